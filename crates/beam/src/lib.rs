@@ -1,0 +1,1 @@
+//! beam layer of flexprr (placeholder).

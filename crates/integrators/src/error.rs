@@ -1,0 +1,59 @@
+//! Integrator errors, each with the time at which it happened.
+
+use thiserror::Error;
+
+/// Why an integration stopped.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum IntegratorError {
+    /// The step size fell below the floor `16 eps |t|` (or a method's own floor).
+    #[error(
+        "step size collapsed to {h:e} s at t = {t} s (the problem may be singular, discontinuous or too stiff for this method)"
+    )]
+    StepSizeTooSmall {
+        /// Time reached.
+        t: f64,
+        /// The step size that was too small.
+        h: f64,
+    },
+    /// More than `max_steps` steps were needed.
+    #[error(
+        "gave up after {max_steps} steps at t = {t} s (raise max_steps, loosen the tolerance or try an implicit method)"
+    )]
+    TooManySteps {
+        /// Time reached.
+        t: f64,
+        /// The limit that was hit.
+        max_steps: usize,
+    },
+    /// The state or its derivative became NaN or infinite.
+    #[error(
+        "non-finite value in component {component} at t = {t} s (the solution diverged or the right-hand side failed)"
+    )]
+    NonFinite {
+        /// Time at which it was detected.
+        t: f64,
+        /// Index of the first non-finite component.
+        component: usize,
+    },
+    /// Newton iterations of an implicit method kept failing even with a fresh Jacobian.
+    #[error("Newton iterations failed to converge at t = {t} s with step {h:e} s")]
+    NewtonFailure {
+        /// Time reached.
+        t: f64,
+        /// Last step size tried.
+        h: f64,
+    },
+    /// The iteration matrix `I - h gamma J` was singular.
+    #[error("singular iteration matrix at t = {t} s")]
+    SingularMatrix {
+        /// Time reached.
+        t: f64,
+    },
+    /// An option is out of range.
+    #[error("invalid integrator option: {0}")]
+    InvalidOptions(String),
+    /// The initial value or the requested output times are not usable.
+    #[error("invalid integration input: {0}")]
+    InvalidInput(String),
+}

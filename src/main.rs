@@ -1,0 +1,44 @@
+//! The `flexprr` command-line program: parses arguments, calls the library, prints.
+
+mod cli;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Simulate 3-PRR planar parallel manipulators with flexible links.
+#[derive(Debug, Parser)]
+#[command(name = "flexprr", version, about, long_about = None)]
+struct Args {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run a scene: kinematics, forces, frequencies and vibration as the scene requests.
+    Run(cli::run::RunArgs),
+    /// Validate a scene file without running it.
+    Check(cli::run::CheckArgs),
+    /// Write the slider and link-angle time series of a scene's trajectory as CSV.
+    Kinematics(cli::kinematics::KinematicsArgs),
+    /// Natural frequencies of a single link under an axial load.
+    Beam(cli::beam::BeamArgs),
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    let result = match args.command {
+        Command::Run(a) => cli::run::run(a),
+        Command::Check(a) => cli::run::check(a),
+        Command::Kinematics(a) => cli::kinematics::run(a),
+        Command::Beam(a) => cli::beam::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failure) => {
+            eprintln!("error: {}", failure.message);
+            ExitCode::from(failure.code)
+        }
+    }
+}
