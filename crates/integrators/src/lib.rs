@@ -44,12 +44,12 @@ pub mod bdf;
 pub mod rk45;
 pub mod test_problems;
 
-// pub use abm::Abm;
-// pub use bdf::Bdf;
+pub use abm::Abm;
+pub use bdf::Bdf;
 pub use common::{error_norm, initial_step};
 pub use error::IntegratorError;
 pub use options::{Options, Tolerance};
-// pub use rk45::Rk45;
+pub use rk45::Rk45;
 pub use solution::{Solution, Stats};
 pub use system::{OdeSystem, finite_difference_jacobian};
 

@@ -1,0 +1,2 @@
+//! Criterion benchmark of Abm (placeholder).
+fn main() {}

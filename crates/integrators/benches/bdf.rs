@@ -1,0 +1,2 @@
+//! Criterion benchmark of Bdf (placeholder).
+fn main() {}

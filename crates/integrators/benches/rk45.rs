@@ -1,0 +1,2 @@
+//! Criterion benchmark of Rk45 (placeholder).
+fn main() {}
