@@ -1,0 +1,380 @@
+//! Closed-form inverse kinematics of position, velocity and acceleration
+//! (model.md section 3), velocity Jacobians and singularity measures.
+
+use nalgebra::{Matrix3, Point2, Vector2, Vector3};
+
+use crate::error::{KinematicsError, SingularityKind};
+use crate::geometry::{Geometry, Leg};
+use crate::pose::{PlatformMotion, Pose};
+
+/// Position-level state of one leg.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LegPosition {
+    /// Slider position `rho_i` along the guide from `A_i` (m).
+    pub rho: f64,
+    /// Link angle `beta_i = atan2(e_i)` in `(-pi, pi]` (rad).
+    pub beta: f64,
+    /// Guide centre `A_i`.
+    pub a: Point2<f64>,
+    /// Slider joint `B_i = A_i + rho_i u_i`.
+    pub b: Point2<f64>,
+    /// Platform joint `C_i = p + R(phi) c_i`.
+    pub c: Point2<f64>,
+    /// Unit link direction `e_i = (C_i - B_i) / l_i`.
+    pub e: Vector2<f64>,
+    /// Link normal `n_i = (-e_y, e_x)`.
+    pub n: Vector2<f64>,
+    /// Attachment vector in the fixed frame, `r_i = R(phi) c_i = C_i - p`.
+    pub r: Vector2<f64>,
+}
+
+/// Position, velocity and acceleration state of one leg.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LegState {
+    /// Slider position `rho_i` (m).
+    pub rho: f64,
+    /// Slider velocity `rho_i'` (m/s).
+    pub rho_dot: f64,
+    /// Slider acceleration `rho_i''` (m/s^2).
+    pub rho_ddot: f64,
+    /// Link angle `beta_i` (rad).
+    pub beta: f64,
+    /// Link angular velocity `beta_i'` (rad/s).
+    pub beta_dot: f64,
+    /// Link angular acceleration `beta_i''` (rad/s^2).
+    pub beta_ddot: f64,
+    /// Guide centre `A_i`.
+    pub a: Point2<f64>,
+    /// Slider joint `B_i`.
+    pub b: Point2<f64>,
+    /// Platform joint `C_i`.
+    pub c: Point2<f64>,
+    /// Velocity of `C_i`.
+    pub c_dot: Vector2<f64>,
+    /// Acceleration of `C_i`.
+    pub c_ddot: Vector2<f64>,
+    /// Unit link direction `e_i` (from `B_i` to `C_i`).
+    pub e: Vector2<f64>,
+    /// Link normal `n_i = (-e_y, e_x)`.
+    pub n: Vector2<f64>,
+}
+
+/// Full rigid-body state of the machine for one platform motion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MachineState {
+    /// The platform motion the state was computed from.
+    pub motion: PlatformMotion,
+    /// The three legs.
+    pub legs: [LegState; 3],
+}
+
+/// Distance to the two kinds of singularity (small = close; both dimensionless, in `[0, 1]`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SingularityMeasures {
+    /// `|e_i . u_i| = |cos(beta_i - alpha_i)|` per leg: 0 at a type-I singularity of leg i
+    /// (link perpendicular to its guide), 1 when the link lies along its guide.
+    pub type_i: [f64; 3],
+    /// `|det N|`, where row `i` of `N` is the row `(e_i, ((r_i - r_bar) x e_i) / L)` of the
+    /// direct Jacobian normalised to unit length; `r_bar` is the centroid of the platform
+    /// joints and `L` their largest distance from it. 0 when the link lines are concurrent or
+    /// parallel (type II), 1 when the rows are mutually orthogonal. Invariant under
+    /// translation, rotation and uniform scaling of the machine.
+    pub type_ii: f64,
+}
+
+/// Velocity Jacobians of the closure, `direct * twist = diag(inverse) * rho'`
+/// (Gosselin & Angeles 1990 form `A t = B q'`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VelocityJacobians {
+    /// Direct Jacobian, row `i` = `(e_i^T, r_i x e_i)` (the link line's Plucker coordinates
+    /// about the platform reference point); singular at type II.
+    pub direct: Matrix3<f64>,
+    /// Diagonal of the inverse Jacobian, `e_i . u_i`; zero entry at type I.
+    pub inverse: Vector3<f64>,
+}
+
+impl VelocityJacobians {
+    /// Slider rates `rho_i' = (direct * twist)_i / (e_i . u_i)` for a platform twist
+    /// `(x', y', phi')`. Non-finite at a type-I singularity.
+    pub fn slider_rates(&self, twist: &Vector3<f64>) -> Vector3<f64> {
+        (self.direct * twist).component_div(&self.inverse)
+    }
+
+    /// Platform twist for given slider rates (forward velocity problem); `None` at a
+    /// type-II singularity.
+    pub fn platform_twist(&self, rho_dot: &Vector3<f64>) -> Option<Vector3<f64>> {
+        self.direct.lu().solve(&self.inverse.component_mul(rho_dot))
+    }
+}
+
+#[inline]
+pub(crate) fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+#[inline]
+fn perp(a: &Vector2<f64>) -> Vector2<f64> {
+    Vector2::new(-a.y, a.x)
+}
+
+/// Position IK of one leg with the given link length.
+#[inline]
+pub(crate) fn leg_position(
+    index: usize,
+    leg: &Leg,
+    pose: &Pose,
+    sin_cos: (f64, f64),
+    length: f64,
+) -> Result<LegPosition, KinematicsError> {
+    let (sin, cos) = sin_cos;
+    let c_local = leg.attachment;
+    let r = Vector2::new(
+        cos * c_local.x - sin * c_local.y,
+        sin * c_local.x + cos * c_local.y,
+    );
+    let c = Point2::new(pose.x + r.x, pose.y + r.y);
+    let a = leg.guide.anchor;
+    let u = leg.guide.direction.into_inner();
+    let d = c - a;
+    let along = d.dot(&u);
+    let offset = cross(&d, &u);
+    let discriminant = length * length - offset * offset;
+    if discriminant < 0.0 {
+        return Err(KinematicsError::Unreachable {
+            leg: index,
+            shortfall: offset.abs() - length,
+        });
+    }
+    let rho = along + leg.branch.sign() * discriminant.sqrt();
+    let link = d - rho * u;
+    let e = link / length;
+    Ok(LegPosition {
+        rho,
+        beta: e.y.atan2(e.x),
+        a,
+        b: a + rho * u,
+        c,
+        e,
+        n: perp(&e),
+        r,
+    })
+}
+
+/// Type-II measure from link directions and attachment vectors (see [`SingularityMeasures`]).
+#[inline]
+pub(crate) fn type_ii_measure(e: [Vector2<f64>; 3], r: [Vector2<f64>; 3]) -> f64 {
+    let centroid = (r[0] + r[1] + r[2]) / 3.0;
+    let rel = [r[0] - centroid, r[1] - centroid, r[2] - centroid];
+    let radius = rel[0].norm().max(rel[1].norm()).max(rel[2].norm());
+    if radius.is_nan() || radius <= 0.0 {
+        return 0.0;
+    }
+    let mut rows = Matrix3::zeros();
+    for i in 0..3 {
+        let moment = cross(&rel[i], &e[i]) / radius;
+        let norm = (e[i].norm_squared() + moment * moment).sqrt();
+        rows[(i, 0)] = e[i].x / norm;
+        rows[(i, 1)] = e[i].y / norm;
+        rows[(i, 2)] = moment / norm;
+    }
+    rows.determinant().abs()
+}
+
+impl Geometry {
+    /// Position inverse kinematics (closed form, model.md section 3):
+    /// `rho_i = d_i.u_i -/+ sqrt(l_i^2 - (d_i x u_i)^2)` with `d_i = C_i - A_i`.
+    ///
+    /// Errors only on a non-finite pose or an unreachable leg; travel and singularities are
+    /// not checked (see [`Geometry::inverse_kinematics`]).
+    pub fn inverse_position(&self, pose: &Pose) -> Result<[LegPosition; 3], KinematicsError> {
+        self.inverse_position_with_lengths(pose, self.link_lengths())
+    }
+
+    /// [`Geometry::inverse_position`] with link lengths overriding the geometry's
+    /// (e.g. foreshortened links `l_i - delta_i`).
+    pub fn inverse_position_with_lengths(
+        &self,
+        pose: &Pose,
+        lengths: [f64; 3],
+    ) -> Result<[LegPosition; 3], KinematicsError> {
+        pose.check_finite()?;
+        check_lengths(lengths)?;
+        let sin_cos = pose.phi.sin_cos();
+        Ok([
+            leg_position(0, &self.legs[0], pose, sin_cos, lengths[0])?,
+            leg_position(1, &self.legs[1], pose, sin_cos, lengths[1])?,
+            leg_position(2, &self.legs[2], pose, sin_cos, lengths[2])?,
+        ])
+    }
+
+    /// Inverse kinematics of position, velocity and acceleration without travel or
+    /// singularity-threshold checks. Allocation-free.
+    ///
+    /// Differentiating `|C_i - B_i|^2 = l_i^2` once and twice (model.md section 3):
+    ///
+    /// ```text
+    /// C' = p' + phi' J r,          C'' = p'' + phi'' J r - phi'^2 r,     J r = (-r_y, r_x)
+    /// rho'  = e.C' / (e.u)
+    /// beta' = (C' - rho' u).n / l
+    /// rho'' = (e.C'' + l beta'^2) / (e.u)
+    /// beta''= (C'' - rho'' u).n / l
+    /// ```
+    ///
+    /// Errors on non-finite input, an unreachable leg, or an exactly type-I singular leg
+    /// (the rates would be infinite): never returns NaN.
+    pub fn inverse_kinematics_unchecked(
+        &self,
+        motion: &PlatformMotion,
+    ) -> Result<MachineState, KinematicsError> {
+        motion.check_finite()?;
+        let pose = &motion.pose;
+        let sin_cos = pose.phi.sin_cos();
+        let v = Vector2::new(motion.velocity.x, motion.velocity.y);
+        let omega = motion.velocity.z;
+        let acc = Vector2::new(motion.acceleration.x, motion.acceleration.y);
+        let alpha = motion.acceleration.z;
+        let leg_state = |index: usize| -> Result<LegState, KinematicsError> {
+            let leg = &self.legs[index];
+            let length = leg.link_length;
+            let pos = leg_position(index, leg, pose, sin_cos, length)?;
+            let u = leg.guide.direction.into_inner();
+            let jr = perp(&pos.r);
+            let c_dot = v + omega * jr;
+            let c_ddot = acc + alpha * jr - omega * omega * pos.r;
+            let e_dot_u = pos.e.dot(&u);
+            let rho_dot = pos.e.dot(&c_dot) / e_dot_u;
+            let beta_dot = (c_dot - rho_dot * u).dot(&pos.n) / length;
+            let rho_ddot = (pos.e.dot(&c_ddot) + length * beta_dot * beta_dot) / e_dot_u;
+            let beta_ddot = (c_ddot - rho_ddot * u).dot(&pos.n) / length;
+            if !(rho_ddot.is_finite() && beta_ddot.is_finite()) {
+                return Err(KinematicsError::Singular {
+                    kind: SingularityKind::TypeI,
+                    leg: Some(index),
+                    measure: e_dot_u.abs(),
+                    threshold: 0.0,
+                });
+            }
+            Ok(LegState {
+                rho: pos.rho,
+                rho_dot,
+                rho_ddot,
+                beta: pos.beta,
+                beta_dot,
+                beta_ddot,
+                a: pos.a,
+                b: pos.b,
+                c: pos.c,
+                c_dot,
+                c_ddot,
+                e: pos.e,
+                n: pos.n,
+            })
+        };
+        Ok(MachineState {
+            motion: *motion,
+            legs: [leg_state(0)?, leg_state(1)?, leg_state(2)?],
+        })
+    }
+
+    /// Inverse kinematics with all checks: reachability, slider travel, type-I and type-II
+    /// thresholds ([`Geometry::thresholds`]), in that order; the first failure is returned.
+    /// Allocation-free.
+    pub fn inverse_kinematics(
+        &self,
+        motion: &PlatformMotion,
+    ) -> Result<MachineState, KinematicsError> {
+        let pose = &motion.pose;
+        pose.check_finite()?;
+        let sin_cos = pose.phi.sin_cos();
+        // Position level first, so that travel and singularity are reported before rates
+        // that may be huge near a type-I singularity.
+        let mut e = [Vector2::zeros(); 3];
+        let mut r = [Vector2::zeros(); 3];
+        for (i, leg) in self.legs.iter().enumerate() {
+            let pos = leg_position(i, leg, pose, sin_cos, leg.link_length)?;
+            let (min, max) = leg.guide.travel;
+            if pos.rho < min || pos.rho > max {
+                return Err(KinematicsError::TravelExceeded {
+                    leg: i,
+                    rho: pos.rho,
+                    min,
+                    max,
+                    excess: (min - pos.rho).max(pos.rho - max),
+                });
+            }
+            e[i] = pos.e;
+            r[i] = pos.r;
+        }
+        for (i, leg) in self.legs.iter().enumerate() {
+            let measure = e[i].dot(&leg.guide.direction).abs();
+            if measure < self.thresholds.type_i {
+                return Err(KinematicsError::Singular {
+                    kind: SingularityKind::TypeI,
+                    leg: Some(i),
+                    measure,
+                    threshold: self.thresholds.type_i,
+                });
+            }
+        }
+        let measure = type_ii_measure(e, r);
+        if measure < self.thresholds.type_ii {
+            return Err(KinematicsError::Singular {
+                kind: SingularityKind::TypeII,
+                leg: None,
+                measure,
+                threshold: self.thresholds.type_ii,
+            });
+        }
+        self.inverse_kinematics_unchecked(motion)
+    }
+
+    /// Singularity measures at a pose (errors only if the pose is unreachable or not finite).
+    pub fn singularity(&self, pose: &Pose) -> Result<SingularityMeasures, KinematicsError> {
+        let legs = self.inverse_position(pose)?;
+        Ok(measures_of(self, &legs))
+    }
+
+    /// Velocity Jacobians at a pose (errors only if the pose is unreachable or not finite).
+    pub fn velocity_jacobians(&self, pose: &Pose) -> Result<VelocityJacobians, KinematicsError> {
+        let legs = self.inverse_position(pose)?;
+        let mut direct = Matrix3::zeros();
+        let mut inverse = Vector3::zeros();
+        for i in 0..3 {
+            let p = &legs[i];
+            direct[(i, 0)] = p.e.x;
+            direct[(i, 1)] = p.e.y;
+            direct[(i, 2)] = cross(&p.r, &p.e);
+            inverse[i] = p.e.dot(&self.legs[i].guide.direction);
+        }
+        Ok(VelocityJacobians { direct, inverse })
+    }
+}
+
+/// Singularity measures from already computed leg positions.
+pub(crate) fn measures_of(geometry: &Geometry, legs: &[LegPosition; 3]) -> SingularityMeasures {
+    let mut type_i = [0.0; 3];
+    for i in 0..3 {
+        type_i[i] = legs[i].e.dot(&geometry.legs[i].guide.direction).abs();
+    }
+    SingularityMeasures {
+        type_i,
+        type_ii: type_ii_measure(
+            [legs[0].e, legs[1].e, legs[2].e],
+            [legs[0].r, legs[1].r, legs[2].r],
+        ),
+    }
+}
+
+pub(crate) fn check_lengths(lengths: [f64; 3]) -> Result<(), KinematicsError> {
+    for (i, l) in lengths.iter().enumerate() {
+        if !(l.is_finite() && *l > 0.0) {
+            return Err(KinematicsError::InvalidGeometry {
+                leg: Some(i),
+                quantity: "link length",
+                value: *l,
+                reason: "must be finite and positive",
+            });
+        }
+    }
+    Ok(())
+}
