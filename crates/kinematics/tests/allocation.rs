@@ -1,0 +1,65 @@
+//! The inverse kinematics is called inside ODE right-hand sides: it must not allocate.
+//! A counting global allocator (per thread) checks that.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use kinematics::{Circle, Geometry, Trajectory};
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards to the system allocator; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(|c| c.get())
+}
+
+#[test]
+fn inverse_kinematics_does_not_allocate() {
+    let geometry = Geometry::paper();
+    let circle = Circle::paper(20.0).unwrap();
+    let before = allocations();
+    let mut checksum = 0.0;
+    for k in 0..1000 {
+        let motion = circle.motion(k as f64 * 5e-5);
+        let checked = geometry.inverse_kinematics(&motion).unwrap();
+        let unchecked = geometry.inverse_kinematics_unchecked(&motion).unwrap();
+        let positions = geometry.inverse_position(&motion.pose).unwrap();
+        let measures = geometry.singularity(&motion.pose).unwrap();
+        let closure = geometry.closure(
+            &motion.pose,
+            [positions[0].rho, positions[1].rho, positions[2].rho],
+            geometry.link_lengths(),
+        );
+        checksum += checked.legs[0].rho_ddot
+            + unchecked.legs[1].beta_ddot
+            + measures.type_ii
+            + closure.residual.x;
+    }
+    let after = allocations();
+    assert!(checksum.is_finite());
+    assert_eq!(after - before, 0, "inverse kinematics allocated");
+    // The counter does see allocations on this thread.
+    let probe: Vec<u8> = std::hint::black_box(Vec::with_capacity(16));
+    assert!(allocations() > after);
+    drop(probe);
+}
