@@ -1,0 +1,89 @@
+//! Assumed-mode bases `psi_j(xi)`, `xi = x / l in [0, 1]`, for the transverse deflection
+//! `w(x, t) = sum_j eta_j(t) psi_j(x / l)` of one link (model.md section 6).
+//!
+//! Derivatives are with respect to `xi` (dimensionless); the `1/l` factors are applied by
+//! [`crate::ModalIntegrals`].
+
+mod classical;
+mod hermite;
+mod sine;
+
+pub use classical::{ClassicalBasis, EndConditions};
+pub use hermite::HermiteBasis;
+pub use sine::SineBasis;
+
+/// A set of `r` shape functions on `[0, 1]` with their first and second derivatives.
+///
+/// Implementations must be cheap to evaluate and allocation-free in [`Basis::eval`];
+/// the modal integrals call it `r` times per quadrature node.
+pub trait Basis: Send + Sync {
+    /// Number of shape functions `r`.
+    fn len(&self) -> usize;
+
+    /// `[psi_j, dpsi_j/dxi, d2psi_j/dxi2]` at `xi` for the 0-based index `j`.
+    ///
+    /// # Panics
+    /// May panic if `j >= self.len()` (a programming error, like slice indexing).
+    fn eval(&self, j: usize, xi: f64) -> [f64; 3];
+
+    /// Short human-readable name, e.g. `"sine (pinned-pinned), r = 3"`.
+    fn name(&self) -> String;
+
+    /// Polynomial degree of every shape function on each panel between
+    /// [`Basis::breakpoints`], if the basis is piecewise polynomial. The modal integrals then
+    /// use the Gauss rule that is exact for the integrands; otherwise they refine until the
+    /// integrals settle, starting from [`Basis::max_wavenumber`].
+    fn polynomial_degree(&self) -> Option<usize> {
+        None
+    }
+
+    /// Interior knots in `(0, 1)` (finite-element ends) where the second derivative may jump;
+    /// quadrature panels are cut there.
+    fn breakpoints(&self) -> Vec<f64> {
+        vec![]
+    }
+
+    /// Largest wavenumber `k` (in `1/xi`) of the shape functions, e.g. `r pi` for sines:
+    /// a hint for the initial quadrature order of non-polynomial bases.
+    fn max_wavenumber(&self) -> f64 {
+        0.0
+    }
+
+    /// True if there are no shape functions (never for the bases of this crate).
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Condition at one end of a link.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EndCondition {
+    /// `w = 0`, `w'' = 0` (pin: no deflection, no moment).
+    Pinned,
+    /// `w = 0`, `w' = 0` (built-in end).
+    Clamped,
+    /// `w'' = 0`, `w''' = 0` (no moment, no shear).
+    Free,
+}
+
+impl EndCondition {
+    /// Lower-case name: `"pinned"`, `"clamped"`, `"free"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            EndCondition::Pinned => "pinned",
+            EndCondition::Clamped => "clamped",
+            EndCondition::Free => "free",
+        }
+    }
+}
+
+pub(crate) fn check_mode_count(r: usize) -> Result<(), crate::BeamError> {
+    if r == 0 || r > 500 {
+        return Err(crate::BeamError::InvalidCount {
+            name: "modes",
+            value: r,
+            reason: "must be between 1 and 500",
+        });
+    }
+    Ok(())
+}
