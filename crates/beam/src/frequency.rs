@@ -145,7 +145,7 @@ impl FrequencySolver {
         };
         let work = |n| Mat::zeros(n, n);
         let n_work = if coupling == Coupling::Full { r } else { 0 };
-        Ok(Self {
+        let mut solver = Self {
             coupling,
             r,
             mass_diagonal,
@@ -154,7 +154,12 @@ impl FrequencySolver {
             reduced: work(n_work),
             eigenvalues: Diag::zeros(n_work),
             scratch,
-        })
+        };
+        // One solve now (K = M, all eigenvalues 1), so that faer's one-time lazy
+        // initialisation (cache sizes) happens here and not in the first hot-path call.
+        let mut warm_up = vec![0.0; r];
+        solver.eigenvalues(mass, &mut warm_up)?;
+        Ok(solver)
     }
 
     /// Number of modes `r`.

@@ -1,0 +1,60 @@
+//! The frequency solver's hot path allocates nothing after construction (counted with a
+//! wrapping global allocator; this test binary holds only this test so nothing else runs
+//! concurrently while counting).
+
+use beam::{AxialLoad, Coupling, FrequencySolver, HermiteBasis, ModalIntegrals, UniformSection};
+use faer::Mat;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn eigenvalues_and_geometric_stiffness_do_not_allocate() {
+    let section = UniformSection::rectangle(7.3e10, 2770.0, 0.002, 0.03).unwrap();
+    // r = 20 unknowns (10 elements) so faer's blocked paths are exercised too.
+    let mi =
+        ModalIntegrals::compute(&HermiteBasis::pinned_pinned(10).unwrap(), &section, 0.2).unwrap();
+    let r = mi.r();
+    for coupling in [Coupling::Full, Coupling::Diagonal] {
+        let mut solver = FrequencySolver::new(&mi, coupling).unwrap();
+        let mut stiffness = Mat::zeros(r, r);
+        let mut out = vec![0.0; r];
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        for step in 0..50 {
+            let load = AxialLoad {
+                p0: -100.0 + 4.0 * step as f64,
+                p1: 10.0,
+                p2: -3.0,
+            };
+            mi.total_stiffness_into(&load, stiffness.as_mut());
+            solver.eigenvalues(stiffness.as_ref(), &mut out).unwrap();
+        }
+        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        assert_eq!(
+            after - before,
+            0,
+            "{coupling:?}: {} allocations",
+            after - before
+        );
+        assert!(out.iter().all(|w| w.is_finite()));
+    }
+}
