@@ -227,8 +227,28 @@ impl Geometry {
         motion: &PlatformMotion,
     ) -> Result<MachineState, KinematicsError> {
         motion.check_finite()?;
-        let pose = &motion.pose;
+        let positions = self.leg_positions(&motion.pose)?;
+        self.rates(motion, &positions)
+    }
+
+    /// Position IK of the three legs with the geometry's link lengths (input checked finite).
+    #[inline]
+    fn leg_positions(&self, pose: &Pose) -> Result<[LegPosition; 3], KinematicsError> {
         let sin_cos = pose.phi.sin_cos();
+        Ok([
+            leg_position(0, &self.legs[0], pose, sin_cos, self.legs[0].link_length)?,
+            leg_position(1, &self.legs[1], pose, sin_cos, self.legs[1].link_length)?,
+            leg_position(2, &self.legs[2], pose, sin_cos, self.legs[2].link_length)?,
+        ])
+    }
+
+    /// Velocity and acceleration level of the IK from the legs' positions.
+    #[inline]
+    fn rates(
+        &self,
+        motion: &PlatformMotion,
+        positions: &[LegPosition; 3],
+    ) -> Result<MachineState, KinematicsError> {
         let v = Vector2::new(motion.velocity.x, motion.velocity.y);
         let omega = motion.velocity.z;
         let acc = Vector2::new(motion.acceleration.x, motion.acceleration.y);
@@ -236,7 +256,7 @@ impl Geometry {
         let leg_state = |index: usize| -> Result<LegState, KinematicsError> {
             let leg = &self.legs[index];
             let length = leg.link_length;
-            let pos = leg_position(index, leg, pose, sin_cos, length)?;
+            let pos = &positions[index];
             let u = leg.guide.direction.into_inner();
             let jr = perp(&pos.r);
             let c_dot = v + omega * jr;
@@ -283,15 +303,11 @@ impl Geometry {
         &self,
         motion: &PlatformMotion,
     ) -> Result<MachineState, KinematicsError> {
-        let pose = &motion.pose;
-        pose.check_finite()?;
-        let sin_cos = pose.phi.sin_cos();
+        motion.check_finite()?;
         // Position level first, so that travel and singularity are reported before rates
         // that may be huge near a type-I singularity.
-        let mut e = [Vector2::zeros(); 3];
-        let mut r = [Vector2::zeros(); 3];
-        for (i, leg) in self.legs.iter().enumerate() {
-            let pos = leg_position(i, leg, pose, sin_cos, leg.link_length)?;
+        let positions = self.leg_positions(&motion.pose)?;
+        for (i, (leg, pos)) in self.legs.iter().zip(&positions).enumerate() {
             let (min, max) = leg.guide.travel;
             if pos.rho < min || pos.rho > max {
                 return Err(KinematicsError::TravelExceeded {
@@ -302,11 +318,9 @@ impl Geometry {
                     excess: (min - pos.rho).max(pos.rho - max),
                 });
             }
-            e[i] = pos.e;
-            r[i] = pos.r;
         }
-        for (i, leg) in self.legs.iter().enumerate() {
-            let measure = e[i].dot(&leg.guide.direction).abs();
+        let measures = measures_of(self, &positions);
+        for (i, &measure) in measures.type_i.iter().enumerate() {
             if measure < self.thresholds.type_i {
                 return Err(KinematicsError::Singular {
                     kind: SingularityKind::TypeI,
@@ -316,16 +330,15 @@ impl Geometry {
                 });
             }
         }
-        let measure = type_ii_measure(e, r);
-        if measure < self.thresholds.type_ii {
+        if measures.type_ii < self.thresholds.type_ii {
             return Err(KinematicsError::Singular {
                 kind: SingularityKind::TypeII,
                 leg: None,
-                measure,
+                measure: measures.type_ii,
                 threshold: self.thresholds.type_ii,
             });
         }
-        self.inverse_kinematics_unchecked(motion)
+        self.rates(motion, &positions)
     }
 
     /// Singularity measures at a pose (errors only if the pose is unreachable or not finite).
