@@ -365,7 +365,11 @@ impl Integrator for Abm {
         let direction = (t_end - t0).signum();
         let h_max = self.options.max_step.min(span);
 
-        let mut stats = Stats::default();
+        // Room for every order, so that recording one never allocates inside `step`.
+        let mut stats = Stats {
+            orders: Vec::with_capacity(MAX_ORDER + 1),
+            ..Stats::default()
+        };
         let mut dy = vec![0.0; n];
         system.rhs(t0, y0, &mut dy);
         stats.rhs_evaluations += 1;
