@@ -59,6 +59,8 @@ fn paper_circle_at_20_hz_is_feasible() {
             let e_dot_u = leg.e.dot(&geometry.legs[i].guide.direction);
             // Platform speed 2 pi f R = 2 pi m/s at constant orientation: |C'| is that speed.
             assert!((leg.c_dot.norm() - TAU * f * 0.05).abs() < 1e-12);
+            // ... and C_i runs on a circle too: centripetal acceleration (2 pi f)^2 R.
+            assert!((leg.c_ddot.norm() - (TAU * f).powi(2) * 0.05).abs() < 1e-9);
             assert!(leg.rho_dot.abs() <= leg.c_dot.norm() / e_dot_u.abs() * (1.0 + 1e-12));
         }
     }
