@@ -206,6 +206,8 @@ fn assert_rk45_needs_many_more_steps<P: TestProblem + Clone>(
             p.name(),
             sol.stats
         ),
+        // RK45 recognising the stiffness and refusing is as good a proof.
+        Err(e) if e.to_string().contains("stiff") => {}
         Err(e) => panic!("{}: RK45 failed otherwise: {e}", p.name()),
     }
 }
