@@ -264,6 +264,8 @@ pub struct AbmStepper {
     predicted: Vec<f64>,
     /// Modified divided differences `phi_1 .. phi_{k+2}`, `N_DIFF` columns of `dim`.
     phi: Vec<f64>,
+    /// Absolute tolerance of each component.
+    atol: Vec<f64>,
     /// Rounding error of the last correction (STEP's `PHI(*, 15)`).
     correction_rounding: Vec<f64>,
     /// Rounding error of the current prediction (STEP's `PHI(*, 16)`).
@@ -405,6 +407,7 @@ impl Integrator for Abm {
 
         let mut phi = vec![0.0; N_DIFF * n];
         column_mut(&mut phi, n, 1).copy_from_slice(&dy);
+        let atol = (0..n).map(|i| self.options.atol.get(i)).collect();
 
         Ok(AbmStepper {
             options: self.options.clone(),
@@ -427,6 +430,7 @@ impl Integrator for Abm {
             dy,
             predicted: vec![0.0; n],
             phi,
+            atol,
             correction_rounding: vec![0.0; n],
             prediction_rounding: vec![0.0; n],
             inv_weight: vec![0.0; n],
@@ -552,19 +556,21 @@ impl Stepper for AbmStepper {
                 let phi1 = column(&self.phi, n, 1);
                 let phik = column(&self.phi, n, k);
                 let phikm1 = column(&self.phi, n, k.saturating_sub(1).max(1));
-                for l in 0..n {
-                    let scale = self.options.atol.get(l)
-                        + rtol * self.y[l].abs().max(self.predicted[l].abs());
-                    let w = 1.0 / scale.max(f64::MIN_POSITIVE);
-                    self.inv_weight[l] = w;
-                    let e = self.dy[l] - phi1[l];
-                    if k >= 3 {
-                        s_km2 += ((phikm1[l] + e) * w).powi(2);
-                    }
-                    if k >= 2 {
-                        s_km1 += ((phik[l] + e) * w).powi(2);
-                    }
-                    s_k += (e * w).powi(2);
+                let components = self
+                    .inv_weight
+                    .iter_mut()
+                    .zip(&self.atol)
+                    .zip(self.y.iter().zip(&self.predicted))
+                    .zip(self.dy.iter().zip(phi1))
+                    .zip(phikm1.iter().zip(phik));
+                for ((((w, atol), (y, p)), (f, f1)), (dkm1, dk)) in components {
+                    let scale = atol + rtol * y.abs().max(p.abs());
+                    *w = 1.0 / scale.max(f64::MIN_POSITIVE);
+                    let e = f - f1;
+                    let (a, b, c) = ((dkm1 + e) * *w, (dk + e) * *w, e * *w);
+                    s_km2 += a * a;
+                    s_km1 += b * b;
+                    s_k += c * c;
                 }
                 let abs_h = h.abs();
                 let nf = n as f64;

@@ -517,6 +517,37 @@ fn order_ramps_up_and_respects_max_order() {
     }
 }
 
+/// A step count predicted by hand: for y' = 1 every error estimate vanishes. STEP's rules
+/// then give: step 1 at order 1 (start phase: raise the order, double the step); step 2 at
+/// order 2, where the test "lower if ERKM1 <= ERK / 2" holds with both zero, which lowers the
+/// order to 1 and ends the start phase; from then on order 1 (raising needs k + 1 steps of
+/// equal size) with the step doubled every time (zero error allows it). From h0 = 1e-3 the
+/// steps are 1e-3 * 2^j; after 9 steps t = 0.511 and the 10th (proposed 0.512) is shortened to
+/// land on t_end = 1. Expected: 10 accepted steps, one at order 2, none rejected,
+/// 1 + 2 * 10 = 21 evaluations, and y = 1 + t to rounding.
+#[test]
+fn start_phase_step_count_matches_hand_count() {
+    struct Constant;
+    impl OdeSystem for Constant {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&mut self, _t: f64, _y: &[f64], dy: &mut [f64]) {
+            dy[0] = 1.0;
+        }
+    }
+    let sol = Abm::new(options(1e-8, 1e-10).initial_step(1e-3))
+        .solve(&mut Constant, 0.0, &[1.0], &[0.25, 1.0])
+        .unwrap();
+    let s = &sol.stats;
+    assert_eq!(s.accepted_steps, 10);
+    assert_eq!(s.rejected_steps, 0);
+    assert_eq!(s.rhs_evaluations, 21);
+    assert_eq!(s.orders, vec![0, 9, 1]);
+    assert!((sol.y(0)[0] - 1.25).abs() < 1e-14);
+    assert!((sol.y(1)[0] - 2.0).abs() < 1e-14);
+}
+
 /// 30 modal oscillators with frequencies 1 .. 900 rad/s (the beam ladder omega_1 j^2) over
 /// 2 s (286 periods of the fastest mode): against the closed form, the error is no more than
 /// 2x that of the Dormand-Prince integrator at the same tolerance, which needs over 3x the
