@@ -1,1 +1,35 @@
-//! dynamics layer of flexprr (placeholder).
+//! Dynamics of a 3-PRR with flexible links under prescribed rigid motion
+//! (kineto-elasto-dynamics, the paper's sections 3-4 and model.md sections 4-7).
+//!
+//! * [`inverse_dynamics`]: rigid-body joint reactions and driving forces (model.md section 4).
+//! * [`AxialForceModel`]: the axial force `P(x)` in each link: none, the paper's eq. (12), or
+//!   the joint-reaction form (model.md section 5).
+//! * [`ModalSystem`]: the modal equations of the three links (eq. 16 or the consistent form
+//!   of model.md section 6) as an [`integrators::OdeSystem`] with an analytic Jacobian.
+//! * [`FrequencyTracker`]: configuration-dependent frequencies (eq. 22 or the generalized
+//!   eigenproblem), buckling detection.
+//! * [`Formulation`]: the named formulations `paper` and `consistent` and their switches.
+
+mod axial;
+mod error;
+mod formulation;
+mod frequencies;
+mod inverse;
+mod machine;
+mod modal;
+pub mod paper;
+
+pub use axial::{
+    AxialForceModel, AxialInput, JointReactionAxialForce, NoAxialForce, PaperAxialForce, end_forces,
+};
+pub use error::DynamicsError;
+pub use formulation::{AxialModel, Formulation};
+pub use frequencies::{BucklingInterval, FrequencyHistory, FrequencyTracker, ModeRange};
+pub use inverse::{
+    ElasticInertia, JointReactions, equilibrium_measure, inverse_dynamics, inverse_dynamics_full,
+    rigid_kinetic_energy,
+};
+pub use machine::{LinkModel, Machine};
+pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
+
+pub use beam::{AxialLoad, Coupling};

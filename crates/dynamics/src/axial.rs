@@ -1,0 +1,108 @@
+//! Axial force models: the tension `P(x) = P0 + P1 x + P2 x^2` along each link
+//! (model.md section 5; tension positive, `x` from `B_i`).
+//!
+//! Both non-trivial models share the distributed inertia part of eq. (11),
+//! `rhoA (rho'' cos(b - a) x - b'^2 x^2 / 2)`, and differ in the end force at `B`:
+//! * [`PaperAxialForce`] (eq. 12): `(m_s rho'' - F_a) cos(b - a) = -(F_B.u) cos(b - a)`, only the
+//!   along-guide part of the slider's force on the link;
+//! * [`JointReactionAxialForce`]: `-F_B.e`, the whole reaction projected on the link.
+
+use beam::AxialLoad;
+use kinematics::LegState;
+use nalgebra::Vector2;
+
+use crate::{JointReactions, LinkModel};
+
+/// Everything an axial force model may read for one link at one instant.
+#[derive(Debug, Clone, Copy)]
+pub struct AxialInput<'a> {
+    /// Kinematic state of the leg.
+    pub leg: &'a LegState,
+    /// Guide direction `u_i`.
+    pub guide_direction: Vector2<f64>,
+    /// The link.
+    pub link: &'a LinkModel,
+    /// Rigid joint reactions (present when the model asked for inverse dynamics).
+    pub reactions: Option<&'a JointReactions>,
+    /// Leg index (0-based).
+    pub index: usize,
+}
+
+/// A model of the axial force in a link.
+pub trait AxialForceModel: std::fmt::Debug + Send + Sync {
+    /// Name used in outputs (`"none"`, `"paper"`, `"joint_reaction"`).
+    fn name(&self) -> &'static str;
+    /// Whether [`AxialForceModel::load`] needs the rigid joint reactions.
+    fn needs_inverse_dynamics(&self) -> bool;
+    /// Coefficients of `P(x)` for one link.
+    fn load(&self, input: &AxialInput<'_>) -> AxialLoad;
+}
+
+/// No axial force: `P = 0` (the model of Zhang et al.'s earlier paper).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoAxialForce;
+
+/// The paper's axial force, eq. (12).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PaperAxialForce;
+
+/// The joint-reaction form of model.md section 5.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct JointReactionAxialForce;
+
+/// The shared inertia part `P1 x + P2 x^2` of eq. (11).
+#[inline]
+fn inertia_part(input: &AxialInput<'_>) -> (f64, f64) {
+    let rho_a = input.link.mass_per_length();
+    let cos_ba = input.leg.e.dot(&input.guide_direction);
+    (
+        rho_a * input.leg.rho_ddot * cos_ba,
+        -0.5 * rho_a * input.leg.beta_dot * input.leg.beta_dot,
+    )
+}
+
+impl AxialForceModel for NoAxialForce {
+    fn name(&self) -> &'static str {
+        "none"
+    }
+    fn needs_inverse_dynamics(&self) -> bool {
+        false
+    }
+    fn load(&self, _input: &AxialInput<'_>) -> AxialLoad {
+        AxialLoad { p0: 0.0, p1: 0.0, p2: 0.0 }
+    }
+}
+
+impl AxialForceModel for PaperAxialForce {
+    fn name(&self) -> &'static str {
+        "paper"
+    }
+    fn needs_inverse_dynamics(&self) -> bool {
+        true
+    }
+    fn load(&self, input: &AxialInput<'_>) -> AxialLoad {
+        let (p1, p2) = inertia_part(input);
+        let f_b = input.reactions.map_or(Vector2::zeros(), |r| r.slider_on_link[input.index]);
+        let cos_ba = input.leg.e.dot(&input.guide_direction);
+        AxialLoad { p0: -f_b.dot(&input.guide_direction) * cos_ba, p1, p2 }
+    }
+}
+
+impl AxialForceModel for JointReactionAxialForce {
+    fn name(&self) -> &'static str {
+        "joint_reaction"
+    }
+    fn needs_inverse_dynamics(&self) -> bool {
+        true
+    }
+    fn load(&self, input: &AxialInput<'_>) -> AxialLoad {
+        let (p1, p2) = inertia_part(input);
+        let f_b = input.reactions.map_or(Vector2::zeros(), |r| r.slider_on_link[input.index]);
+        AxialLoad { p0: -f_b.dot(&input.leg.e), p1, p2 }
+    }
+}
+
+/// The axial force at both ends, `(P(0), P(l))` (N).
+pub fn end_forces(load: &AxialLoad, length: f64) -> (f64, f64) {
+    (load.p0, load.p0 + load.p1 * length + load.p2 * length * length)
+}

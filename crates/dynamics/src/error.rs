@@ -1,0 +1,46 @@
+//! Errors of the dynamics layer.
+
+use thiserror::Error;
+
+/// What went wrong in the dynamics layer; each variant says where (time, link, mode).
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum DynamicsError {
+    /// The kinematics failed (unreachable, travel, singular), with the time if known.
+    #[error("at t = {t} s: {source}")]
+    Kinematics {
+        /// Time (s).
+        t: f64,
+        /// The kinematic failure.
+        source: kinematics::KinematicsError,
+    },
+    /// The platform equilibrium cannot be solved: the link lines are (nearly) concurrent or
+    /// parallel, so the axial link forces are not determined (type-II singularity).
+    #[error(
+        "at t = {t} s the rigid inverse dynamics is singular: the link lines are nearly concurrent (type-II measure {measure:.3e} below {threshold:.1e})"
+    )]
+    SingularInverseDynamics {
+        /// Time (s).
+        t: f64,
+        /// Normalised determinant of the platform equilibrium matrix.
+        measure: f64,
+        /// Threshold it fell below.
+        threshold: f64,
+    },
+    /// A beam-layer failure (basis, section, eigenproblem).
+    #[error(transparent)]
+    Beam(#[from] beam::BeamError),
+    /// Invalid machine or model parameters.
+    #[error("invalid {quantity} = {value}: {reason}")]
+    InvalidParameter {
+        /// Which parameter.
+        quantity: String,
+        /// Its value.
+        value: f64,
+        /// What is expected.
+        reason: &'static str,
+    },
+    /// Inconsistent model set-up (e.g. a damping list longer than the modes).
+    #[error("{0}")]
+    Inconsistent(String),
+}

@@ -1,0 +1,468 @@
+//! The modal system of the three links: the time-varying ODE of eq. (16) (paper) or of
+//! model.md section 6 (consistent), as an [`integrators::OdeSystem`].
+//!
+//! State: `y = (eta_1, eta_2, eta_3, eta_1', eta_2', eta_3')` with `eta_i` the `r_i` modal
+//! coordinates of link `i` (the paper's ordering, eq. 3). For link `i`:
+//!
+//! ```text
+//! eta'' = M^-1 [ -rho'' sin(a - b) m_psi - l b'' m_xipsi  (+ rho' b' cos(a - b) m_psi)   forcing (+ F_fg)
+//!               - (Kf + (P0/l) G0 + P1 G1 + P2 l G2) eta  (+ b'^2 M eta)                 stiffness (- softening)
+//!               - C eta' ]                                                               modal damping
+//! ```
+//! with `m_psi = l int rhoA psi` and `m_xipsi = l int rhoA xi psi`. All products with `M^-1`
+//! are formed once at construction, so the right-hand side is a few `r x r` matrix-vector
+//! products per link after the inverse kinematics (and, if the axial force model needs them,
+//! the rigid joint reactions). It allocates nothing.
+
+use std::sync::Arc;
+
+use beam::{AxialLoad, Coupling};
+use faer::linalg::solvers::DenseSolveCore;
+use faer::{Mat, MatMut, Side};
+use integrators::OdeSystem;
+use kinematics::{MachineState, Trajectory};
+
+use crate::axial::{AxialForceModel, AxialInput};
+use crate::inverse::{ElasticInertia, JointReactions, inverse_dynamics};
+use crate::{DynamicsError, Formulation, Machine};
+
+/// Modal damping: ratio `zeta_j` of critical damping per unloaded mode `j`, the same for every
+/// link. `C = M Phi diag(2 zeta_j omega_j) Phi^T M` with `Phi` the `M`-orthonormal modes of
+/// `(Kf, M)`: exactly `2 zeta_j omega_j m_jj` on the diagonal for the sine basis.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModalDamping {
+    /// One ratio for all modes, or one per mode (in order of increasing frequency).
+    pub ratios: Vec<f64>,
+}
+
+impl ModalDamping {
+    /// No damping.
+    pub fn none() -> Self {
+        Self { ratios: Vec::new() }
+    }
+    /// One ratio for every mode.
+    pub fn uniform(ratio: f64) -> Self {
+        Self { ratios: vec![ratio] }
+    }
+    fn ratio(&self, mode: usize) -> f64 {
+        match self.ratios.len() {
+            0 => 0.0,
+            1 => self.ratios[0],
+            _ => self.ratios[mode],
+        }
+    }
+    fn is_none(&self) -> bool {
+        self.ratios.iter().all(|z| *z == 0.0)
+    }
+}
+
+/// Per-link operators with `M^-1` applied, row-major `r x r`.
+#[derive(Debug, Clone)]
+struct LinkOperators {
+    r: usize,
+    length: f64,
+    flexural: Vec<f64>,
+    geometric: [Vec<f64>; 3],
+    damping: Vec<f64>,
+    rho_forcing: Vec<f64>,
+    beta_forcing: Vec<f64>,
+}
+
+fn to_row_major(m: &Mat<f64>) -> Vec<f64> {
+    let (r, c) = (m.nrows(), m.ncols());
+    let mut out = Vec::with_capacity(r * c);
+    for i in 0..r {
+        for j in 0..c {
+            out.push(m[(i, j)]);
+        }
+    }
+    out
+}
+
+/// Solves `L X = B` in place for lower-triangular `L` (forward substitution, column by column).
+fn forward_substitute(l: &Mat<f64>, b: &mut Mat<f64>) {
+    let n = l.nrows();
+    for c in 0..b.ncols() {
+        for i in 0..n {
+            let mut sum = b[(i, c)];
+            for p in 0..i {
+                sum -= l[(i, p)] * b[(p, c)];
+            }
+            b[(i, c)] = sum / l[(i, i)];
+        }
+    }
+}
+
+impl LinkOperators {
+    fn new(
+        link: &crate::LinkModel,
+        coupling: Coupling,
+        damping: &ModalDamping,
+        index: usize,
+    ) -> Result<Self, DynamicsError> {
+        let ints = &link.integrals;
+        let r = ints.r();
+        let llt = ints.mass.llt(Side::Lower).map_err(|_| {
+            DynamicsError::Inconsistent(format!(
+                "the modal mass matrix of link {} is not positive definite",
+                index + 1
+            ))
+        })?;
+        let m_inv = llt.inverse();
+        let apply = |m: &Mat<f64>| to_row_major(&(&m_inv * m));
+        let geometric = std::array::from_fn(|n| {
+            let g = &ints.g[n];
+            match coupling {
+                Coupling::Full => apply(g),
+                Coupling::Diagonal => {
+                    let d = Mat::from_fn(r, r, |i, j| if i == j { g[(i, i)] } else { 0.0 });
+                    apply(&d)
+                }
+            }
+        });
+        let vec_apply = |v: &[f64], scale: f64| -> Vec<f64> {
+            (0..r).map(|i| scale * (0..r).map(|k| m_inv[(i, k)] * v[k]).sum::<f64>()).collect()
+        };
+        let damping_op = if damping.is_none() {
+            Vec::new()
+        } else {
+            if damping.ratios.len() > 1 && damping.ratios.len() != r {
+                return Err(DynamicsError::Inconsistent(format!(
+                    "modal damping lists {} ratios but link {} has {r} modes (give one ratio for all, or one per mode)",
+                    damping.ratios.len(),
+                    index + 1
+                )));
+            }
+            if let Some(z) = damping.ratios.iter().find(|z| !(z.is_finite() && **z >= 0.0)) {
+                return Err(DynamicsError::InvalidParameter {
+                    quantity: "damping ratio".into(),
+                    value: *z,
+                    reason: "must be finite and non-negative",
+                });
+            }
+            // Phi = L^-T V with V the eigenvectors of L^-1 Kf L^-T.
+            let l = llt.L().to_owned();
+            let mut x = ints.stiffness.clone();
+            forward_substitute(&l, &mut x); // L^-1 Kf
+            let mut a = x.transpose().to_owned();
+            forward_substitute(&l, &mut a); // L^-1 (L^-1 Kf)^T = L^-1 Kf L^-T
+            let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+            let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
+                DynamicsError::Inconsistent(format!("eigen-decomposition failed for link {}", index + 1))
+            })?;
+            let v = eig.U().to_owned();
+            let s = eig.S();
+            // Phi = L^-T V: solve L^T Phi = V by back substitution.
+            let mut phi = v.clone();
+            for c in 0..r {
+                for i in (0..r).rev() {
+                    let mut sum = phi[(i, c)];
+                    for p in i + 1..r {
+                        sum -= l[(p, i)] * phi[(p, c)];
+                    }
+                    phi[(i, c)] = sum / l[(i, i)];
+                }
+            }
+            let diag = Mat::from_fn(r, r, |i, j| {
+                if i == j { 2.0 * damping.ratio(i) * s[i].max(0.0).sqrt() } else { 0.0 }
+            });
+            to_row_major(&(&phi * &diag * phi.transpose() * &ints.mass))
+        };
+        Ok(Self {
+            r,
+            length: ints.length,
+            flexural: apply(&ints.stiffness),
+            geometric,
+            damping: damping_op,
+            rho_forcing: vec_apply(&ints.mass_psi, 1.0),
+            beta_forcing: vec_apply(&ints.mass_xi_psi, ints.length),
+        })
+    }
+}
+
+/// Work counters of a modal system (how much was evaluated: tests use them to prove that
+/// a scene computes only what it needs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Right-hand-side evaluations.
+    pub rhs_evaluations: usize,
+    /// Rigid inverse dynamics solves.
+    pub inverse_dynamics_solves: usize,
+    /// Analytic Jacobian evaluations.
+    pub jacobian_evaluations: usize,
+}
+
+/// The instantaneous rigid-body data a right-hand side needs.
+#[derive(Debug, Clone, Copy)]
+pub struct Instant {
+    /// Kinematic state.
+    pub state: MachineState,
+    /// Rigid joint reactions, when computed.
+    pub reactions: Option<JointReactions>,
+    /// Axial load of each link.
+    pub loads: [AxialLoad; 3],
+}
+
+/// The modal ODE of the three links under a prescribed platform motion (KED).
+pub struct ModalSystem {
+    machine: Arc<Machine>,
+    trajectory: Arc<dyn Trajectory + Send + Sync>,
+    formulation: Formulation,
+    damping: ModalDamping,
+    axial: Box<dyn AxialForceModel>,
+    ops: [LinkOperators; 3],
+    offsets: [usize; 3],
+    modes: usize,
+    counters: Counters,
+    failure: Option<DynamicsError>,
+}
+
+impl std::fmt::Debug for ModalSystem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ModalSystem")
+            .field("formulation", &self.formulation)
+            .field("modes", &self.modes)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+impl ModalSystem {
+    /// Builds the system: forms `M^-1 Kf`, `M^-1 Gn`, `M^-1 C` and the forcing vectors once.
+    ///
+    /// # Errors
+    /// A modal mass matrix that is not positive definite, or inconsistent damping.
+    pub fn new(
+        machine: Arc<Machine>,
+        trajectory: Arc<dyn Trajectory + Send + Sync>,
+        formulation: Formulation,
+        damping: ModalDamping,
+    ) -> Result<Self, DynamicsError> {
+        let ops = [0, 1, 2].map(|i| {
+            LinkOperators::new(&machine.links[i], formulation.geometric_stiffness, &damping, i)
+        });
+        let [a, b, c] = ops;
+        let ops = [a?, b?, c?];
+        let offsets = [0, ops[0].r, ops[0].r + ops[1].r];
+        let modes = offsets[2] + ops[2].r;
+        Ok(Self {
+            axial: formulation.axial.model(),
+            machine,
+            trajectory,
+            formulation,
+            damping,
+            ops,
+            offsets,
+            modes,
+            counters: Counters::default(),
+            failure: None,
+        })
+    }
+
+    /// The machine.
+    pub fn machine(&self) -> &Machine {
+        &self.machine
+    }
+    /// The formulation.
+    pub fn formulation(&self) -> &Formulation {
+        &self.formulation
+    }
+    /// The damping.
+    pub fn damping(&self) -> &ModalDamping {
+        &self.damping
+    }
+    /// The trajectory.
+    pub fn trajectory(&self) -> &Arc<dyn Trajectory + Send + Sync> {
+        &self.trajectory
+    }
+    /// Total number of modal coordinates (half the state dimension).
+    pub fn modes(&self) -> usize {
+        self.modes
+    }
+    /// Range of link `i`'s coordinates in `eta`.
+    pub fn link_range(&self, link: usize) -> std::ops::Range<usize> {
+        self.offsets[link]..self.offsets[link] + self.ops[link].r
+    }
+    /// Work counters so far.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+    /// The zero initial state `eta(0) = 0`, `eta'(0) = 0` (the paper's).
+    pub fn initial_state(&self) -> Vec<f64> {
+        vec![0.0; 2 * self.modes]
+    }
+    /// The first failure met inside the right-hand side (which then writes NaN so the
+    /// integrator stops with a non-finite error): use it to report the real cause.
+    pub fn take_failure(&mut self) -> Option<DynamicsError> {
+        self.failure.take()
+    }
+
+    /// Kinematics, joint reactions (if the axial model needs them) and axial loads at `t`.
+    ///
+    /// # Errors
+    /// Kinematic failure or a singular inverse dynamics, with the time.
+    pub fn instant(&mut self, t: f64) -> Result<Instant, DynamicsError> {
+        let motion = self.trajectory.motion(t);
+        let state = self
+            .machine
+            .geometry
+            .inverse_kinematics_unchecked(&motion)
+            .map_err(|source| DynamicsError::Kinematics { t, source })?;
+        let reactions = if self.axial.needs_inverse_dynamics() {
+            self.counters.inverse_dynamics_solves += 1;
+            Some(inverse_dynamics(&self.machine, &state, None, t)?)
+        } else {
+            None
+        };
+        let loads = std::array::from_fn(|i| {
+            self.axial.load(&AxialInput {
+                leg: &state.legs[i],
+                guide_direction: self.machine.geometry.legs[i].guide.direction.into_inner(),
+                link: &self.machine.links[i],
+                reactions: reactions.as_ref(),
+                index: i,
+            })
+        });
+        Ok(Instant { state, reactions, loads })
+    }
+
+    /// Modal accelerations `eta''` for the state `y` at the instant `inst`, written into `out`.
+    fn accelerations(&self, inst: &Instant, y: &[f64], out: &mut [f64]) {
+        let n = self.modes;
+        let (eta, eta_dot) = y.split_at(n);
+        for (i, op) in self.ops.iter().enumerate() {
+            let leg = &inst.state.legs[i];
+            let u = self.machine.geometry.legs[i].guide.direction.into_inner();
+            let load = &inst.loads[i];
+            let (c0, c1, c2) = (load.p0 / op.length, load.p1, load.p2 * op.length);
+            let sin_ab = u.dot(&leg.n); // sin(a - b)
+            let mut rho_coef = -leg.rho_ddot * sin_ab;
+            if self.formulation.coriolis_forcing {
+                rho_coef += leg.rho_dot * leg.beta_dot * u.dot(&leg.e); // F_fg, cos(a - b)
+            }
+            let beta_coef = -leg.beta_ddot;
+            let softening =
+                if self.formulation.centrifugal_softening { leg.beta_dot * leg.beta_dot } else { 0.0 };
+            let off = self.offsets[i];
+            let r = op.r;
+            let eta_i = &eta[off..off + r];
+            let eta_dot_i = &eta_dot[off..off + r];
+            let [g0, g1, g2] = &op.geometric;
+            for j in 0..r {
+                let row = j * r..(j + 1) * r;
+                let mut acc = rho_coef * op.rho_forcing[j] + beta_coef * op.beta_forcing[j]
+                    + softening * eta_i[j];
+                let (kf, a0, a1, a2) = (&op.flexural[row.clone()], &g0[row.clone()], &g1[row.clone()], &g2[row.clone()]);
+                for k in 0..r {
+                    acc -= (kf[k] + c0 * a0[k] + c1 * a1[k] + c2 * a2[k]) * eta_i[k];
+                }
+                if !op.damping.is_empty() {
+                    let d = &op.damping[row];
+                    for k in 0..r {
+                        acc -= d[k] * eta_dot_i[k];
+                    }
+                }
+                out[off + j] = acc;
+            }
+        }
+    }
+
+    /// Modal accelerations `eta''` at `(t, y)` (allocating; for outputs).
+    ///
+    /// # Errors
+    /// As [`ModalSystem::instant`].
+    pub fn modal_accelerations(&mut self, t: f64, y: &[f64]) -> Result<Vec<f64>, DynamicsError> {
+        let inst = self.instant(t)?;
+        let mut out = vec![0.0; self.modes];
+        self.accelerations(&inst, y, &mut out);
+        Ok(out)
+    }
+
+    /// Elastic transverse inertia of each link for modal accelerations `eta_ddot`.
+    pub fn elastic_inertia(&self, eta_ddot: &[f64]) -> ElasticInertia {
+        let mut e = ElasticInertia::default();
+        for i in 0..3 {
+            let ints = &self.machine.links[i].integrals;
+            let range = self.link_range(i);
+            let acc = &eta_ddot[range];
+            e.force[i] = acc.iter().zip(&ints.mass_psi).map(|(a, m)| a * m).sum();
+            e.moment_about_b[i] =
+                ints.length * acc.iter().zip(&ints.mass_xi_psi).map(|(a, m)| a * m).sum::<f64>();
+        }
+        e
+    }
+
+    fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {
+        if self.failure.is_none() {
+            self.failure = Some(error);
+        }
+        dy.fill(f64::NAN);
+    }
+}
+
+impl OdeSystem for ModalSystem {
+    fn dim(&self) -> usize {
+        2 * self.modes
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.counters.rhs_evaluations += 1;
+        let inst = match self.instant(t) {
+            Ok(inst) => inst,
+            Err(e) => return self.fail(e, dy),
+        };
+        let n = self.modes;
+        dy[..n].copy_from_slice(&y[n..]);
+        let (_, acc) = dy.split_at_mut(n);
+        self.accelerations(&inst, y, acc);
+    }
+
+    /// `J = [[0, I], [-M^-1 K(t) (+ b'^2 I), -M^-1 C]]`, block diagonal per link.
+    fn jacobian(&mut self, t: f64, _y: &[f64], mut jac: MatMut<'_, f64>) {
+        self.counters.jacobian_evaluations += 1;
+        let n = self.modes;
+        jac.fill(0.0);
+        for k in 0..n {
+            jac[(k, n + k)] = 1.0;
+        }
+        let inst = match self.instant(t) {
+            Ok(inst) => inst,
+            Err(e) => {
+                if self.failure.is_none() {
+                    self.failure = Some(e);
+                }
+                jac.fill(f64::NAN);
+                return;
+            }
+        };
+        for (i, op) in self.ops.iter().enumerate() {
+            let leg = &inst.state.legs[i];
+            let load = &inst.loads[i];
+            let (c0, c1, c2) = (load.p0 / op.length, load.p1, load.p2 * op.length);
+            let softening =
+                if self.formulation.centrifugal_softening { leg.beta_dot * leg.beta_dot } else { 0.0 };
+            let off = self.offsets[i];
+            let r = op.r;
+            for j in 0..r {
+                for k in 0..r {
+                    let idx = j * r + k;
+                    let mut v = -(op.flexural[idx]
+                        + c0 * op.geometric[0][idx]
+                        + c1 * op.geometric[1][idx]
+                        + c2 * op.geometric[2][idx]);
+                    if j == k {
+                        v += softening;
+                    }
+                    jac[(n + off + j, off + k)] = v;
+                    if !op.damping.is_empty() {
+                        jac[(n + off + j, n + off + k)] = -op.damping[idx];
+                    }
+                }
+            }
+        }
+    }
+
+    fn has_analytic_jacobian(&self) -> bool {
+        true
+    }
+}
