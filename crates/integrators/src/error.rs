@@ -50,6 +50,17 @@ pub enum IntegratorError {
         /// Time reached.
         t: f64,
     },
+    /// An explicit method found the problem stiff and was asked to stop
+    /// (see [`crate::rk45::StiffnessDetection::Error`]).
+    #[error(
+        "the problem looks stiff at t = {t} s (stability, not accuracy, limits the step: h*|lambda| ~ {h_lambda:.2}); use an implicit method such as BDF"
+    )]
+    Stiff {
+        /// Time at which the test fired.
+        t: f64,
+        /// Estimate of `|h lambda|` on the step that fired the test.
+        h_lambda: f64,
+    },
     /// An option is out of range.
     #[error("invalid integrator option: {0}")]
     InvalidOptions(String),

@@ -49,7 +49,7 @@ pub use bdf::Bdf;
 pub use common::{error_norm, initial_step};
 pub use error::IntegratorError;
 pub use options::{Options, Tolerance};
-pub use rk45::Rk45;
+pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};
 pub use solution::{Solution, Stats};
 pub use system::{OdeSystem, finite_difference_jacobian};
 

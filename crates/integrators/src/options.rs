@@ -141,7 +141,7 @@ impl Options {
                 ));
             }
         }
-        if !(self.max_step > 0.0) || self.max_step.is_nan() {
+        if self.max_step.is_nan() || self.max_step <= 0.0 {
             return bad(format!("max_step must be positive, got {}", self.max_step));
         }
         if self.max_steps == 0 {
