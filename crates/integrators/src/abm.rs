@@ -504,30 +504,26 @@ impl Stepper for AbmStepper {
             let coef = &self.coef;
 
             // ---- Block 2: predict, evaluate, estimate errors at orders k-2 .. k.
-            // phi -> phi* (scaled to the new step pattern).
-            for i in ns + 1..=k {
-                let b = coef.beta[i];
-                for v in column_mut(&mut self.phi, n, i) {
-                    *v *= b;
-                }
-            }
+            // phi -> phi* (scaled to the new step pattern: beta_i = 1 for i <= ns), the
+            // predicted differences phi^p_i = phi*_i + phi^p_{i+1} (phi^p_{k+1} = 0, the old
+            // phi_{k+1} kept in column k + 2 for the order k + 1 estimate) and
+            // sum_{i<=k} g_i phi*_i, one column at a time.
             {
                 let (phi_k1, phi_k2) = two_columns_mut(&mut self.phi, n, k + 1, k + 2);
                 phi_k2.copy_from_slice(phi_k1);
                 phi_k1.fill(0.0);
             }
-            self.predicted.fill(0.0);
+            let sum = &mut self.predicted[..n];
+            sum.fill(0.0);
             for i in (1..=k).rev() {
                 let gi = coef.g[i];
+                let beta_i = if i > ns { coef.beta[i] } else { 1.0 };
                 let (phi_i, phi_next) = column_and_next(&mut self.phi, n, i);
-                for ((p, a), b) in self
-                    .predicted
-                    .iter_mut()
-                    .zip(phi_i.iter_mut())
-                    .zip(phi_next)
-                {
-                    *p += gi * *a;
-                    *a += b;
+                let (phi_i, phi_next) = (&mut phi_i[..n], &phi_next[..n]);
+                for l in 0..n {
+                    let star = beta_i * phi_i[l];
+                    sum[l] += gi * star;
+                    phi_i[l] = star + phi_next[l];
                 }
             }
             // p = y + h sum g_i phi*_i with the rounding of the last correction carried
