@@ -8,6 +8,8 @@ use integrators::{
     Integrator, IntegratorError, OdeSystem, Options, Rk45, Stepper, StiffnessDetection,
 };
 use proptest::prelude::*;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 
 /// Reference solution by the classical 4th-order Runge-Kutta method with a fixed step
 /// (Kutta 1901; Hairer-Norsett-Wanner I, Table II.1.2): independent of the code under test.
@@ -48,6 +50,34 @@ fn classical_rk4<S: OdeSystem>(
         }
     }
     y
+}
+
+/// Counts heap allocations made by the current thread, to check that stepping allocates
+/// nothing (tests run in parallel threads, hence the thread-local counter).
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards every call to the system allocator unchanged; only counts.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+fn allocations_so_far() -> usize {
+    ALLOCATIONS.with(Cell::get)
 }
 
 /// Largest componentwise absolute difference.
@@ -510,4 +540,31 @@ proptest! {
             prop_assert!(err <= 20.0 * (rtol * exact.abs().max(y0.abs()) + atol), "t = {}: err {:e}", t, err);
         }
     }
+}
+
+/// `step` and `interpolate` allocate nothing: all work vectors come from `start`
+/// (including the stiffness test, rejected steps and the order statistics).
+#[test]
+fn stepping_and_dense_output_do_not_allocate() {
+    let mut p = VanDerPol::default();
+    let rk = Rk45::new(Options::default().rtol(1e-4).atol(1e-6));
+    let mut stepper = rk.start(&mut p, 0.0, &[2.0, 0.0], 2.0).unwrap();
+    let mut out = [0.0; 2];
+    let before = allocations_so_far();
+    while stepper.t() < 2.0 {
+        stepper.step(&mut p).unwrap();
+        let t_mid = 0.5 * (stepper.t_previous() + stepper.t());
+        stepper.interpolate(t_mid, &mut out);
+    }
+    let allocated = allocations_so_far() - before;
+    let s = stepper.stats();
+    assert!(
+        s.rejected_steps > 0 && s.stiffness_detected_at.is_some(),
+        "{s:?}"
+    );
+    assert_eq!(
+        allocated, 0,
+        "{allocated} allocations in {} steps",
+        s.accepted_steps
+    );
 }
