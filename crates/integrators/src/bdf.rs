@@ -650,11 +650,6 @@ impl Stepper for BdfStepper {
                     MIN_FACTOR
                 };
                 h_abs *= factor;
-                if error_failures >= 3 && self.order > 1 {
-                    // Repeated failures: the higher differences are unreliable (CVODE
-                    // drops to order 1 after three failures).
-                    self.order = 1;
-                }
                 continue;
             }
             if let Some(component) = first_non_finite(&self.y_new) {
