@@ -1,5 +1,18 @@
-//! `flexprr beam`: placeholder until the beam layer lands.
+//! `flexprr beam <link.toml> [--json]`: natural frequencies of a single link under an axial
+//! load `P(x) = p0 + p1 x + p2 x^2` (model.md section 7).
+//!
+//! The link file (see `configs/link_paper.toml` and `docs/beam.md`) gives the material, the
+//! section, the length, the assumed-mode basis, the number of modes, the coupling and the load.
+//! Its TOML structs live here for now; they will move to the scenarios layer.
+
 use super::Failure;
+use beam::{
+    AxialLoad, Basis, ClassicalBasis, Coupling, EndCondition, EndConditions, HermiteBasis,
+    LinkFrequencies, ModalIntegrals, Section, SineBasis, SteppedSection, TaperedSection,
+    UniformSection, frequencies,
+};
+use serde::Deserialize;
+
 /// Arguments of `flexprr beam`.
 #[derive(Debug, clap::Args)]
 pub struct BeamArgs {
@@ -9,7 +22,432 @@ pub struct BeamArgs {
     #[arg(long)]
     pub json: bool,
 }
+
+/// A single-link file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkFile {
+    /// Link length `l` (m).
+    pub length: f64,
+    /// Number of basis functions `r` for `sine` and `classical` bases; for `hermite`, the
+    /// number of modes reported (at most the number of free nodal unknowns).
+    pub modes: usize,
+    /// `"full"` (default) or `"diagonal"` (the paper's eq. 22).
+    #[serde(default)]
+    pub coupling: CouplingConfig,
+    /// Material of the link.
+    pub material: MaterialConfig,
+    /// Cross-section along the link.
+    pub section: SectionConfig,
+    /// Assumed-mode basis.
+    pub basis: BasisConfig,
+    /// Axial force, tension positive (default: none).
+    #[serde(default)]
+    pub load: LoadConfig,
+}
+
+/// Material constants.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialConfig {
+    /// Young's modulus `E` (Pa).
+    pub youngs_modulus: f64,
+    /// Density (kg/m^3).
+    pub density: f64,
+}
+
+/// Rectangular cross-section of in-plane (bending) thickness `t` and out-of-plane height `h`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum SectionConfig {
+    /// Constant `t` and `h`: `EI = E h t^3 / 12`, `rhoA = density t h`.
+    Uniform {
+        /// In-plane thickness `t` (m).
+        thickness: f64,
+        /// Out-of-plane height `h` (m).
+        height: f64,
+    },
+    /// Thickness linear from `thickness_start` (slider end) to `thickness_end`.
+    Tapered {
+        /// Thickness at `xi = 0` (m).
+        thickness_start: f64,
+        /// Thickness at `xi = 1` (m).
+        thickness_end: f64,
+        /// Out-of-plane height (m).
+        height: f64,
+    },
+    /// Piecewise-constant rectangles.
+    Stepped {
+        /// Pieces in order along the link.
+        steps: Vec<StepConfig>,
+    },
+}
+
+/// One piece of a stepped section.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepConfig {
+    /// Where the piece ends, as a fraction `xi` of the length (the last one is 1).
+    pub end: f64,
+    /// In-plane thickness (m).
+    pub thickness: f64,
+    /// Out-of-plane height (m).
+    pub height: f64,
+}
+
+/// End conditions, `"<at slider>-<at platform>"`.
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+#[allow(missing_docs)]
+pub enum EndsConfig {
+    #[default]
+    PinnedPinned,
+    PinnedClamped,
+    PinnedFree,
+    ClampedPinned,
+    ClampedClamped,
+    ClampedFree,
+    FreePinned,
+    FreeClamped,
+    FreeFree,
+}
+
+impl EndsConfig {
+    fn to_ends(self) -> EndConditions {
+        use EndCondition::{Clamped, Free, Pinned};
+        let (left, right) = match self {
+            EndsConfig::PinnedPinned => (Pinned, Pinned),
+            EndsConfig::PinnedClamped => (Pinned, Clamped),
+            EndsConfig::PinnedFree => (Pinned, Free),
+            EndsConfig::ClampedPinned => (Clamped, Pinned),
+            EndsConfig::ClampedClamped => (Clamped, Clamped),
+            EndsConfig::ClampedFree => (Clamped, Free),
+            EndsConfig::FreePinned => (Free, Pinned),
+            EndsConfig::FreeClamped => (Free, Clamped),
+            EndsConfig::FreeFree => (Free, Free),
+        };
+        EndConditions::new(left, right)
+    }
+}
+
+/// Assumed-mode basis.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum BasisConfig {
+    /// `sin(j pi xi)` (pinned-pinned; the paper's).
+    Sine,
+    /// Euler-Bernoulli eigenfunctions of a uniform beam with the given ends.
+    Classical {
+        /// End conditions, e.g. `"clamped-free"`.
+        ends: EndsConfig,
+    },
+    /// Hermite cubic finite elements.
+    Hermite {
+        /// Number of elements.
+        elements: usize,
+        /// End conditions (default `"pinned-pinned"`).
+        #[serde(default)]
+        ends: EndsConfig,
+    },
+}
+
+/// Frequency coupling.
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum CouplingConfig {
+    /// Generalized eigenproblem with the full matrices.
+    #[default]
+    Full,
+    /// Diagonals only (eq. 22).
+    Diagonal,
+}
+
+/// `P(x) = p0 + p1 x + p2 x^2`, `x` in metres from the slider end, tension positive.
+#[derive(Debug, Clone, Copy, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct LoadConfig {
+    /// Constant part (N).
+    #[serde(default)]
+    pub p0: f64,
+    /// Linear coefficient (N/m).
+    #[serde(default)]
+    pub p1: f64,
+    /// Quadratic coefficient (N/m^2).
+    #[serde(default)]
+    pub p2: f64,
+}
+
+/// Parses a link file; errors say where (line, column) and which key.
+///
+/// For an unknown key inside a tagged table (`[section]`, `[basis]`) the TOML parser only
+/// knows the table's span, so the key itself is looked up from there.
+pub fn parse_link_file(text: &str) -> Result<LinkFile, String> {
+    toml::from_str(text).map_err(|e| {
+        let message = e.message().trim().to_string();
+        let Some(span) = e.span() else {
+            return message;
+        };
+        let mut offset = span.start.min(text.len());
+        if let Some(key) = message
+            .strip_prefix("unknown field `")
+            .and_then(|rest| rest.split('`').next())
+        {
+            if let Some(found) = find_key(text, offset, key) {
+                offset = found;
+            }
+        }
+        let before = &text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+        format!("line {line}, column {column}: {message}")
+    })
+}
+
+/// Byte offset of the first line at or after `from` that assigns `key`.
+fn find_key(text: &str, from: usize, key: &str) -> Option<usize> {
+    let line_start = text[..from].rfind('\n').map_or(0, |i| i + 1);
+    let mut offset = line_start;
+    for line in text[line_start..].split_inclusive('\n') {
+        let trimmed = line.trim_start();
+        if let Some(rest) = trimmed.strip_prefix(key) {
+            if rest.trim_start().starts_with('=') {
+                return Some(offset + (line.len() - trimmed.len()));
+            }
+        }
+        offset += line.len();
+    }
+    None
+}
+
+/// A link built from a file: basis, section and its integrals.
+struct Link {
+    basis: Box<dyn Basis>,
+    ei_at_start: f64,
+    rho_a_at_start: f64,
+    integrals: ModalIntegrals,
+    reported: usize,
+}
+
+fn build_link(file: &LinkFile) -> Result<Link, String> {
+    let e = file.material.youngs_modulus;
+    let rho = file.material.density;
+    let section: Box<dyn Section> = match &file.section {
+        SectionConfig::Uniform { thickness, height } => Box::new(
+            UniformSection::rectangle(e, rho, *thickness, *height)
+                .map_err(|e| format!("section: {e}"))?,
+        ),
+        SectionConfig::Tapered {
+            thickness_start,
+            thickness_end,
+            height,
+        } => Box::new(
+            TaperedSection::new(e, rho, *thickness_start, *thickness_end, *height)
+                .map_err(|e| format!("section: {e}"))?,
+        ),
+        SectionConfig::Stepped { steps } => {
+            let pieces = steps
+                .iter()
+                .enumerate()
+                .map(|(k, s)| {
+                    UniformSection::rectangle(e, rho, s.thickness, s.height)
+                        .map(|u| (s.end, u))
+                        .map_err(|e| format!("section.steps[{k}]: {e}"))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            Box::new(SteppedSection::new(pieces).map_err(|e| format!("section.steps: {e}"))?)
+        }
+    };
+    let (basis, reported): (Box<dyn Basis>, usize) = match file.basis {
+        BasisConfig::Sine => (
+            Box::new(SineBasis::new(file.modes).map_err(|e| format!("modes: {e}"))?),
+            file.modes,
+        ),
+        BasisConfig::Classical { ends } => (
+            Box::new(
+                ClassicalBasis::new(ends.to_ends(), file.modes)
+                    .map_err(|e| format!("basis: {e}"))?,
+            ),
+            file.modes,
+        ),
+        BasisConfig::Hermite { elements, ends } => {
+            let basis =
+                HermiteBasis::new(elements, ends.to_ends()).map_err(|e| format!("basis: {e}"))?;
+            if file.modes == 0 || file.modes > basis.len() {
+                return Err(format!(
+                    "modes = {} must be between 1 and the {} nodal unknowns of {} elements",
+                    file.modes,
+                    basis.len(),
+                    elements
+                ));
+            }
+            (Box::new(basis), file.modes)
+        }
+    };
+    let integrals = ModalIntegrals::compute(basis.as_ref(), section.as_ref(), file.length)
+        .map_err(|e| format!("modal integrals: {e}"))?;
+    Ok(Link {
+        ei_at_start: section.bending_stiffness(0.0),
+        rho_a_at_start: section.mass_per_length(0.0),
+        basis,
+        integrals,
+        reported,
+    })
+}
+
 /// Runs the command.
-pub fn run(_args: BeamArgs) -> Result<(), Failure> {
-    Err(Failure::run("not implemented yet"))
+pub fn run(args: BeamArgs) -> Result<(), Failure> {
+    let path = args.file.display().to_string();
+    let text = std::fs::read_to_string(&args.file)
+        .map_err(|e| Failure::bad_input(format!("{path}: cannot read: {e}")))?;
+    let file = parse_link_file(&text).map_err(|e| Failure::bad_input(format!("{path}: {e}")))?;
+    let link = build_link(&file).map_err(|e| Failure::bad_input(format!("{path}: {e}")))?;
+    let load = AxialLoad {
+        p0: file.load.p0,
+        p1: file.load.p1,
+        p2: file.load.p2,
+    };
+    let coupling = match file.coupling {
+        CouplingConfig::Full => Coupling::Full,
+        CouplingConfig::Diagonal => Coupling::Diagonal,
+    };
+    let result = frequencies(&link.integrals, &load, coupling)
+        .map_err(|e| Failure::run(format!("{path}: {e}")))?;
+    let report = if args.json {
+        json_report(&file, &link, &load, &result) + "\n"
+    } else {
+        table_report(&file, &link, &load, &result)
+    };
+    write_stdout(&report)
+}
+
+/// Writes to standard output; a closed pipe (e.g. `| head`) is not an error.
+fn write_stdout(text: &str) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(Failure::run(format!("cannot write output: {e}"))),
+    }
+}
+
+fn json_report(file: &LinkFile, link: &Link, load: &AxialLoad, result: &LinkFrequencies) -> String {
+    let modes: Vec<_> = result.modes[..link.reported]
+        .iter()
+        .map(|m| {
+            serde_json::json!({
+                "mode": m.mode,
+                "frequency_hz": m.frequency_hz,
+                "omega_squared": m.omega_squared,
+                "state": m.state.name(),
+            })
+        })
+        .collect();
+    let value = serde_json::json!({
+        "basis": link.basis.name(),
+        "r": link.integrals.r(),
+        "coupling": result.coupling.name(),
+        "length": file.length,
+        "total_mass": link.integrals.total_mass,
+        "bending_stiffness_at_slider": link.ei_at_start,
+        "mass_per_length_at_slider": link.rho_a_at_start,
+        "quadrature": {
+            "points_per_panel": link.integrals.points_per_panel,
+            "panels": link.integrals.panels,
+        },
+        "load": { "p0": load.p0, "p1": load.p1, "p2": load.p2 },
+        "buckled": result.is_buckled(),
+        "lowest_eigenvalue": result.lowest_eigenvalue(),
+        "critical_load_factor": result.critical_load_factor,
+        "modes": modes,
+    });
+    serde_json::to_string_pretty(&value).unwrap_or_else(|_| value.to_string())
+}
+
+fn table_report(
+    file: &LinkFile,
+    link: &Link,
+    load: &AxialLoad,
+    result: &LinkFrequencies,
+) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let mi = &link.integrals;
+    let _ = writeln!(
+        s,
+        "link: l = {} m, mass = {:.6} kg, EI(0) = {:.6e} N m^2, rhoA(0) = {:.6e} kg/m",
+        file.length, mi.total_mass, link.ei_at_start, link.rho_a_at_start
+    );
+    let _ = writeln!(
+        s,
+        "basis: {}; coupling: {}; quadrature: {} Gauss points x {} panel(s)",
+        link.basis.name(),
+        result.coupling.name(),
+        mi.points_per_panel,
+        mi.panels
+    );
+    let _ = writeln!(
+        s,
+        "load: P(x) = {} + {} x + {} x^2 N (tension positive)",
+        load.p0, load.p1, load.p2
+    );
+    let _ = writeln!(
+        s,
+        "{:>5}  {:>16}  {:>20}  state",
+        "mode", "frequency (Hz)", "omega^2 (rad^2/s^2)"
+    );
+    for m in &result.modes[..link.reported] {
+        let _ = writeln!(
+            s,
+            "{:>5}  {:>16.6}  {:>20.9e}  {}",
+            m.mode,
+            m.frequency_hz,
+            m.omega_squared,
+            m.state.name()
+        );
+    }
+    match result.critical_load_factor {
+        Some(factor) => {
+            let _ = writeln!(
+                s,
+                "critical load factor: {factor:.9} (the link buckles at {factor:.6} x this load)"
+            );
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "critical load factor: none (no positive multiple of this load buckles the link)"
+            );
+        }
+    }
+    if result.is_buckled() {
+        let _ = writeln!(
+            s,
+            "BUCKLED: lowest eigenvalue {:.6e} rad^2/s^2 (stiffness not positive definite)",
+            result.lowest_eigenvalue()
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_key_is_reported_with_line_and_column() {
+        let text = "length = 0.2\nmodes = 3\nlenght = 1\n";
+        let err = parse_link_file(text).unwrap_err();
+        assert!(err.contains("line 3"), "{err}");
+        assert!(err.contains("lenght"), "{err}");
+    }
+
+    #[test]
+    fn unknown_key_inside_a_tagged_table_is_rejected() {
+        let text = "length = 0.2\nmodes = 3\n[material]\nyoungs_modulus = 7e10\ndensity = 2770.0\n\
+                    [section]\nkind = \"uniform\"\nthickness = 0.002\nheight = 0.03\nwidth = 1\n\
+                    [basis]\nkind = \"sine\"\n";
+        let err = parse_link_file(text).unwrap_err();
+        assert!(err.contains("width"), "{err}");
+    }
 }
