@@ -16,12 +16,12 @@
 //!
 //! for the correction `d = y - y_pred` (= `nabla^{k+1} y_{n+1}`), by simplified Newton
 //! iterations with the iteration matrix `I - c J`, `c = h / ((1 - kappa_k) gamma_k)`
-//! (Shampine & Reichelt 1997, eqs. (2)-(5)). `kappa = 0` is the BDF; the NDF uses the
+//! (Shampine & Reichelt 1997, section 2.1). `kappa = 0` is the BDF; the NDF uses the
 //! `kappa` of their Table 1. The local error is `(kappa_k gamma_k + 1/(k+1)) d`, and the
 //! error estimates of orders `k - 1` and `k + 1` come from `D[k]` and `nabla^{k+2} y_{n+1}`
 //! (their section 2.3); the order with the largest admissible step is taken after `k + 1`
 //! steps of constant size. A change of step size re-samples the interpolating polynomial on
-//! the new spacing (their eq. (6): `D <- (R U)^T D`), which also gives the dense output.
+//! the new spacing (their section 2.1: `D <- (R U)^T D`), which also gives the dense output.
 //!
 //! # Linear algebra and reuse (after CVODE)
 //!
@@ -262,7 +262,7 @@ fn first_non_finite(v: &[f64]) -> Option<usize> {
     v.iter().position(|x| !x.is_finite())
 }
 
-/// `R(order, factor)` of Shampine & Reichelt (1997), eq. (6) context:
+/// The matrix `R(order, factor)` of Shampine & Reichelt (1997), section 2.1:
 /// `R[i][j] = prod_{m=1..i} (m - 1 - factor j) / m`, `i, j = 0..=order`.
 fn resampling_matrix(order: usize, factor: f64) -> [[f64; MAX_ORDER + 1]; MAX_ORDER + 1] {
     let mut r = [[0.0; MAX_ORDER + 1]; MAX_ORDER + 1];
@@ -283,7 +283,7 @@ impl BdfStepper {
     }
 
     /// Re-samples the difference table of order `order` from spacing `h` to `factor h`
-    /// (Shampine & Reichelt 1997, eq. (6)): `D[0..=k] <- (R(k, factor) U(k))^T D[0..=k]`
+    /// (Shampine & Reichelt 1997, section 2.1): `D[0..=k] <- (R(k, factor) U(k))^T D[0..=k]`
     /// with `U(k) = R(k, 1)`. The interpolating polynomial is unchanged.
     fn rescale_differences(&mut self, order: usize, factor: f64) {
         let r = resampling_matrix(order, factor);
