@@ -7,7 +7,7 @@ use std::cell::Cell;
 
 use integrators::abm::AbmStepper;
 use integrators::test_problems::{
-    ForcedOscillator, HarmonicOscillator, Mathieu, TestProblem, VanDerPol,
+    ForcedOscillator, HarmonicOscillator, Mathieu, StiffLinear, TestProblem, VanDerPol,
 };
 use integrators::{Abm, Integrator, IntegratorError, OdeSystem, Options, Rk45, Stats, Stepper};
 use proptest::prelude::*;
@@ -588,6 +588,34 @@ fn modal_ladder_of_thirty_modes() {
         abm.stats.rhs_evaluations,
         rk.stats.rhs_evaluations
     );
+}
+
+/// On a stiff linear problem (eigenvalues -1 and -1000) the explicit Adams code still gets the
+/// closed-form answer, but only with stability-bounded steps at low order, and DE's stiffness
+/// test (50 steps in a row at order <= 4) flags it; on the smooth harmonic oscillator at a
+/// tight tolerance it does not.
+#[test]
+fn stiffness_is_flagged_on_a_stiff_problem_only() {
+    let p = StiffLinear {
+        lambda_fast: 1e3,
+        t_end: 2.0,
+        ..Default::default()
+    };
+    let t = grid(0.0, p.t_end, 20);
+    let sol = Abm::new(options(1e-6, 1e-9))
+        .solve(&mut p.clone(), 0.0, &p.y0(), &t)
+        .unwrap();
+    let e = max_error_vs_exact(&p, &t, &sol);
+    assert!(e < 1e-5, "stiff linear error {e:e}");
+    assert!(sol.stats.stiffness_detected_at.is_some(), "{:?}", sol.stats);
+    // Stability, not accuracy, bounds the step: far more steps than the slow mode needs.
+    assert!(sol.stats.accepted_steps > 500, "{:?}", sol.stats);
+
+    let h = HarmonicOscillator::default();
+    let sol = Abm::new(options(1e-10, 1e-12))
+        .solve(&mut h.clone(), 0.0, &h.y0(), &[h.t_end()])
+        .unwrap();
+    assert_eq!(sol.stats.stiffness_detected_at, None);
 }
 
 /// No heap allocation inside `step` or `interpolate` (counted with a global allocator).
