@@ -25,8 +25,9 @@
 //!
 //! # Linear algebra and reuse (after CVODE)
 //!
-//! The Jacobian `J` comes from [`OdeSystem::jacobian`] (analytic when the system has one) and
-//! is kept across steps as CVODE does (Hindmarsh et al., *SUNDIALS*, ACM TOMS 31(3), 2005,
+//! The Jacobian `J` comes from [`OdeSystem::jacobian`] when the system has an analytic one,
+//! otherwise from [`finite_difference_jacobian`] (the trait's default, run here on
+//! preallocated work vectors), and is kept across steps as CVODE does (Hindmarsh et al., *SUNDIALS*, ACM TOMS 31(3), 2005,
 //! section 2.1): it is re-evaluated after [`JACOBIAN_MAX_AGE`] accepted steps, when `c`
 //! moved by more than [`JACOBIAN_MAX_GAMMA_CHANGE`] since it was evaluated, and after a
 //! Newton convergence failure with an old Jacobian. The iteration matrix `I - c J` is
@@ -49,7 +50,10 @@ use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve}
 use faer::perm::PermRef;
 use faer::{Mat, MatMut, Par};
 
-use crate::{IntegratorError, OdeSystem, Options, Stats, Stepper, error_norm, initial_step};
+use crate::{
+    IntegratorError, OdeSystem, Options, Stats, Stepper, error_norm, finite_difference_jacobian,
+    initial_step,
+};
 
 /// Highest BDF order (orders above 5 are not zero-stable).
 pub const MAX_ORDER: usize = 5;
@@ -229,6 +233,9 @@ pub struct BdfStepper {
     weights: Vec<f64>,
     error: Vec<f64>,
     jacobian: Mat<f64>,
+    /// `f(t_n, y_n)` and work space for differenced Jacobians.
+    jacobian_f0: Vec<f64>,
+    jacobian_work: Vec<f64>,
     lu: Mat<f64>,
     row_perm: Vec<usize>,
     row_perm_inv: Vec<usize>,
@@ -316,9 +323,24 @@ impl BdfStepper {
         system: &mut S,
         c: f64,
     ) -> Result<(), AttemptFailure> {
-        system.jacobian(self.t, &self.y, self.jacobian.as_mut());
+        if system.has_analytic_jacobian() {
+            system.jacobian(self.t, &self.y, self.jacobian.as_mut());
+            self.stats.rhs_evaluations += system.jacobian_rhs_evaluations();
+        } else {
+            // The trait's provided Jacobian is these same forward differences but allocates
+            // its work vectors; with ours preallocated the step stays allocation-free.
+            system.rhs(self.t, &self.y, &mut self.jacobian_f0);
+            finite_difference_jacobian(
+                system,
+                self.t,
+                &self.y,
+                &self.jacobian_f0,
+                self.jacobian.as_mut(),
+                &mut self.jacobian_work,
+            );
+            self.stats.rhs_evaluations += self.dim + 1;
+        }
         self.stats.jacobian_evaluations += 1;
-        self.stats.rhs_evaluations += system.jacobian_rhs_evaluations();
         self.jacobian_c = Some(c);
         self.jacobian_current = true;
         self.steps_since_jacobian = 0;
@@ -849,6 +871,8 @@ impl crate::Integrator for Bdf {
             weights: vec![0.0; n],
             error: vec![0.0; n],
             jacobian: Mat::zeros(n, n),
+            jacobian_f0: vec![0.0; n],
+            jacobian_work: vec![0.0; 2 * n],
             lu: Mat::zeros(n, n),
             row_perm: vec![0; n],
             row_perm_inv: vec![0; n],

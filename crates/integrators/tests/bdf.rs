@@ -666,8 +666,8 @@ fn differenced_jacobian_evaluations_are_counted() {
     assert!((y[1] - exact1).abs() < 1e-4 * exact1 + 1e-8);
 }
 
-/// After `start`, steps with an analytic Jacobian allocate nothing (Jacobian evaluation,
-/// LU factorization, Newton iterations and dense output included).
+/// After `start`, steps allocate nothing (Jacobian evaluation, analytic or differenced, LU
+/// factorization, Newton iterations and dense output included).
 #[test]
 fn steps_do_not_allocate() {
     let mut p = Robertson::default();
@@ -725,4 +725,37 @@ proptest::proptest! {
         }
         proptest::prop_assert!(sol.stats.accepted_steps < 400, "{:?}", sol.stats);
     }
+}
+
+#[test]
+fn steps_with_differenced_jacobian_do_not_allocate() {
+    /// Robertson without its analytic Jacobian.
+    struct RobertsonDifferenced(Robertson);
+    impl OdeSystem for RobertsonDifferenced {
+        fn dim(&self) -> usize {
+            3
+        }
+        fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+            self.0.rhs(t, y, dy);
+        }
+    }
+    let mut p = RobertsonDifferenced(Robertson::default());
+    let bdf = Bdf::new(cvode_options());
+    let mut stepper = bdf.start(&mut p, 0.0, &[1.0, 0.0, 0.0], 1e5).unwrap();
+    let before = allocations();
+    while stepper.t() < 1e5 {
+        stepper.step(&mut p).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
+    let st = stepper.stats();
+    assert!(st.jacobian_evaluations > 0);
+    assert_eq!(
+        st.rhs_evaluations,
+        2 + st.newton_iterations + 4 * st.jacobian_evaluations
+    );
+    let y = stepper.y();
+    assert!(
+        (y[0] - 1.786592114210e-02).abs() < 2e-3 * 1.786592114210e-02,
+        "{y:?}"
+    );
 }
