@@ -29,8 +29,9 @@
 //! otherwise from [`finite_difference_jacobian`] (the trait's default, run here on
 //! preallocated work vectors), and is kept across steps as CVODE does (Hindmarsh et al.,
 //! *SUNDIALS*, ACM TOMS 31(3), 2005, the section on CVODE): it is re-evaluated after
-//! [`JACOBIAN_MAX_AGE`] accepted steps, when `c` moved by more than [`JACOBIAN_MAX_GAMMA_CHANGE`] since it was evaluated, and after a
-//! Newton convergence failure with an old Jacobian. The iteration matrix `I - c J` is
+//! [`JACOBIAN_MAX_AGE`] accepted steps, when `c` moved by more than
+//! [`JACOBIAN_MAX_GAMMA_CHANGE`] since it was evaluated, and after a Newton convergence
+//! failure with an old Jacobian. The iteration matrix `I - c J` is
 //! re-factored (LU with partial pivoting, faer's `lu_in_place` into preallocated storage)
 //! whenever `c` changed, so Newton never runs on a matrix with a wrong `c`. The Newton loop
 //! itself allocates nothing.
