@@ -69,7 +69,11 @@ impl AxialForceModel for NoAxialForce {
         false
     }
     fn load(&self, _input: &AxialInput<'_>) -> AxialLoad {
-        AxialLoad { p0: 0.0, p1: 0.0, p2: 0.0 }
+        AxialLoad {
+            p0: 0.0,
+            p1: 0.0,
+            p2: 0.0,
+        }
     }
 }
 
@@ -82,9 +86,15 @@ impl AxialForceModel for PaperAxialForce {
     }
     fn load(&self, input: &AxialInput<'_>) -> AxialLoad {
         let (p1, p2) = inertia_part(input);
-        let f_b = input.reactions.map_or(Vector2::zeros(), |r| r.slider_on_link[input.index]);
+        let f_b = input
+            .reactions
+            .map_or(Vector2::zeros(), |r| r.slider_on_link[input.index]);
         let cos_ba = input.leg.e.dot(&input.guide_direction);
-        AxialLoad { p0: -f_b.dot(&input.guide_direction) * cos_ba, p1, p2 }
+        AxialLoad {
+            p0: -f_b.dot(&input.guide_direction) * cos_ba,
+            p1,
+            p2,
+        }
     }
 }
 
@@ -97,12 +107,21 @@ impl AxialForceModel for JointReactionAxialForce {
     }
     fn load(&self, input: &AxialInput<'_>) -> AxialLoad {
         let (p1, p2) = inertia_part(input);
-        let f_b = input.reactions.map_or(Vector2::zeros(), |r| r.slider_on_link[input.index]);
-        AxialLoad { p0: -f_b.dot(&input.leg.e), p1, p2 }
+        let f_b = input
+            .reactions
+            .map_or(Vector2::zeros(), |r| r.slider_on_link[input.index]);
+        AxialLoad {
+            p0: -f_b.dot(&input.leg.e),
+            p1,
+            p2,
+        }
     }
 }
 
 /// The axial force at both ends, `(P(0), P(l))` (N).
 pub fn end_forces(load: &AxialLoad, length: f64) -> (f64, f64) {
-    (load.p0, load.p0 + load.p1 * length + load.p2 * length * length)
+    (
+        load.p0,
+        load.p0 + load.p1 * length + load.p2 * length * length,
+    )
 }

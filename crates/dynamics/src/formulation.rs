@@ -93,7 +93,11 @@ impl fmt::Display for Formulation {
             self.axial,
             self.geometric_stiffness,
             if self.coriolis_forcing { "on" } else { "off" },
-            if self.centrifugal_softening { "on" } else { "off" }
+            if self.centrifugal_softening {
+                "on"
+            } else {
+                "off"
+            }
         )
     }
 }

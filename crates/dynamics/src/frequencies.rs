@@ -43,7 +43,9 @@ impl FrequencyTracker {
         let solvers: [FrequencySolver; 3] = solvers.try_into().expect("three links");
         let nominal: [Vec<f64>; 3] = nominal.try_into().expect("three links");
         Ok(Self {
-            stiffness: std::array::from_fn(|i| Mat::zeros(machine.links[i].modes(), machine.links[i].modes())),
+            stiffness: std::array::from_fn(|i| {
+                Mat::zeros(machine.links[i].modes(), machine.links[i].modes())
+            }),
             eigenvalues: std::array::from_fn(|i| vec![0.0; machine.links[i].modes()]),
             solvers,
             nominal,
@@ -153,7 +155,8 @@ impl FrequencyHistory {
         let r: [usize; 3] = std::array::from_fn(|i| system.machine().links[i].modes());
         let mut omega_squared: [Vec<Vec<f64>>; 3] =
             std::array::from_fn(|i| vec![Vec::with_capacity(t.len()); r[i]]);
-        let mut end_forces: [Vec<(f64, f64)>; 3] = std::array::from_fn(|_| Vec::with_capacity(t.len()));
+        let mut end_forces: [Vec<(f64, f64)>; 3] =
+            std::array::from_fn(|_| Vec::with_capacity(t.len()));
         let lengths: [f64; 3] = std::array::from_fn(|i| system.machine().links[i].length());
         for &tk in t {
             let (ev, loads) = tracker.at(system, tk)?;
@@ -195,7 +198,11 @@ impl FrequencyHistory {
             }
             // Buckling: the lowest eigenvalue over all modes at each sample.
             let lowest: Vec<f64> = (0..t.len())
-                .map(|k| (0..r[i]).map(|j| omega_squared[i][j][k]).fold(f64::INFINITY, f64::min))
+                .map(|k| {
+                    (0..r[i])
+                        .map(|j| omega_squared[i][j][k])
+                        .fold(f64::INFINITY, f64::min)
+                })
                 .collect();
             let nominal_lowest = nominal[i].iter().copied().fold(f64::INFINITY, f64::min);
             let mut k = 0;
@@ -213,9 +220,16 @@ impl FrequencyHistory {
                     let (la, lb) = (lowest[a], lowest[b]);
                     t[a] + (t[b] - t[a]) * la / (la - lb)
                 };
-                let t_start = if start > 0 { cross(start - 1, start) } else { t[start] };
+                let t_start = if start > 0 {
+                    cross(start - 1, start)
+                } else {
+                    t[start]
+                };
                 let t_end = if k < t.len() { cross(end, k) } else { t[end] };
-                let min_eigenvalue = lowest[start..=end].iter().copied().fold(f64::INFINITY, f64::min);
+                let min_eigenvalue = lowest[start..=end]
+                    .iter()
+                    .copied()
+                    .fold(f64::INFINITY, f64::min);
                 buckling.push(BucklingInterval {
                     link: i,
                     t_start,
@@ -225,11 +239,19 @@ impl FrequencyHistory {
                 });
             }
         }
-        Ok(Self { t: t.to_vec(), omega_squared, end_forces, ranges, buckling })
+        Ok(Self {
+            t: t.to_vec(),
+            omega_squared,
+            end_forces,
+            ranges,
+            buckling,
+        })
     }
 
     /// The range of link `link`, mode `mode` (0-based).
     pub fn range(&self, link: usize, mode: usize) -> Option<&ModeRange> {
-        self.ranges.iter().find(|r| r.link == link && r.mode == mode)
+        self.ranges
+            .iter()
+            .find(|r| r.link == link && r.mode == mode)
     }
 }

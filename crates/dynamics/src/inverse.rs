@@ -52,8 +52,7 @@ pub struct ElasticInertia {
 /// Acceleration of link `i`'s centroid.
 #[inline]
 fn centroid_acceleration(leg: &LegState, u: &Vector2<f64>, length: f64) -> Vector2<f64> {
-    leg.rho_ddot * u
-        + 0.5 * length * (leg.beta_ddot * leg.n - leg.beta_dot * leg.beta_dot * leg.e)
+    leg.rho_ddot * u + 0.5 * length * (leg.beta_ddot * leg.n - leg.beta_dot * leg.beta_dot * leg.e)
 }
 
 #[inline]
@@ -83,7 +82,8 @@ pub fn equilibrium_measure(state: &MachineState) -> f64 {
 
 #[inline]
 fn det3(m: &[[f64; 3]; 3]) -> f64 {
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
@@ -104,13 +104,21 @@ pub fn inverse_dynamics(
     let threshold = machine.geometry.thresholds.type_ii;
     let measure = equilibrium_measure(state);
     if !(measure >= threshold) {
-        return Err(DynamicsError::SingularInverseDynamics { t, measure, threshold });
+        return Err(DynamicsError::SingularInverseDynamics {
+            t,
+            measure,
+            threshold,
+        });
     }
     let p = state.motion.pose.position().coords;
     let a_p = Vector2::new(state.motion.acceleration.x, state.motion.acceleration.y);
     let phi_ddot = state.motion.acceleration.z;
     let mut a = [[0.0; 3]; 3];
-    let mut g = [-machine.platform_mass * a_p.x, -machine.platform_mass * a_p.y, -machine.platform_inertia * phi_ddot];
+    let mut g = [
+        -machine.platform_mass * a_p.x,
+        -machine.platform_mass * a_p.y,
+        -machine.platform_inertia * phi_ddot,
+    ];
     let mut normal = [0.0; 3];
     let mut a_g = [Vector2::zeros(); 3];
     for i in 0..3 {
@@ -120,7 +128,8 @@ pub fn inverse_dynamics(
         let u = machine.geometry.legs[i].guide.direction.into_inner();
         a_g[i] = centroid_acceleration(leg, &u, l);
         let m_el = elastic.map_or(0.0, |e| e.moment_about_b[i]);
-        let t_i = (link.centroid_inertia * leg.beta_ddot + 0.5 * l * m * a_g[i].dot(&leg.n) + m_el) / l;
+        let t_i =
+            (link.centroid_inertia * leg.beta_ddot + 0.5 * l * m * a_g[i].dot(&leg.n) + m_el) / l;
         normal[i] = t_i;
         let r = leg.c.coords - p;
         a[0][i] = leg.e.x;
@@ -173,7 +182,11 @@ pub fn inverse_dynamics_full(
     let threshold = machine.geometry.thresholds.type_ii;
     let measure = equilibrium_measure(state);
     if !(measure >= threshold) {
-        return Err(DynamicsError::SingularInverseDynamics { t, measure, threshold });
+        return Err(DynamicsError::SingularInverseDynamics {
+            t,
+            measure,
+            threshold,
+        });
     }
     // Unknowns: for link i, columns 4i..4i+4 = (F_Bx, F_By, F_Cx, F_Cy).
     let mut a = Mat::<f64>::zeros(12, 12);
@@ -242,6 +255,7 @@ pub fn rigid_kinetic_energy(machine: &Machine, state: &MachineState) -> f64 {
             + 0.5 * link.centroid_inertia * leg.beta_dot * leg.beta_dot;
     }
     let v = &state.motion.velocity;
-    energy + 0.5 * machine.platform_mass * (v.x * v.x + v.y * v.y)
+    energy
+        + 0.5 * machine.platform_mass * (v.x * v.x + v.y * v.y)
         + 0.5 * machine.platform_inertia * v.z * v.z
 }

@@ -38,16 +38,27 @@ impl LinkModel {
     ///
     /// # Errors
     /// Invalid basis, section or length (from the beam layer).
-    pub fn new(basis: Arc<dyn Basis>, section: &dyn Section, length: f64) -> Result<Self, DynamicsError> {
+    pub fn new(
+        basis: Arc<dyn Basis>,
+        section: &dyn Section,
+        length: f64,
+    ) -> Result<Self, DynamicsError> {
         let integrals = ModalIntegrals::compute(basis.as_ref(), section, length)?;
         let m = integrals.total_mass;
-        Ok(Self { basis, centroid_inertia: m * length * length / 12.0, integrals })
+        Ok(Self {
+            basis,
+            centroid_inertia: m * length * length / 12.0,
+            integrals,
+        })
     }
 
     /// Transverse deflection `w(xi) = sum_j eta_j psi_j(xi)` for the link's modal
     /// coordinates `eta` (m).
     pub fn deflection(&self, eta: &[f64], xi: f64) -> f64 {
-        eta.iter().enumerate().map(|(j, e)| e * self.basis.eval(j, xi)[0]).sum()
+        eta.iter()
+            .enumerate()
+            .map(|(j, e)| e * self.basis.eval(j, xi)[0])
+            .sum()
     }
 
     /// Link mass `m = int rhoA dx` (kg).
@@ -126,9 +137,18 @@ impl Machine {
                     reason: "must equal the geometry's link length",
                 });
             }
-            check(format!("centroid inertia of link {}", i + 1), link.centroid_inertia)?;
+            check(
+                format!("centroid inertia of link {}", i + 1),
+                link.centroid_inertia,
+            )?;
         }
-        Ok(Self { geometry, links, slider_mass, platform_mass, platform_inertia })
+        Ok(Self {
+            geometry,
+            links,
+            slider_mass,
+            platform_mass,
+            platform_inertia,
+        })
     }
 
     /// Total number of modal coordinates `r_1 + r_2 + r_3`.

@@ -42,7 +42,9 @@ impl ModalDamping {
     }
     /// One ratio for every mode.
     pub fn uniform(ratio: f64) -> Self {
-        Self { ratios: vec![ratio] }
+        Self {
+            ratios: vec![ratio],
+        }
     }
     fn ratio(&self, mode: usize) -> f64 {
         match self.ratios.len() {
@@ -121,7 +123,9 @@ impl LinkOperators {
             }
         });
         let vec_apply = |v: &[f64], scale: f64| -> Vec<f64> {
-            (0..r).map(|i| scale * (0..r).map(|k| m_inv[(i, k)] * v[k]).sum::<f64>()).collect()
+            (0..r)
+                .map(|i| scale * (0..r).map(|k| m_inv[(i, k)] * v[k]).sum::<f64>())
+                .collect()
         };
         let damping_op = if damping.is_none() {
             Vec::new()
@@ -133,7 +137,11 @@ impl LinkOperators {
                     index + 1
                 )));
             }
-            if let Some(z) = damping.ratios.iter().find(|z| !(z.is_finite() && **z >= 0.0)) {
+            if let Some(z) = damping
+                .ratios
+                .iter()
+                .find(|z| !(z.is_finite() && **z >= 0.0))
+            {
                 return Err(DynamicsError::InvalidParameter {
                     quantity: "damping ratio".into(),
                     value: *z,
@@ -148,7 +156,10 @@ impl LinkOperators {
             forward_substitute(&l, &mut a); // L^-1 (L^-1 Kf)^T = L^-1 Kf L^-T
             let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
             let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
-                DynamicsError::Inconsistent(format!("eigen-decomposition failed for link {}", index + 1))
+                DynamicsError::Inconsistent(format!(
+                    "eigen-decomposition failed for link {}",
+                    index + 1
+                ))
             })?;
             let v = eig.U().to_owned();
             let s = eig.S();
@@ -164,7 +175,11 @@ impl LinkOperators {
                 }
             }
             let diag = Mat::from_fn(r, r, |i, j| {
-                if i == j { 2.0 * damping.ratio(i) * s[i].max(0.0).sqrt() } else { 0.0 }
+                if i == j {
+                    2.0 * damping.ratio(i) * s[i].max(0.0).sqrt()
+                } else {
+                    0.0
+                }
             });
             to_row_major(&(&phi * &diag * phi.transpose() * &ints.mass))
         };
@@ -239,7 +254,12 @@ impl ModalSystem {
         damping: ModalDamping,
     ) -> Result<Self, DynamicsError> {
         let ops = [0, 1, 2].map(|i| {
-            LinkOperators::new(&machine.links[i], formulation.geometric_stiffness, &damping, i)
+            LinkOperators::new(
+                &machine.links[i],
+                formulation.geometric_stiffness,
+                &damping,
+                i,
+            )
         });
         let [a, b, c] = ops;
         let ops = [a?, b?, c?];
@@ -323,7 +343,11 @@ impl ModalSystem {
                 index: i,
             })
         });
-        Ok(Instant { state, reactions, loads })
+        Ok(Instant {
+            state,
+            reactions,
+            loads,
+        })
     }
 
     /// Modal accelerations `eta''` for the state `y` at the instant `inst`, written into `out`.
@@ -341,8 +365,11 @@ impl ModalSystem {
                 rho_coef += leg.rho_dot * leg.beta_dot * u.dot(&leg.e); // F_fg, cos(a - b)
             }
             let beta_coef = -leg.beta_ddot;
-            let softening =
-                if self.formulation.centrifugal_softening { leg.beta_dot * leg.beta_dot } else { 0.0 };
+            let softening = if self.formulation.centrifugal_softening {
+                leg.beta_dot * leg.beta_dot
+            } else {
+                0.0
+            };
             let off = self.offsets[i];
             let r = op.r;
             let eta_i = &eta[off..off + r];
@@ -350,9 +377,15 @@ impl ModalSystem {
             let [g0, g1, g2] = &op.geometric;
             for j in 0..r {
                 let row = j * r..(j + 1) * r;
-                let mut acc = rho_coef * op.rho_forcing[j] + beta_coef * op.beta_forcing[j]
+                let mut acc = rho_coef * op.rho_forcing[j]
+                    + beta_coef * op.beta_forcing[j]
                     + softening * eta_i[j];
-                let (kf, a0, a1, a2) = (&op.flexural[row.clone()], &g0[row.clone()], &g1[row.clone()], &g2[row.clone()]);
+                let (kf, a0, a1, a2) = (
+                    &op.flexural[row.clone()],
+                    &g0[row.clone()],
+                    &g1[row.clone()],
+                    &g2[row.clone()],
+                );
                 for k in 0..r {
                     acc -= (kf[k] + c0 * a0[k] + c1 * a1[k] + c2 * a2[k]) * eta_i[k];
                 }
@@ -386,8 +419,12 @@ impl ModalSystem {
             let range = self.link_range(i);
             let acc = &eta_ddot[range];
             e.force[i] = acc.iter().zip(&ints.mass_psi).map(|(a, m)| a * m).sum();
-            e.moment_about_b[i] =
-                ints.length * acc.iter().zip(&ints.mass_xi_psi).map(|(a, m)| a * m).sum::<f64>();
+            e.moment_about_b[i] = ints.length
+                * acc
+                    .iter()
+                    .zip(&ints.mass_xi_psi)
+                    .map(|(a, m)| a * m)
+                    .sum::<f64>();
         }
         e
     }
@@ -439,8 +476,11 @@ impl OdeSystem for ModalSystem {
             let leg = &inst.state.legs[i];
             let load = &inst.loads[i];
             let (c0, c1, c2) = (load.p0 / op.length, load.p1, load.p2 * op.length);
-            let softening =
-                if self.formulation.centrifugal_softening { leg.beta_dot * leg.beta_dot } else { 0.0 };
+            let softening = if self.formulation.centrifugal_softening {
+                leg.beta_dot * leg.beta_dot
+            } else {
+                0.0
+            };
             let off = self.offsets[i];
             let r = op.r;
             for j in 0..r {

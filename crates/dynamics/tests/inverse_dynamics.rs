@@ -2,7 +2,7 @@
 //! balance `sum F_ai rho_i' = dT/dt`, the link's own equilibrium, and the type-II error.
 
 use dynamics::{
-    DynamicsError, Machine, ModalDamping, ModalSystem, Formulation, end_forces, inverse_dynamics,
+    DynamicsError, Formulation, Machine, ModalDamping, ModalSystem, end_forces, inverse_dynamics,
     inverse_dynamics_full, paper, rigid_kinetic_energy,
 };
 use kinematics::{PlatformMotion, Pose, Trajectory};
@@ -51,7 +51,11 @@ fn wobble() -> impl Strategy<Value = Wobble> {
         prop::array::uniform3(1.0..25.0f64),
         prop::array::uniform3(0.0..6.28f64),
     )
-        .prop_map(|(amp, freq, phase)| Wobble { amp: [amp[0], amp[1], amp[2] * 3.0], freq, phase })
+        .prop_map(|(amp, freq, phase)| Wobble {
+            amp: [amp[0], amp[1], amp[2] * 3.0],
+            freq,
+            phase,
+        })
 }
 
 proptest! {
@@ -97,7 +101,13 @@ proptest! {
 fn joint_reaction_axial_force_closes_at_platform_end() {
     let m = Arc::new(machine());
     let traj = Arc::new(paper::trajectory(20.0).unwrap());
-    let mut sys = ModalSystem::new(m.clone(), traj, Formulation::consistent(), ModalDamping::none()).unwrap();
+    let mut sys = ModalSystem::new(
+        m.clone(),
+        traj,
+        Formulation::consistent(),
+        ModalDamping::none(),
+    )
+    .unwrap();
     for k in 0..20 {
         let t = k as f64 * 0.0025;
         let inst = sys.instant(t).unwrap();
@@ -105,7 +115,10 @@ fn joint_reaction_axial_force_closes_at_platform_end() {
         for i in 0..3 {
             let (_, p_c) = end_forces(&inst.loads[i], m.links[i].length());
             let f_c = reactions.platform_on_link[i].dot(&inst.state.legs[i].e);
-            assert!((p_c - f_c).abs() < 1e-9 * f_c.abs().max(1.0), "link {i} t {t}: {p_c} vs {f_c}");
+            assert!(
+                (p_c - f_c).abs() < 1e-9 * f_c.abs().max(1.0),
+                "link {i} t {t}: {p_c} vs {f_c}"
+            );
         }
     }
 }
@@ -115,9 +128,15 @@ fn joint_reaction_axial_force_closes_at_platform_end() {
 #[test]
 fn home_pose_is_a_clear_type_ii_error() {
     let m = machine();
-    let state = m.geometry.inverse_kinematics_unchecked(&PlatformMotion::at_rest(Pose::new(0.0, 0.0, 0.0))).unwrap();
+    let state = m
+        .geometry
+        .inverse_kinematics_unchecked(&PlatformMotion::at_rest(Pose::new(0.0, 0.0, 0.0)))
+        .unwrap();
     let err = inverse_dynamics(&m, &state, None, 0.25).unwrap_err();
-    assert!(matches!(err, DynamicsError::SingularInverseDynamics { .. }), "{err}");
+    assert!(
+        matches!(err, DynamicsError::SingularInverseDynamics { .. }),
+        "{err}"
+    );
     let msg = err.to_string();
     assert!(msg.contains("t = 0.25") && msg.contains("type-II"), "{msg}");
 }
