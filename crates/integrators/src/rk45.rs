@@ -310,6 +310,17 @@ impl Integrator for Rk45 {
 }
 
 impl Rk45Stepper {
+    /// Signed size of the next step attempt (as chosen by the controller, before `max_step`
+    /// and landing on `t_end` are applied).
+    pub fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    /// Signed size of the last accepted step (0 before the first).
+    pub fn last_step_size(&self) -> f64 {
+        self.h_previous
+    }
+
     /// One trial step of size `h` from `(t, y)`: fills `k[1..7]`, `y_new` and `error`.
     /// Six right-hand-side evaluations (stages 2-7).
     fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) {

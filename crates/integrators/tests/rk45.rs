@@ -359,6 +359,9 @@ fn honours_the_initial_step() {
         stepper.t()
     );
     assert_eq!(stepper.stats().rejected_steps, 0);
+    assert!((stepper.last_step_size() - 1e-4).abs() < 1e-18);
+    // The controller grows the next step (error far below tolerance), by at most 10x.
+    assert!(stepper.step_size() > 1e-4 && stepper.step_size() <= 1e-3 * (1.0 + 1e-12));
 }
 
 /// Hairer's stiffness test fires on a stiff linear problem (eigenvalues -1 and -1e4) once the
