@@ -5,7 +5,7 @@
 //!
 //! * [`Rk45`]: Dormand-Prince 5(4) with PI step control, 4th-order dense output and
 //!   Hairer's stiffness detection ([`StiffnessDetection`]) (Hairer, Norsett & Wanner,
-//!   *Solving ODEs I*, 2nd ed., II.4-II.6 and II.10; the code DOPRI5).
+//!   *Solving ODEs I*, 2nd ed., II.4-II.6, and Hairer & Wanner II, IV.2; the code DOPRI5).
 //! * [`Abm`]: variable-step, variable-order Adams-Bashforth-Moulton PECE, orders 1-12, in the
 //!   spirit of Shampine & Gordon, *Computer Solution of ODEs* (1975) (the code DE/STEP, and
 //!   MATLAB's `ode113`).

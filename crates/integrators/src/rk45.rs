@@ -4,10 +4,10 @@
 //! Sources: J. R. Dormand & P. J. Prince, "A family of embedded Runge-Kutta formulae",
 //! *J. Comput. Appl. Math.* 6 (1980) 19-26 (the tableau); E. Hairer, S. P. Norsett &
 //! G. Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993:
-//! Table II.5.2 (tableau), II.4 (error norm, starting step), II.6 (dense output, eq. 6.12 and
-//! the coefficients of the code DOPRI5), IV.2 in vol. II and II.10 of vol. I (the stiffness
-//! test), and the PI ("stabilized") step-size control of Gustafsson (1991) as used in DOPRI5
-//! (Hairer & Wanner II, IV.2, eq. 2.43c).
+//! Table II.5.2 (tableau), II.4 (error norm, starting step), II.6 (dense output, with the
+//! coefficients of the code DOPRI5); E. Hairer & G. Wanner, *Solving Ordinary Differential
+//! Equations II*, 2nd ed., Springer 1996, IV.2 (automatic stiffness detection, and the PI
+//! "stabilized" step-size control of K. Gustafsson, *ACM TOMS* 17 (1991), as used in DOPRI5).
 
 use crate::common::{error_norm, initial_step};
 use crate::{Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper};
@@ -68,7 +68,7 @@ const NON_FINITE_SHRINK: f64 = 0.1;
 /// Consecutive non-finite trial steps tolerated before reporting [`IntegratorError::NonFinite`].
 const NON_FINITE_RETRIES: usize = 3;
 /// `|h lambda|` above which a step counts as stability-limited: the real stability boundary
-/// of DOPRI5 is about 3.3 (Hairer-Norsett-Wanner I, II.10; DOPRI5 uses 3.25).
+/// of DOPRI5 is about 3.3 (Hairer & Wanner II, IV.2; DOPRI5 uses 3.25).
 const STIFF_H_LAMBDA: f64 = 3.25;
 /// Stability-limited accepted steps (without 6 non-stiff ones in between) that make the
 /// problem "stiff" (DOPRI5's `IASTI = 15`).
@@ -78,7 +78,7 @@ const NONSTIFF_RESET: usize = 6;
 
 /// What [`Rk45`] does when its stiffness test fires.
 ///
-/// The test (Hairer-Norsett-Wanner I, II.10; the code DOPRI5) estimates `|h lambda|`, the
+/// The test (Hairer & Wanner II, IV.2; the code DOPRI5) estimates `|h lambda|`, the
 /// step size times the dominant eigenvalue of the Jacobian, from the last two stages, which
 /// share the abscissa `t + h`:
 /// `h_lambda = |h| * ||f(t + h, y_new) - f(t + h, y_6)|| / ||y_new - y_6||`. When it exceeds
@@ -547,8 +547,8 @@ impl Stepper for Rk45Stepper {
         }
     }
 
-    /// The 4th-order continuous extension of DOPRI5 (Hairer-Norsett-Wanner I, II.6, eq. 6.12
-    /// and the coefficients `d_i` of the code): with `theta = (t - t_prev) / h`,
+    /// The 4th-order continuous extension of DOPRI5 (Hairer-Norsett-Wanner I, II.6, with the
+    /// coefficients `d_i` of the code): with `theta = (t - t_prev) / h`,
     /// `y(t) = y_prev + theta (ydiff + (1 - theta) (bspl + theta (c4 + (1 - theta) c5)))`.
     /// Exact at both ends of the step, with the right derivatives there (Hermite-like).
     fn interpolate(&self, t: f64, out: &mut [f64]) {

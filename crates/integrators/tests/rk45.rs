@@ -212,7 +212,7 @@ fn evaluation_count_follows_the_fsal_design() {
 
 /// The global error falls in proportion to the tolerance: a least-squares fit of
 /// log10(error) against log10(rtol) over 6 decades has a slope near 1 (tolerance
-/// proportionality; Hairer-Norsett-Wanner I, II.4 and the work-precision diagrams of II.10).
+/// proportionality; Hairer-Norsett-Wanner I, II.4).
 #[test]
 fn error_is_proportional_to_the_tolerance() {
     let mut xs = Vec::new();
