@@ -345,8 +345,8 @@ const NEUTRAL: f64 = 1e-10;
 
 /// Natural frequencies of one link under the axial load `P(x)` (model.md section 7):
 /// eigenvalues of `(Kf + Kp, M)` (full) or eq. 22 (diagonal), with buckled modes flagged and
-/// the critical load factor (full: bisection on the lowest eigenvalue of
-/// `(Kf + lambda Kp, M)`, which is concave in `lambda` so the crossing is unique;
+/// the critical load factor (full: the buckling eigenproblem `(-Kp, Kf)`, or bisection on
+/// the lowest eigenvalue of `(Kf + lambda Kp, M)` when `Kf` has rigid-body modes;
 /// diagonal: `min_j kf_jj / (-kp_jj)` over `kp_jj < 0`).
 ///
 /// Allocates; for repeated calls use [`FrequencySolver`].
@@ -411,7 +411,13 @@ pub fn frequencies(
 /// Largest load factor tried before concluding that a load never buckles the link.
 const MAX_LOAD_FACTOR: f64 = 1e15;
 
-/// Bisection on `f(lambda) = lowest eigenvalue of (Kf + lambda Kp, M)`.
+/// Critical load factor for full coupling.
+///
+/// If `Kf` is positive definite (no rigid-body modes): `Kf + lambda Kp` is singular when
+/// `1/lambda` is an eigenvalue of the pencil `(-Kp, Kf)`, so the smallest positive `lambda`
+/// is `1 / nu_max` (one eigenproblem, the buckling eigenproblem of structural stability).
+/// Otherwise: bisection on `f(lambda) = lowest eigenvalue of (Kf + lambda Kp, M)`, which is
+/// concave in `lambda`, so its positive root is unique.
 fn critical_factor_full(
     integrals: &ModalIntegrals,
     geometric: &Mat<f64>,
@@ -419,6 +425,15 @@ fn critical_factor_full(
     omega2: &mut [f64],
 ) -> Result<Option<f64>, BeamError> {
     let r = integrals.r();
+    if let Ok(mut buckling) =
+        FrequencySolver::from_mass(integrals.stiffness.as_ref(), Coupling::Full)
+    {
+        let compression = Mat::from_fn(r, r, |i, k| -geometric[(i, k)]);
+        let mut nu = vec![0.0; r];
+        buckling.eigenvalues(compression.as_ref(), &mut nu)?;
+        let nu_max = nu[r - 1];
+        return Ok((nu_max * MAX_LOAD_FACTOR > 1.0).then(|| 1.0 / nu_max));
+    }
     let mut k = Mat::zeros(r, r);
     let mut lowest = |factor: f64| -> Result<f64, BeamError> {
         for c in 0..r {

@@ -205,3 +205,71 @@ fn bad_counts_are_errors() {
     assert_eq!(basis.rigid_modes(), 2);
     assert!((basis.wavenumbers()[2] - 4.7300).abs() < 1e-4);
 }
+
+#[test]
+fn critical_load_factor_makes_the_stiffness_singular() {
+    // Law: at lambda_c the lowest eigenvalue crosses zero (stable just below, buckled just
+    // above), for a non-uniform load, with and without a rigid-body mode (the latter takes
+    // the bisection path, the former the buckling eigenproblem).
+    use beam::{AxialLoad, ModeState, SineBasis};
+    let section = UniformSection::rectangle(7.1e10, 2770.0, 0.002, 0.03).unwrap();
+    let sine = SineBasis::new(6).unwrap();
+    let cantilever = ClassicalBasis::clamped_free(6).unwrap();
+    let pinned_free = ClassicalBasis::pinned_free(6).unwrap();
+    let bases: [(&dyn Basis, AxialLoad); 3] = [
+        (
+            &sine,
+            AxialLoad {
+                p0: 40.0,
+                p1: -900.0,
+                p2: 1500.0,
+            },
+        ),
+        (
+            &cantilever,
+            AxialLoad {
+                p0: -20.0,
+                p1: -100.0,
+                p2: 0.0,
+            },
+        ),
+        (
+            &pinned_free,
+            AxialLoad {
+                p0: 30.0,
+                p1: -200.0,
+                p2: 0.0,
+            },
+        ),
+    ];
+    for (basis, load) in bases {
+        let mi = ModalIntegrals::compute(basis, &section, 0.2).unwrap();
+        for coupling in [Coupling::Full, Coupling::Diagonal] {
+            let f = frequencies(&mi, &load, coupling).unwrap();
+            let Some(lambda) = f.critical_load_factor else {
+                // Possible for the diagonal model only (here: pinned-free, all kp_jj > 0);
+                // then no multiple of the load buckles it.
+                assert_eq!(coupling, Coupling::Diagonal, "{}", basis.name());
+                for factor in [1e2, 1e4, 1e8] {
+                    let g = frequencies(&mi, &load.scaled(factor), coupling).unwrap();
+                    assert!(!g.is_buckled(), "{} x{factor}", basis.name());
+                }
+                continue;
+            };
+            let below = frequencies(&mi, &load.scaled(lambda * (1.0 - 1e-6)), coupling).unwrap();
+            let above = frequencies(&mi, &load.scaled(lambda * (1.0 + 1e-6)), coupling).unwrap();
+            assert!(
+                !below.is_buckled(),
+                "{} {coupling:?}: {below:?}",
+                basis.name()
+            );
+            assert!(
+                above.is_buckled(),
+                "{} {coupling:?}: {above:?}",
+                basis.name()
+            );
+            let at = frequencies(&mi, &load.scaled(lambda), coupling).unwrap();
+            assert!(at.modes.iter().any(|m| m.state != ModeState::Stable));
+        }
+    }
+}
