@@ -446,6 +446,8 @@ def main(argv=None):
         path = args.out or os.path.join(data_dir, f"coupled_f{int(f)}.csv")
         write_csv(path, table)
         bal = check_platform_balance(scene, table, ex)
+        acc_nom = np.array([scene.platform_pose(tn)[2][:2] for tn in table[:, 0]])
+        acc_dev = ex["platform_acc"][:, :2] - acc_nom
         strain_diff_b = float(np.sqrt(np.mean((ex["P_B_strain_N"] - table[:, 7:10]) ** 2)))
         strain_diff_c = float(np.sqrt(np.mean((ex["P_C_strain_N"] - table[:, 10:13]) ** 2)))
         meta["runs"][f"f{int(f)}"] = {
@@ -462,6 +464,8 @@ def main(argv=None):
             "P_B_range_N": [[float(table[:, 7 + i].min()), float(table[:, 7 + i].max())] for i in range(3)],
             "P_C_range_N": [[float(table[:, 10 + i].min()), float(table[:, 10 + i].max())] for i in range(3)],
             "max_abs_chord_shortening_m": float(np.abs(ex["chord_length_m"] - scene.link_length).max()),
+            "rms_platform_acc_deviation_m_s2": float(np.sqrt(np.mean(np.sum(acc_dev**2, axis=1)))),
+            "rms_platform_acc_nominal_m_s2": float(np.sqrt(np.mean(np.sum(acc_nom**2, axis=1)))),
         }
         print(json.dumps(meta["runs"][f"f{int(f)}"], indent=1))
     meta["parameters"] = {
