@@ -125,3 +125,62 @@ fn invalid_value_is_bad_input() {
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("thickness"));
 }
+
+fn run_json(dir: &Path, name: &str, text: &str) -> serde_json::Value {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    let output = flexprr()
+        .arg("beam")
+        .arg(&path)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).unwrap()
+}
+
+fn first_frequencies(report: &serde_json::Value) -> Vec<f64> {
+    report["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["frequency_hz"].as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn stepped_and_hermite_files_agree_with_the_uniform_sine_example() {
+    // A stepped section of two identical pieces is the uniform section; 32 Hermite elements
+    // reproduce the sine frequencies to O(h^4) ~ 1e-5.
+    let dir = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(example()).unwrap();
+    let uniform = first_frequencies(&run_json(dir.path(), "uniform.toml", &base));
+    let section_start = base.find("[section]").unwrap();
+    let basis_start = base.find("[basis]").unwrap();
+    let stepped_text = format!(
+        "{}[section]\nkind = \"stepped\"\n[[section.steps]]\nend = 0.4\nthickness = 0.002\nheight = 0.03\n\
+         [[section.steps]]\nend = 1.0\nthickness = 0.002\nheight = 0.03\n\n{}",
+        &base[..section_start],
+        &base[basis_start..]
+    );
+    let stepped = first_frequencies(&run_json(dir.path(), "stepped.toml", &stepped_text));
+    let hermite_text = base.replace(
+        "kind = \"sine\"",
+        "kind = \"hermite\"\nelements = 32\nends = \"pinned-pinned\"",
+    );
+    let hermite = first_frequencies(&run_json(dir.path(), "hermite.toml", &hermite_text));
+    assert_eq!(stepped.len(), 3);
+    assert_eq!(hermite.len(), 3);
+    for j in 0..3 {
+        assert!(
+            (stepped[j] - uniform[j]).abs() < 1e-10 * uniform[j],
+            "{stepped:?}"
+        );
+        let rel = (hermite[j] - uniform[j]) / uniform[j];
+        assert!(rel > 0.0 && rel < 1e-5, "mode {}: {rel}", j + 1);
+    }
+}

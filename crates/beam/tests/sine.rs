@@ -295,3 +295,14 @@ fn solver_rejects_bad_input() {
     let singular = Mat::<f64>::zeros(3, 3);
     assert!(FrequencySolver::from_mass(singular.as_ref(), Coupling::Full).is_err());
 }
+
+#[test]
+fn public_types_are_thread_safe() {
+    fn send_sync<T: Send + Sync>() {}
+    send_sync::<FrequencySolver>();
+    send_sync::<ModalIntegrals>();
+    send_sync::<beam::LinkFrequencies>();
+    send_sync::<beam::BeamError>();
+    send_sync::<beam::ClassicalBasis>();
+    send_sync::<beam::HermiteBasis>();
+}
