@@ -1,12 +1,56 @@
-//! `flexprr kinematics`: placeholder.
+//! `flexprr kinematics`: the slider and link-angle time series of a scene's trajectory as CSV.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use scenarios::Scene;
+
 use super::Failure;
+use super::run::failure;
+
 /// Arguments of `flexprr kinematics`.
 #[derive(Debug, clap::Args)]
 pub struct KinematicsArgs {
     /// Scene file (TOML).
-    pub scene: std::path::PathBuf,
+    pub scene: PathBuf,
+    /// Write the CSV here instead of standard output.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
+
 /// Runs the command.
-pub fn run(_args: KinematicsArgs) -> Result<(), Failure> {
-    Err(Failure::run("not implemented yet"))
+pub fn run(args: KinematicsArgs) -> Result<(), Failure> {
+    let scene = Scene::load(&args.scene).map_err(failure)?;
+    let mut text = String::from("t_s,x_m,y_m,phi_rad");
+    for i in 1..=3 {
+        text.push_str(&format!(",rho_{i}_m,rho_dot_{i}_m_s,rho_ddot_{i}_m_s2,beta_{i}_rad,beta_dot_{i}_rad_s,beta_ddot_{i}_rad_s2"));
+    }
+    text.push('\n');
+    for &t in &scene.output_times {
+        let motion = scene.trajectory.motion(t);
+        let state = scene
+            .machine
+            .geometry
+            .inverse_kinematics(&motion)
+            .map_err(|e| Failure::run(format!("at t = {t} s: {e}")))?;
+        text.push_str(&format!(
+            "{t:.9e},{:.12e},{:.12e},{:.12e}",
+            motion.pose.x, motion.pose.y, motion.pose.phi
+        ));
+        for leg in &state.legs {
+            text.push_str(&format!(
+                ",{:.12e},{:.12e},{:.12e},{:.12e},{:.12e},{:.12e}",
+                leg.rho, leg.rho_dot, leg.rho_ddot, leg.beta, leg.beta_dot, leg.beta_ddot
+            ));
+        }
+        text.push('\n');
+    }
+    match args.out {
+        Some(path) => std::fs::write(&path, text)
+            .map_err(|e| Failure::run(format!("{}: {e}", path.display())))?,
+        None => std::io::stdout()
+            .write_all(text.as_bytes())
+            .map_err(|e| Failure::run(e.to_string()))?,
+    }
+    Ok(())
 }

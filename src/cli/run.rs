@@ -1,22 +1,156 @@
-//! `flexprr run` and `flexprr check`: placeholder.
+//! `flexprr run` and `flexprr check`.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use scenarios::{ScenarioError, Scene, run as run_scene, table_one_markdown, write_outputs};
+
 use super::Failure;
+
 /// Arguments of `flexprr run`.
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
     /// Scene file (TOML).
-    pub scene: std::path::PathBuf,
+    pub scene: PathBuf,
+    /// Output directory (default `out/<scene name>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// No progress display.
+    #[arg(long)]
+    pub quiet: bool,
 }
+
 /// Arguments of `flexprr check`.
 #[derive(Debug, clap::Args)]
 pub struct CheckArgs {
     /// Scene file (TOML).
-    pub scene: std::path::PathBuf,
+    pub scene: PathBuf,
 }
-/// Runs a scene.
-pub fn run(_args: RunArgs) -> Result<(), Failure> {
-    Err(Failure::run("not implemented yet"))
+
+/// Maps a scenario error to the exit code convention (2 bad input, 1 run failure).
+pub fn failure(e: ScenarioError) -> Failure {
+    match e {
+        ScenarioError::Input { .. } | ScenarioError::Io { .. } => Failure::bad_input(e),
+        other => Failure::run(other),
+    }
 }
-/// Checks a scene.
-pub fn check(_args: CheckArgs) -> Result<(), Failure> {
-    Err(Failure::run("not implemented yet"))
+
+/// Progress on stderr, shown only once a run has taken more than a second.
+pub struct ProgressLine {
+    start: Instant,
+    last: Instant,
+    enabled: bool,
+    shown: bool,
+}
+
+impl ProgressLine {
+    /// A progress line (disabled when `quiet`).
+    pub fn new(quiet: bool) -> Self {
+        let now = Instant::now();
+        Self {
+            start: now,
+            last: now,
+            enabled: !quiet,
+            shown: false,
+        }
+    }
+    /// Reports the fraction done.
+    pub fn update(&mut self, fraction: f64) {
+        if !self.enabled {
+            return;
+        }
+        let now = Instant::now();
+        let elapsed = now - self.start;
+        if elapsed < Duration::from_secs(1) || now - self.last < Duration::from_millis(200) {
+            return;
+        }
+        self.last = now;
+        let eta = if fraction > 0.0 {
+            elapsed.as_secs_f64() * (1.0 - fraction) / fraction
+        } else {
+            0.0
+        };
+        let line = format!(
+            "integrating: {:5.1} %  elapsed {:.1} s  left ~{:.1} s",
+            100.0 * fraction,
+            elapsed.as_secs_f64(),
+            eta
+        );
+        if std::io::stderr().is_terminal() {
+            eprint!("\r{line}");
+        } else {
+            eprintln!("{line}");
+        }
+        self.shown = true;
+    }
+    /// Ends the line.
+    pub fn finish(&self) {
+        if self.shown && std::io::stderr().is_terminal() {
+            eprintln!();
+        }
+    }
+}
+
+/// Runs a scene and writes its outputs.
+pub fn run(args: RunArgs) -> Result<(), Failure> {
+    let scene = Scene::load(&args.scene).map_err(failure)?;
+    let out = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    let mut progress = ProgressLine::new(args.quiet);
+    let result = run_scene(&scene, &mut |f| progress.update(f));
+    progress.finish();
+    let result = result.map_err(failure)?;
+    let written = write_outputs(&scene, &result, &out).map_err(Failure::run)?;
+    let stats = &result.stats;
+    println!(
+        "{}: {} formulation, {} outputs written to {} in {:.3} s",
+        scene.name,
+        scene.formulation.name(),
+        written.len(),
+        out.display(),
+        stats.wall_time_s
+    );
+    if let Some(s) = &stats.integrator {
+        println!(
+            "  integrator {}: {} steps ({} rejected), {} rhs evaluations",
+            scene.method.name(),
+            s.accepted_steps,
+            s.rejected_steps,
+            s.rhs_evaluations
+        );
+    }
+    if let Some(table) = table_one_markdown(&result) {
+        println!("\nTable I (link 1 frequencies over the motion):\n{table}");
+    }
+    if let Some(h) = &result.frequencies {
+        for b in &h.buckling {
+            println!(
+                "  warning: link {} buckles from t = {:.5} s to {:.5} s (lowest omega^2 = {:.3e} rad^2/s^2, margin {:.3})",
+                b.link + 1,
+                b.t_start,
+                b.t_end,
+                b.min_eigenvalue,
+                b.margin
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Validates a scene without running it.
+pub fn check(args: CheckArgs) -> Result<(), Failure> {
+    let scene = Scene::load(&args.scene).map_err(failure)?;
+    let requests: Vec<&str> = scene.outputs.iter().map(|k| k.name()).collect();
+    println!(
+        "{}: ok ({} formulation, {} sine/basis modes per link, {} integrator, {} output times, outputs: {})",
+        args.scene.display(),
+        scene.formulation.name(),
+        scene.machine.links[0].modes(),
+        scene.method.name(),
+        scene.output_times.len(),
+        requests.join(", ")
+    );
+    Ok(())
 }

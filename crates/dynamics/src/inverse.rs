@@ -103,7 +103,7 @@ pub fn inverse_dynamics(
 ) -> Result<JointReactions, DynamicsError> {
     let threshold = machine.geometry.thresholds.type_ii;
     let measure = equilibrium_measure(state);
-    if !(measure >= threshold) {
+    if measure.is_nan() || measure < threshold {
         return Err(DynamicsError::SingularInverseDynamics {
             t,
             measure,
@@ -181,7 +181,7 @@ pub fn inverse_dynamics_full(
 ) -> Result<JointReactions, DynamicsError> {
     let threshold = machine.geometry.thresholds.type_ii;
     let measure = equilibrium_measure(state);
-    if !(measure >= threshold) {
+    if measure.is_nan() || measure < threshold {
         return Err(DynamicsError::SingularInverseDynamics {
             t,
             measure,

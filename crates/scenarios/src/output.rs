@@ -1,0 +1,402 @@
+//! Writing a run's results: one CSV per time series, `summary.json`, Table I and SVG plots.
+//! Every file is written to a temporary name and renamed, so a crash never leaves a
+//! half-written file behind.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde_json::{Value, json};
+
+use crate::error::ScenarioError;
+use crate::plot::{Panel, Series, write_svg};
+use crate::run::{RunResult, Table};
+use crate::scene::Scene;
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> ScenarioError + '_ {
+    move |source| ScenarioError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+/// Writes `bytes` to `path` atomically (temporary file + rename).
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ScenarioError> {
+    let tmp = path.with_extension("tmp~");
+    std::fs::write(&tmp, bytes).map_err(io(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(io(path))
+}
+
+fn csv_bytes(table: &Table) -> Result<Vec<u8>, ScenarioError> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let csv_err = |e: csv::Error| ScenarioError::Run(format!("writing {}.csv: {e}", table.name));
+    w.write_record(&table.columns).map_err(csv_err)?;
+    let mut row = Vec::with_capacity(table.columns.len());
+    for k in 0..table.rows() {
+        row.clear();
+        row.extend(table.data.iter().map(|c| format!("{:.10e}", c[k])));
+        w.write_record(&row).map_err(csv_err)?;
+    }
+    w.into_inner()
+        .map_err(|e| ScenarioError::Run(format!("writing {}.csv: {e}", table.name)))
+}
+
+/// The summary of a run as JSON: scene echo, formulation, integrator statistics, wall
+/// time, frequency ranges and buckling intervals.
+pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
+    let f = &scene.formulation;
+    let stats = &result.stats;
+    let integrator = stats.integrator.as_ref().map(|s| {
+        json!({
+            "method": scene.method.name(),
+            "rtol": scene.options.rtol,
+            "accepted_steps": s.accepted_steps,
+            "rejected_steps": s.rejected_steps,
+            "rhs_evaluations": s.rhs_evaluations,
+            "jacobian_evaluations": s.jacobian_evaluations,
+            "lu_decompositions": s.lu_decompositions,
+            "orders_used": s.orders,
+            "stiffness_detected_at_s": s.stiffness_detected_at,
+        })
+    });
+    let frequencies = result.frequencies.as_ref().map(|h| {
+        let ranges: Vec<Value> = h
+            .ranges
+            .iter()
+            .map(|r| {
+                json!({
+                    "link": r.link + 1, "mode": r.mode + 1,
+                    "nominal_hz": r.nominal_hz, "min_hz": r.min_hz, "t_min_s": r.t_min,
+                    "max_hz": r.max_hz, "t_max_s": r.t_max,
+                    "min_stiffness_ratio": r.min_stiffness_ratio,
+                })
+            })
+            .collect();
+        let buckling: Vec<Value> = h
+            .buckling
+            .iter()
+            .map(|b| {
+                json!({
+                    "link": b.link + 1, "t_start_s": b.t_start, "t_end_s": b.t_end,
+                    "min_eigenvalue_rad2_s2": b.min_eigenvalue, "margin": b.margin,
+                })
+            })
+            .collect();
+        json!({ "ranges": ranges, "buckling_intervals": buckling })
+    });
+    let peaks: serde_json::Map<String, Value> = result
+        .tables
+        .iter()
+        .flat_map(|t| {
+            t.columns
+                .iter()
+                .zip(&t.data)
+                .skip(1)
+                .map(move |(name, col)| {
+                    let peak = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                    (format!("{}.{}", t.name, name), json!(peak))
+                })
+        })
+        .collect();
+    json!({
+        "scene": scene.name,
+        "flexprr_version": env!("CARGO_PKG_VERSION"),
+        "formulation": {
+            "name": f.name(),
+            "axial_force": format!("{:?}", f.axial),
+            "geometric_stiffness": f.geometric_stiffness.name(),
+            "coriolis_forcing": f.coriolis_forcing,
+            "centrifugal_softening": f.centrifugal_softening,
+            "damping": scene.damping.ratios,
+        },
+        "run": {
+            "integrated": stats.integrated,
+            "rhs_evaluations": stats.rhs_evaluations,
+            "inverse_dynamics_solves": stats.inverse_dynamics_solves,
+            "wall_time_s": stats.wall_time_s,
+            "output_samples": scene.output_times.len(),
+        },
+        "integrator": integrator,
+        "frequencies": frequencies,
+        "peak_abs": peaks,
+        "scene_file": serde_json::to_value(&scene.file).unwrap_or(Value::Null),
+    })
+}
+
+/// The paper's Table I for link 1 as markdown (nominal, min, max and relative change).
+pub fn table_one_markdown(result: &RunResult) -> Option<String> {
+    let h = result.frequencies.as_ref()?;
+    let mut s = String::from(
+        "| link 1 | nominal (Hz) | minimum (Hz) | maximum (Hz) | change |\n|---|---|---|---|---|\n",
+    );
+    for r in h.ranges.iter().filter(|r| r.link == 0) {
+        let change = (r.max_hz - r.min_hz) / r.nominal_hz * 100.0;
+        let _ = writeln!(
+            s,
+            "| mode {} | {:.1} | {:.1} | {:.1} | {:.0} % |",
+            r.mode + 1,
+            r.nominal_hz,
+            r.min_hz,
+            r.max_hz,
+            change
+        );
+    }
+    Some(s)
+}
+
+/// Writes every output of `result` into `dir` (created if needed): CSV tables,
+/// `summary.json`, `table1.md`/`table1.csv` when frequencies were computed, SVG plots unless
+/// the scene turned them off.
+///
+/// # Errors
+/// [`ScenarioError::Io`] when a file cannot be written.
+pub fn write_outputs(
+    scene: &Scene,
+    result: &RunResult,
+    dir: &Path,
+) -> Result<Vec<String>, ScenarioError> {
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let mut written = Vec::new();
+    for table in &result.tables {
+        let path = dir.join(format!("{}.csv", table.name));
+        write_atomic(&path, &csv_bytes(table)?)?;
+        written.push(path.display().to_string());
+    }
+    if let Some(md) = table_one_markdown(result) {
+        let path = dir.join("table1.md");
+        write_atomic(&path, md.as_bytes())?;
+        written.push(path.display().to_string());
+        if let Some(h) = &result.frequencies {
+            let mut csv = String::from("link,mode,nominal_hz,min_hz,t_min_s,max_hz,t_max_s\n");
+            for r in &h.ranges {
+                let _ = writeln!(
+                    csv,
+                    "{},{},{:.4},{:.4},{:.6},{:.4},{:.6}",
+                    r.link + 1,
+                    r.mode + 1,
+                    r.nominal_hz,
+                    r.min_hz,
+                    r.t_min,
+                    r.max_hz,
+                    r.t_max
+                );
+            }
+            let path = dir.join("table1.csv");
+            write_atomic(&path, csv.as_bytes())?;
+            written.push(path.display().to_string());
+        }
+    }
+    if scene.file.output.plots {
+        for (file, title, x_label, panels) in plot_specs(scene, result) {
+            let path = dir.join(file);
+            write_svg(&path, &title, x_label, &panels).map_err(ScenarioError::Run)?;
+            written.push(path.display().to_string());
+        }
+    }
+    let summary = summary_json(scene, result);
+    let path = dir.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+    write_atomic(&path, text.as_bytes())?;
+    written.push(path.display().to_string());
+    Ok(written)
+}
+
+type PlotSpec<'a> = (String, String, &'static str, Vec<Panel<'a>>);
+
+fn series<'a>(table: &'a Table, column: &str, label: &str, dashed: bool) -> Option<Series<'a>> {
+    Some(Series {
+        label: label.to_string(),
+        x: &table.data[0],
+        y: table.column(column)?,
+        dashed,
+    })
+}
+
+/// The figures of the paper that the run's tables can draw.
+fn plot_specs<'a>(scene: &Scene, result: &'a RunResult) -> Vec<PlotSpec<'a>> {
+    let name = &scene.name;
+    let mut specs = Vec::new();
+    if let Some(t) = result.table("deflections") {
+        for &xi in &scene.file.output.deflection_xi {
+            let mut panels = Vec::new();
+            for i in 1..=3 {
+                let mut s: Vec<Series> = Vec::new();
+                s.extend(series(
+                    t,
+                    &format!("w_{i}_xi{xi}_m"),
+                    "with axial force",
+                    false,
+                ));
+                s.extend(series(
+                    t,
+                    &format!("w_{i}_xi{xi}_no_axial_m"),
+                    "without axial force",
+                    true,
+                ));
+                panels.push(Panel {
+                    y_label: format!("link {i} w(xi = {xi}) (m)"),
+                    series: s,
+                });
+            }
+            specs.push((
+                format!("deflections_xi{xi}.svg"),
+                format!("{name}: deflection of the links at xi = {xi} (paper figs 6-7)"),
+                "t (s)",
+                panels,
+            ));
+        }
+    }
+    if let Some(t) = result.table("modes") {
+        let r = scene.machine.links[0].modes();
+        let panels = (1..=r.min(3))
+            .map(|j| Panel {
+                y_label: format!("eta_1{j} (m)"),
+                series: series(
+                    t,
+                    &format!("eta_1_{j}_m"),
+                    &format!("link 1 mode {j}"),
+                    false,
+                )
+                .into_iter()
+                .collect(),
+            })
+            .collect();
+        specs.push((
+            "modes.svg".into(),
+            format!("{name}: mode amplitudes of link 1 (paper fig 8)"),
+            "t (s)",
+            panels,
+        ));
+    }
+    if let Some(t) = result.table("modal_forces") {
+        let s = ["F_rho_1_1_N", "F_beta_1_1_N", "F_fg_1_1_N"]
+            .iter()
+            .zip(["F1 = -M_rho rho''", "F2 = -M_beta beta''", "F3 = F_fg"])
+            .filter_map(|(c, l)| series(t, c, l, false))
+            .collect();
+        specs.push((
+            "modal_forces.svg".into(),
+            format!("{name}: inertial and coupling forces, link 1 mode 1 (paper fig 9)"),
+            "t (s)",
+            vec![Panel {
+                y_label: "modal force (N)".into(),
+                series: s,
+            }],
+        ));
+    }
+    if let Some(t) = result.table("driving_forces") {
+        let mut top = Vec::new();
+        top.extend(series(
+            t,
+            "F_a_1_flexible_N",
+            "with link flexibility",
+            false,
+        ));
+        top.extend(series(t, "F_a_1_rigid_N", "rigid links", true));
+        let mut panels = vec![Panel {
+            y_label: "F_a1 (N)".into(),
+            series: top,
+        }];
+        if let Some(s) = series(t, "F_a_1_difference_N", "flexible - rigid", false) {
+            panels.push(Panel {
+                y_label: "difference (N)".into(),
+                series: vec![s],
+            });
+        }
+        specs.push((
+            "driving_forces.svg".into(),
+            format!("{name}: driving force of slider 1 (paper figs 10-11)"),
+            "t (s)",
+            panels,
+        ));
+    }
+    if let Some(t) = result.table("frequencies") {
+        let r = scene.machine.links[0].modes();
+        for j in 1..=r.min(3) {
+            let panels = vec![
+                Panel {
+                    y_label: "axial force link 1 (N)".into(),
+                    series: [("P_B_1_N", "at B (slider)"), ("P_C_1_N", "at C (platform)")]
+                        .iter()
+                        .filter_map(|(c, l)| series(t, c, l, false))
+                        .collect(),
+                },
+                Panel {
+                    y_label: format!("mode {j} frequency (Hz)"),
+                    series: series(
+                        t,
+                        &format!("f_1_{j}_Hz"),
+                        &format!("link 1 mode {j}"),
+                        false,
+                    )
+                    .into_iter()
+                    .collect(),
+                },
+            ];
+            specs.push((
+                format!("axial_force_frequency_mode{j}.svg"),
+                format!("{name}: axial force and mode {j} frequency of link 1 (paper figs 12-14)"),
+                "t (s)",
+                panels,
+            ));
+        }
+    }
+    if let Some(t) = result.table("axial_forces") {
+        let s = (1..=3)
+            .filter_map(|i| series(t, &format!("P_B_{i}_N"), &format!("link {i} at B"), false))
+            .collect();
+        specs.push((
+            "axial_forces.svg".into(),
+            format!("{name}: axial forces (tension positive, paper fig 15)"),
+            "t (s)",
+            vec![Panel {
+                y_label: "axial force (N)".into(),
+                series: s,
+            }],
+        ));
+    }
+    if let Some(t) = result.table("kinematics") {
+        let rho = (1..=3)
+            .filter_map(|i| series(t, &format!("rho_{i}_m"), &format!("slider {i}"), false))
+            .collect();
+        let beta = (1..=3)
+            .filter_map(|i| series(t, &format!("beta_{i}_rad"), &format!("link {i}"), false))
+            .collect();
+        specs.push((
+            "kinematics.svg".into(),
+            format!("{name}: slider positions and link angles"),
+            "t (s)",
+            vec![
+                Panel {
+                    y_label: "rho (m)".into(),
+                    series: rho,
+                },
+                Panel {
+                    y_label: "beta (rad)".into(),
+                    series: beta,
+                },
+            ],
+        ));
+    }
+    if let Some(t) = result.table("energies") {
+        let s = (1..=3)
+            .filter_map(|i| {
+                series(
+                    t,
+                    &format!("strain_{i}_J"),
+                    &format!("strain energy link {i}"),
+                    false,
+                )
+            })
+            .collect();
+        specs.push((
+            "energies.svg".into(),
+            format!("{name}: elastic strain energy of the links"),
+            "t (s)",
+            vec![Panel {
+                y_label: "energy (J)".into(),
+                series: s,
+            }],
+        ));
+    }
+    specs
+}
