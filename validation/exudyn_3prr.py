@@ -74,7 +74,7 @@ class SliderPath:
         self._val = None
 
     def _eval(self, t):
-        if self._t is None or abs(t - self._t) > 0.0:
+        if self._t is None or t != self._t:
             k = leg_kinematics(self.scene, self.i, t)
             u = self.scene.guide_direction(self.i)
             self._val = (k.slider_point, k.rho_d * u)
@@ -96,6 +96,8 @@ def build_model(scene, n_elements, axial_damping_time=0.0):
     axial_damping_time beta (s): axial damping d = beta EA of the cable elements (stiffness
     proportional, on the axial strain rate only; bending is undamped). 0 = no damping.
     """
+    if n_elements < 2 or n_elements % 2:
+        raise ValueError(f"elements per link must be even and >= 2 (mid-point node), got {n_elements}")
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
     mbs.AddObject(ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
@@ -201,9 +203,9 @@ def add_sensors(mbs, handles, n_elements):
     s["platform_acc"] = mbs.AddSensor(
         SensorNode(nodeNumber=handles["platform_node"], storeInternal=True, writeToFile=False,
                    outputVariableType=exu.OutputVariableType.Coordinates_tt))
-    le_half = n_elements // 2
+    mid_node = n_elements // 2  # material point x = l/2 (n_elements is even)
     for i, link in enumerate(handles["links"]):
-        for key, node in (("B", link["nodes"][0]), ("M", link["nodes"][le_half]), ("C", link["nodes"][-1])):
+        for key, node in (("B", link["nodes"][0]), ("M", link["nodes"][mid_node]), ("C", link["nodes"][-1])):
             s[f"{key}{i}"] = mbs.AddSensor(
                 SensorNode(nodeNumber=node, storeInternal=True, writeToFile=False,
                            outputVariableType=exu.OutputVariableType.Position))
@@ -215,7 +217,6 @@ def add_sensors(mbs, handles, n_elements):
             SensorObject(objectNumber=link["platform_joint"], storeInternal=True, writeToFile=False,
                          outputVariableType=exu.OutputVariableType.Force))
         # axial force EA*eps from the ANCF strain at the two link ends (cross-check)
-        le = None
         for key, elem, xloc in (("NB", link["elements"][0], 0.0), ("NC", link["elements"][-1], 1.0)):
             le = mbs.GetObjectParameter(elem, "length")
             s[f"{key}{i}"] = mbs.AddSensor(
