@@ -329,43 +329,15 @@ impl Integrator for Abm {
         t_end: f64,
     ) -> Result<AbmStepper, IntegratorError> {
         let n = system.dim();
-        self.options.validate(n)?;
+        crate::common::validate_start(&self.options, n, y0, t0, t_end)?;
         if !(1..=MAX_ORDER).contains(&self.max_order) {
             return Err(IntegratorError::InvalidOptions(format!(
                 "max_order must be between 1 and {MAX_ORDER}, got {}",
                 self.max_order
             )));
         }
-        if n == 0 {
-            return Err(IntegratorError::InvalidInput(
-                "the system has no state components".to_string(),
-            ));
-        }
-        if y0.len() != n {
-            return Err(IntegratorError::InvalidInput(format!(
-                "y0 has {} components but the system has {n}",
-                y0.len()
-            )));
-        }
-        if let Some(i) = first_non_finite(y0) {
-            return Err(IntegratorError::InvalidInput(format!(
-                "y0[{i}] = {} is not finite",
-                y0[i]
-            )));
-        }
-        if !t0.is_finite() || !t_end.is_finite() {
-            return Err(IntegratorError::InvalidInput(format!(
-                "t0 = {t0} and t_end = {t_end} must be finite"
-            )));
-        }
-        let span = (t_end - t0).abs();
-        if span <= 0.0 || span < 16.0 * f64::EPSILON * t0.abs().max(t_end.abs()) {
-            return Err(IntegratorError::InvalidInput(format!(
-                "t_end = {t_end} is not distinguishable from t0 = {t0}"
-            )));
-        }
         let direction = (t_end - t0).signum();
-        let h_max = self.options.max_step.min(span);
+        let h_max = self.options.max_step.min((t_end - t0).abs());
 
         // Room for every order, so that recording one never allocates inside `step`.
         let mut stats = Stats {

@@ -770,38 +770,11 @@ impl crate::Integrator for Bdf {
         t_end: f64,
     ) -> Result<BdfStepper, IntegratorError> {
         let n = system.dim();
-        self.options.validate(n)?;
+        crate::common::validate_start(&self.options, n, y0, t0, t_end)?;
         if !(1..=MAX_ORDER).contains(&self.max_order) {
             return Err(IntegratorError::InvalidOptions(format!(
                 "BDF max_order must be between 1 and {MAX_ORDER}, got {}",
                 self.max_order
-            )));
-        }
-        if y0.len() != n {
-            return Err(IntegratorError::InvalidInput(format!(
-                "y0 has {} components but the system has {n}",
-                y0.len()
-            )));
-        }
-        if n == 0 {
-            return Err(IntegratorError::InvalidInput(
-                "the system has no state components".to_string(),
-            ));
-        }
-        if !t0.is_finite() || !t_end.is_finite() {
-            return Err(IntegratorError::InvalidInput(format!(
-                "t0 = {t0} and t_end = {t_end} must be finite"
-            )));
-        }
-        if (t_end - t0).abs() <= 16.0 * f64::EPSILON * t0.abs().max(t_end.abs()) {
-            return Err(IntegratorError::InvalidInput(format!(
-                "t_end = {t_end} equals t0 = {t0}: nothing to integrate"
-            )));
-        }
-        if let Some(i) = first_non_finite(y0) {
-            return Err(IntegratorError::InvalidInput(format!(
-                "y0[{i}] = {} is not finite",
-                y0[i]
             )));
         }
         // Sized up front so that recording an order never allocates inside `step`.

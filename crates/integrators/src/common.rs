@@ -1,6 +1,6 @@
 //! Pieces every method shares: the error norm and the initial step.
 
-use crate::{OdeSystem, Options};
+use crate::{IntegratorError, OdeSystem, Options};
 
 /// Weighted RMS norm of a local error estimate (Hairer, Norsett & Wanner I, eq. II.4.11):
 /// `sqrt(1/n sum (err_i / (atol_i + rtol max(|y_i|, |y_new_i|)))^2)`.
@@ -66,4 +66,41 @@ pub fn initial_step<S: OdeSystem + ?Sized>(
         (0.01 / der12).powf(1.0 / (order as f64 + 1.0))
     };
     (100.0 * h).min(h1).min(h_max)
+}
+
+/// Checks what every method's `start` needs: valid options, a non-empty system whose
+/// dimension matches `y0`, finite `t0`, `t_end` and `y0`, and `t_end` distinguishable from `t0`.
+///
+/// # Errors
+/// [`IntegratorError::InvalidOptions`] or [`IntegratorError::InvalidInput`] saying which.
+pub fn validate_start(
+    options: &Options,
+    dim: usize,
+    y0: &[f64],
+    t0: f64,
+    t_end: f64,
+) -> Result<(), IntegratorError> {
+    options.validate(dim)?;
+    let input = |msg: String| Err(IntegratorError::InvalidInput(msg));
+    if dim == 0 {
+        return input("the system has no state components".to_string());
+    }
+    if y0.len() != dim {
+        return input(format!(
+            "y0 has {} components but the system has {dim}",
+            y0.len()
+        ));
+    }
+    if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
+        return input(format!("y0[{i}] = {} is not finite", y0[i]));
+    }
+    if !t0.is_finite() || !t_end.is_finite() {
+        return input(format!("t0 = {t0} and t_end = {t_end} must be finite"));
+    }
+    if (t_end - t0).abs() <= 16.0 * f64::EPSILON * t0.abs().max(t_end.abs()) {
+        return input(format!(
+            "t_end = {t_end} is not distinguishable from t0 = {t0}: nothing to integrate"
+        ));
+    }
+    Ok(())
 }

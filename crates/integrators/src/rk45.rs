@@ -213,35 +213,8 @@ impl Integrator for Rk45 {
         t_end: f64,
     ) -> Result<Rk45Stepper, IntegratorError> {
         let n = system.dim();
-        self.options.validate(n)?;
-        if y0.len() != n {
-            return Err(IntegratorError::InvalidInput(format!(
-                "y0 has {} components but the system has {n}",
-                y0.len()
-            )));
-        }
-        if n == 0 {
-            return Err(IntegratorError::InvalidInput(
-                "the system has no state components".to_string(),
-            ));
-        }
-        if !t0.is_finite() || !t_end.is_finite() {
-            return Err(IntegratorError::InvalidInput(format!(
-                "t0 = {t0} and t_end = {t_end} must be finite"
-            )));
-        }
+        crate::common::validate_start(&self.options, n, y0, t0, t_end)?;
         let span = t_end - t0;
-        if span.abs() <= 0.0 {
-            return Err(IntegratorError::InvalidInput(format!(
-                "t_end = {t_end} equals t0: nothing to integrate"
-            )));
-        }
-        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
-            return Err(IntegratorError::InvalidInput(format!(
-                "y0[{i}] = {} is not finite",
-                y0[i]
-            )));
-        }
         let direction = span.signum();
         let h_max = self.options.max_step.min(span.abs());
 
