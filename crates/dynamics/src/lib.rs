@@ -11,6 +11,7 @@
 //! * [`Formulation`]: the named formulations `paper` and `consistent` and their switches.
 
 mod axial;
+mod coupled;
 mod error;
 mod formulation;
 mod frequencies;
@@ -21,6 +22,9 @@ pub mod paper;
 
 pub use axial::{
     AxialForceModel, AxialInput, JointReactionAxialForce, NoAxialForce, PaperAxialForce, end_forces,
+};
+pub use coupled::{
+    CoupledCounters, CoupledOptions, CoupledOutput, CoupledSystem, CouplingModel, UnknownCoupling,
 };
 pub use error::DynamicsError;
 pub use formulation::{AxialModel, Formulation};

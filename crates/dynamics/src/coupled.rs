@@ -1,0 +1,932 @@
+//! The coupled rigid-flexible model: the sliders follow their inverse-kinematics path, the
+//! platform is no longer prescribed but follows from the sliders and the links' *chords*,
+//! which bending shortens (foreshortening). The axial forces are the constraint forces of the
+//! chords, computed from the platform's and the links' equations of motion at every instant.
+//!
+//! The derivation is in the workspace's `docs/coupled.md`; in short, for link `i` with modal
+//! coordinates `eta_i` (model.md section 6 notation, `x` from `B_i` along the chord):
+//!
+//! ```text
+//! chord length      L_i = l - delta_i,   delta_i = (1/(2l)) eta_i^T G0 eta_i   (= (1/2) int w'^2 dx)
+//! platform pose     q(eta, t): closure |C_i(q) - B_i(rho_i(t))| = L_i          (forward kinematics)
+//!                   F q' = (g.u) rho' + L L',  F q'' = ... + L L''  with  L'' = L''_0 + dL . eta''
+//! chord angle       b_i'' = [N_i . q'' - phi'^2 r_i.n_i - rho_i'' u_i.n_i - 2 L_i' b_i'] / L_i
+//! modal equations   M eta_i'' + C eta_i' + (Kf + Kp(N_i) - b_i'^2 M) eta_i
+//!                       = -m_psi rho_i'' sin(a_i - b_i) - l m_xipsi b_i''
+//! axial force       N_i(x) = T_i - rhoA [rho_i'' cos(a_i - b_i) (l - x) - b_i'^2 (l^2 - x^2) / 2]
+//! chord tension     T_i = F_Ci . e_i from the platform's Newton-Euler equations
+//!                   M_p q'' = -sum_i (T_i E_i + S_i N_i),   S_i = Mom_i / L_i,
+//!                   Mom_i = I_B b_i'' + (m l / 2) rho_i'' sin(a_i - b_i) + l m_xipsi.eta_i''
+//!                           - rho_i'' cos(a_i - b_i) m_psi.eta_i      (moment about B_i)
+//! ```
+//!
+//! with `E_i = (e_i, r_i x e_i)`, `N_i = (n_i, r_i x n_i)` and `M_p = diag(m_p, m_p, I_p)`.
+//! These are Lagrange's equations for the generalized coordinates `eta` (kinetic energy of
+//! links and platform through `(eta, t)`, strain energy of the links) in the virtual-work
+//! form: the platform's and the links' rigid inertia seen through `dq/d eta` and
+//! `d b / d eta` add up, by the Newton-Euler equations of the platform and the links, to
+//! exactly the chord tension times `d delta / d eta`, which joins the links' own axial inertia
+//! in `Kp(N)`. Terms whose coefficient is itself of second order in `eta` (the foreshortening
+//! displacement in the transverse acceleration, `u_s b''` and `2 u_s' b'`, and the elastic
+//! part of the links' axial inertia in `N(x)`) are left out.
+//!
+//! `eta''` enters `b''` (through `q''` and `L''`) and `T` (through `q''` and `Mom`), so the
+//! accelerations solve a small linear system per evaluation: `A eta'' = g` with `A` the block
+//! diagonal modal mass plus low-rank terms. It is assembled into preallocated storage and
+//! solved by Gaussian elimination with partial pivoting: the right-hand side allocates nothing.
+//!
+//! Linearised about `eta = 0` (so `L = l`, the platform on its nominal path, `T` the rigid
+//! inverse-dynamics value) the equations are exactly the consistent KED equations of
+//! model.md section 6; with [`CoupledOptions::ked_limit`] (no foreshortening in the closure,
+//! no elastic inertia in the reactions) they are those equations for every `eta`.
+
+use std::str::FromStr;
+use std::sync::Arc;
+
+use faer::{Mat, Side};
+use integrators::OdeSystem;
+use kinematics::{LegDrive, PlatformMotion, Pose, Trajectory};
+use nalgebra::{Matrix3, Vector2, Vector3};
+
+use crate::{DynamicsError, Machine, ModalDamping};
+
+/// Which model of the links' interaction with the rigid machine a scene uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CouplingModel {
+    /// Kineto-elasto-dynamics: rigid motion prescribed, axial forces from rigid inverse
+    /// dynamics ([`crate::ModalSystem`]).
+    #[default]
+    Ked,
+    /// The coupled model of this module ([`CoupledSystem`]).
+    Coupled,
+}
+
+impl CouplingModel {
+    /// The name used in scene files: `"ked"` or `"coupled"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            CouplingModel::Ked => "ked",
+            CouplingModel::Coupled => "coupled",
+        }
+    }
+}
+
+impl std::fmt::Display for CouplingModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A coupling name that is neither `"ked"` nor `"coupled"`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown coupling {given:?}: expected \"ked\" or \"coupled\"")]
+pub struct UnknownCoupling {
+    /// The name given.
+    pub given: String,
+}
+
+impl FromStr for CouplingModel {
+    type Err = UnknownCoupling;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "ked" => Ok(CouplingModel::Ked),
+            "coupled" => Ok(CouplingModel::Coupled),
+            _ => Err(UnknownCoupling {
+                given: s.to_string(),
+            }),
+        }
+    }
+}
+
+/// Switches of the coupled model (both on in [`CoupledOptions::full`], the default).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoupledOptions {
+    /// Chords shortened by `delta_i` in the closure: the platform feels the deflection.
+    /// Off: chord lengths stay `l` and the platform follows its nominal path.
+    pub foreshortening: bool,
+    /// The links' elastic inertia in their moment balance (and so in the chord tensions).
+    /// Off: the tensions are the rigid inverse-dynamics ones for the actual chord motion.
+    pub elastic_reactions: bool,
+    /// Axial stiffness `EA` of each link (N). When given, [`CoupledOutput`] also reports the
+    /// quasi-static axial stretch of each chord, `(1/EA) int N dx`, and the platform pose
+    /// correction it causes to first order (`F dq = L stretch`, the closure's implicit
+    /// differentiation). Output only: the dynamics stay rigid-axial (the axial modes, near
+    /// 2 kHz for the paper's links, are far above the foreshortening excitation).
+    pub axial_stiffness: Option<[f64; 3]>,
+}
+
+impl CoupledOptions {
+    /// The full coupled model.
+    pub const fn full() -> Self {
+        Self {
+            foreshortening: true,
+            elastic_reactions: true,
+            axial_stiffness: None,
+        }
+    }
+    /// Both couplings off: the consistent KED equations (model.md section 6, joint-reaction
+    /// axial force, full `Kp`), for checks.
+    pub const fn ked_limit() -> Self {
+        Self {
+            foreshortening: false,
+            elastic_reactions: false,
+            axial_stiffness: None,
+        }
+    }
+}
+
+impl Default for CoupledOptions {
+    fn default() -> Self {
+        Self::full()
+    }
+}
+
+/// Work counters of a coupled system.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CoupledCounters {
+    /// Right-hand-side evaluations.
+    pub rhs_evaluations: usize,
+    /// Forward-kinematics solves (one per evaluation with foreshortening on).
+    pub forward_kinematics_solves: usize,
+    /// Linear solves for the modal accelerations.
+    pub acceleration_solves: usize,
+}
+
+/// Everything the coupled model knows at one `(t, y)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoupledOutput {
+    /// Time (s).
+    pub t: f64,
+    /// The nominal platform motion (the trajectory's).
+    pub nominal: PlatformMotion,
+    /// The actual platform motion: pose from the sliders and chords, velocity and acceleration
+    /// by implicit differentiation of the closure.
+    pub platform: PlatformMotion,
+    /// Chord lengths `L_i = l - delta_i` (m).
+    pub chord_length: [f64; 3],
+    /// Chord angles `b_i`, rates and accelerations (rad, rad/s, rad/s^2).
+    pub chord_angle: [[f64; 3]; 3],
+    /// Axial force of each link at `B_i` (tension positive, N).
+    pub axial_force_b: [f64; 3],
+    /// Axial force of each link at `C_i`: the chord constraint force (tension positive, N).
+    pub axial_force_c: [f64; 3],
+    /// Transverse deflection at each link's mid-point, along the chord normal (m).
+    pub midpoint_deflection: [f64; 3],
+    /// Driving force of each slider along its guide (N).
+    pub driving_force: [f64; 3],
+    /// Quasi-static axial stretch of each chord `(1/EA) int_0^l N dx` (m); zero unless
+    /// [`CoupledOptions::axial_stiffness`] is given.
+    pub axial_stretch: [f64; 3],
+    /// Platform pose change `(dx, dy, dphi)` caused by the axial stretch, to first order;
+    /// zero unless [`CoupledOptions::axial_stiffness`] is given.
+    pub stretch_pose_correction: [f64; 3],
+}
+
+impl CoupledOutput {
+    /// Platform pose minus the nominal pose `(dx, dy, dphi)` (m, m, rad).
+    pub fn pose_deviation(&self) -> [f64; 3] {
+        [
+            self.platform.pose.x - self.nominal.pose.x,
+            self.platform.pose.y - self.nominal.pose.y,
+            self.platform.pose.phi - self.nominal.pose.phi,
+        ]
+    }
+
+    /// [`CoupledOutput::pose_deviation`] plus the first-order effect of the quasi-static axial
+    /// stretch of the links ([`CoupledOptions::axial_stiffness`]).
+    pub fn pose_deviation_with_stretch(&self) -> [f64; 3] {
+        let d = self.pose_deviation();
+        std::array::from_fn(|k| d[k] + self.stretch_pose_correction[k])
+    }
+}
+
+/// Per-link constants, matrices row-major `r x r`.
+#[derive(Debug, Clone)]
+struct LinkData {
+    r: usize,
+    length: f64,
+    mass: f64,
+    /// Inertia about `B`: `I_G + m l^2 / 4` (kg m^2).
+    inertia_b: f64,
+    modal_mass: Vec<f64>,
+    flexural: Vec<f64>,
+    geometric: [Vec<f64>; 3],
+    damping: Vec<f64>,
+    mass_psi: Vec<f64>,
+    mass_xi_psi: Vec<f64>,
+    /// `psi_j(1/2)`.
+    psi_mid: Vec<f64>,
+}
+
+fn row_major(m: &Mat<f64>) -> Vec<f64> {
+    let (r, c) = (m.nrows(), m.ncols());
+    (0..r)
+        .flat_map(|i| (0..c).map(move |j| (i, j)))
+        .map(|(i, j)| m[(i, j)])
+        .collect()
+}
+
+/// Modal damping matrix `C = M Phi diag(2 zeta_j omega_j) Phi^T M` with `Phi` the
+/// `M`-orthonormal modes of `(Kf, M)`. With `M = L L^T` and `V` the eigenvectors of
+/// `L^-1 Kf L^-T`, `M Phi = L V`, so `C = L V D V^T L^T` (row-major result).
+fn damping_matrix(
+    link: &crate::LinkModel,
+    damping: &ModalDamping,
+    index: usize,
+) -> Result<Vec<f64>, DynamicsError> {
+    let ints = &link.integrals;
+    let r = ints.r();
+    if damping.ratios.iter().all(|z| z.abs() <= 0.0) {
+        return Ok(vec![0.0; r * r]);
+    }
+    if damping.ratios.len() > 1 && damping.ratios.len() != r {
+        return Err(DynamicsError::Inconsistent(format!(
+            "modal damping lists {} ratios but link {} has {r} modes (give one ratio for all, or one per mode)",
+            damping.ratios.len(),
+            index + 1
+        )));
+    }
+    if let Some(z) = damping
+        .ratios
+        .iter()
+        .find(|z| !(z.is_finite() && **z >= 0.0))
+    {
+        return Err(DynamicsError::InvalidParameter {
+            quantity: "damping ratio".into(),
+            value: *z,
+            reason: "must be finite and non-negative",
+        });
+    }
+    let not_pd = || {
+        DynamicsError::Inconsistent(format!(
+            "the modal mass matrix of link {} is not positive definite",
+            index + 1
+        ))
+    };
+    let llt = ints.mass.llt(Side::Lower).map_err(|_| not_pd())?;
+    let l = llt.L().to_owned();
+    // L^-1 by forward substitution on the identity.
+    let mut l_inv = Mat::<f64>::identity(r, r);
+    for c in 0..r {
+        for i in 0..r {
+            let mut sum = l_inv[(i, c)];
+            for p in 0..i {
+                sum -= l[(i, p)] * l_inv[(p, c)];
+            }
+            l_inv[(i, c)] = sum / l[(i, i)];
+        }
+    }
+    let a = &l_inv * &ints.stiffness * l_inv.transpose();
+    let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
+        DynamicsError::Inconsistent(format!("eigen-decomposition failed for link {}", index + 1))
+    })?;
+    let v = eig.U().to_owned();
+    let s = eig.S();
+    let ratio = |j: usize| {
+        if damping.ratios.len() == 1 {
+            damping.ratios[0]
+        } else {
+            damping.ratios[j]
+        }
+    };
+    let d = Mat::from_fn(r, r, |i, j| {
+        if i == j {
+            2.0 * ratio(i) * s[i].max(0.0).sqrt()
+        } else {
+            0.0
+        }
+    });
+    let lv = &l * &v;
+    Ok(row_major(&(&lv * &d * lv.transpose())))
+}
+
+impl LinkData {
+    fn new(
+        link: &crate::LinkModel,
+        damping: &ModalDamping,
+        index: usize,
+    ) -> Result<Self, DynamicsError> {
+        let ints = &link.integrals;
+        let r = ints.r();
+        let l = ints.length;
+        let m = ints.total_mass;
+        Ok(Self {
+            r,
+            length: l,
+            mass: m,
+            inertia_b: link.centroid_inertia + 0.25 * m * l * l,
+            modal_mass: row_major(&ints.mass),
+            flexural: row_major(&ints.stiffness),
+            geometric: std::array::from_fn(|n| row_major(&ints.g[n])),
+            damping: damping_matrix(link, damping, index)?,
+            mass_psi: ints.mass_psi.clone(),
+            mass_xi_psi: ints.mass_xi_psi.clone(),
+            psi_mid: (0..r).map(|j| link.basis.eval(j, 0.5)[0]).collect(),
+        })
+    }
+}
+
+/// Per-evaluation scratch, preallocated (sizes fixed by the machine).
+#[derive(Debug, Clone)]
+struct Scratch {
+    /// System matrix `A`, row-major `n x n`.
+    matrix: Vec<f64>,
+    /// Right-hand side, then the solution `eta''`.
+    rhs: Vec<f64>,
+    /// `G0 eta_i / l` per link, stacked (`n`).
+    g0_eta: Vec<f64>,
+    /// `dL_i / d eta_i`, stacked (`n`).
+    length_gradient: Vec<f64>,
+}
+
+/// Linear-in-`eta''` pieces of one evaluation: `b'' = beta0 + Bs s`,
+/// `T = tension0 + Ts s + Tm m` with `s_j = dL_j . eta_j''` and `m_j = m_xipsi_j . eta_j''`.
+#[derive(Debug, Clone, Copy)]
+struct Kinetics {
+    nominal: PlatformMotion,
+    pose: Pose,
+    velocity: Vector3<f64>,
+    acceleration0: Vector3<f64>,
+    /// `Q = F^-1 diag(L)`: `q'' = acceleration0 + Q s`.
+    q_of_s: Matrix3<f64>,
+    lengths: [f64; 3],
+    rho: [[f64; 3]; 3],
+    e: [Vector2<f64>; 3],
+    n: [Vector2<f64>; 3],
+    beta: [f64; 3],
+    beta_dot: [f64; 3],
+    beta0: Vector3<f64>,
+    beta_s: Matrix3<f64>,
+    tension0: Vector3<f64>,
+    tension_s: Matrix3<f64>,
+    tension_m: Matrix3<f64>,
+    sin_ab: [f64; 3],
+    cos_ab: [f64; 3],
+}
+
+/// The coupled rigid-flexible 3-PRR as an [`OdeSystem`]: state
+/// `y = (eta_1, eta_2, eta_3, eta_1', eta_2', eta_3')` as in [`crate::ModalSystem`].
+pub struct CoupledSystem {
+    machine: Arc<Machine>,
+    trajectory: Arc<dyn Trajectory + Send + Sync>,
+    damping: ModalDamping,
+    options: CoupledOptions,
+    links: [LinkData; 3],
+    offsets: [usize; 3],
+    modes: usize,
+    scratch: Scratch,
+    counters: CoupledCounters,
+    failure: Option<DynamicsError>,
+}
+
+impl std::fmt::Debug for CoupledSystem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CoupledSystem")
+            .field("options", &self.options)
+            .field("modes", &self.modes)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+#[inline]
+fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `out = A x` for row-major `r x r` `A`, accumulated with factor `scale`: `out += scale A x`.
+#[inline]
+fn mat_vec_acc(a: &[f64], x: &[f64], scale: f64, out: &mut [f64]) {
+    let r = x.len();
+    for (j, o) in out.iter_mut().enumerate() {
+        *o += scale * dot(&a[j * r..(j + 1) * r], x);
+    }
+}
+
+/// Solves `A x = b` in place (`A` row-major `n x n`, overwritten; `b` becomes `x`) by Gaussian
+/// elimination with partial pivoting (Golub & Van Loan, *Matrix Computations*, 4th ed.,
+/// algorithm 3.4.1). Returns the column of a zero pivot.
+fn solve_in_place(a: &mut [f64], b: &mut [f64]) -> Result<(), usize> {
+    let n = b.len();
+    for k in 0..n {
+        let (mut p, mut best) = (k, a[k * n + k].abs());
+        for i in k + 1..n {
+            let v = a[i * n + k].abs();
+            if v > best {
+                (p, best) = (i, v);
+            }
+        }
+        if !(best > 0.0 && best.is_finite()) {
+            return Err(k);
+        }
+        if p != k {
+            for j in 0..n {
+                a.swap(k * n + j, p * n + j);
+            }
+            b.swap(k, p);
+        }
+        let pivot = a[k * n + k];
+        for i in k + 1..n {
+            let factor = a[i * n + k] / pivot;
+            if factor.abs() > 0.0 {
+                for j in k + 1..n {
+                    a[i * n + j] -= factor * a[k * n + j];
+                }
+                b[i] -= factor * b[k];
+            }
+        }
+    }
+    for k in (0..n).rev() {
+        let mut sum = b[k];
+        for j in k + 1..n {
+            sum -= a[k * n + j] * b[j];
+        }
+        b[k] = sum / a[k * n + k];
+    }
+    Ok(())
+}
+
+impl CoupledSystem {
+    /// Builds the system for a machine, a nominal platform trajectory (the sliders follow its
+    /// inverse kinematics), modal damping and the model switches.
+    ///
+    /// # Errors
+    /// A modal mass matrix that is not positive definite, inconsistent damping, or a
+    /// non-positive axial stiffness.
+    pub fn new(
+        machine: Arc<Machine>,
+        trajectory: Arc<dyn Trajectory + Send + Sync>,
+        damping: ModalDamping,
+        options: CoupledOptions,
+    ) -> Result<Self, DynamicsError> {
+        if let Some(stiffness) = options.axial_stiffness {
+            if let Some((i, k)) = stiffness
+                .iter()
+                .enumerate()
+                .find(|(_, k)| !(k.is_finite() && **k > 0.0))
+            {
+                return Err(DynamicsError::InvalidParameter {
+                    quantity: format!("axial stiffness EA of link {}", i + 1),
+                    value: *k,
+                    reason: "must be finite and positive",
+                });
+            }
+        }
+        let [a, b, c] = [0, 1, 2].map(|i| LinkData::new(&machine.links[i], &damping, i));
+        let links = [a?, b?, c?];
+        let offsets = [0, links[0].r, links[0].r + links[1].r];
+        let modes = offsets[2] + links[2].r;
+        Ok(Self {
+            machine,
+            trajectory,
+            damping,
+            options,
+            links,
+            offsets,
+            modes,
+            scratch: Scratch {
+                matrix: vec![0.0; modes * modes],
+                rhs: vec![0.0; modes],
+                g0_eta: vec![0.0; modes],
+                length_gradient: vec![0.0; modes],
+            },
+            counters: CoupledCounters::default(),
+            failure: None,
+        })
+    }
+
+    /// The machine.
+    pub fn machine(&self) -> &Machine {
+        &self.machine
+    }
+    /// The nominal trajectory.
+    pub fn trajectory(&self) -> &Arc<dyn Trajectory + Send + Sync> {
+        &self.trajectory
+    }
+    /// The damping.
+    pub fn damping(&self) -> &ModalDamping {
+        &self.damping
+    }
+    /// The model switches.
+    pub fn options(&self) -> CoupledOptions {
+        self.options
+    }
+    /// Total number of modal coordinates (half the state dimension).
+    pub fn modes(&self) -> usize {
+        self.modes
+    }
+    /// Range of link `i`'s coordinates in `eta`.
+    pub fn link_range(&self, link: usize) -> std::ops::Range<usize> {
+        self.offsets[link]..self.offsets[link] + self.links[link].r
+    }
+    /// Work counters so far.
+    pub fn counters(&self) -> CoupledCounters {
+        self.counters
+    }
+    /// The zero initial state `eta(0) = 0`, `eta'(0) = 0`: links straight, machine on its
+    /// rigid inverse-kinematics path with the rigid velocities.
+    pub fn initial_state(&self) -> Vec<f64> {
+        vec![0.0; 2 * self.modes]
+    }
+    /// The first failure met inside the right-hand side (which then writes NaN so the
+    /// integrator stops with a non-finite error): use it to report the real cause.
+    pub fn take_failure(&mut self) -> Option<DynamicsError> {
+        self.failure.take()
+    }
+
+    /// Chord shortening `delta_i = (1/(2l)) eta_i^T G0 eta_i` of each link (m).
+    pub fn chord_shortening(&self, eta: &[f64]) -> [f64; 3] {
+        std::array::from_fn(|i| {
+            let link = &self.links[i];
+            let e = &eta[self.link_range(i)];
+            let mut s = 0.0;
+            for j in 0..link.r {
+                s += e[j] * dot(&link.geometric[0][j * link.r..(j + 1) * link.r], e);
+            }
+            0.5 * s / link.length
+        })
+    }
+
+    /// Rigid kinematics and the linear-in-`eta''` pieces at `(t, y)`; fills
+    /// `scratch.g0_eta` and `scratch.length_gradient`.
+    fn kinetics(&mut self, t: f64, y: &[f64]) -> Result<Kinetics, DynamicsError> {
+        let n = self.modes;
+        let (eta, eta_dot) = y.split_at(n);
+        let geometry = &self.machine.geometry;
+        let nominal = self.trajectory.motion(t);
+        let rigid = geometry
+            .inverse_kinematics_unchecked(&nominal)
+            .map_err(|source| DynamicsError::Kinematics { t, source })?;
+        let rho: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            let leg = &rigid.legs[i];
+            [leg.rho, leg.rho_dot, leg.rho_ddot]
+        });
+        let mut lengths = [0.0; 3];
+        let mut length_dot = [0.0; 3];
+        let mut length_ddot0 = [0.0; 3];
+        for (i, link) in self.links.iter().enumerate() {
+            let range = self.offsets[i]..self.offsets[i] + link.r;
+            let r = link.r;
+            let g0 = &link.geometric[0];
+            let (e, ed) = (&eta[range.clone()], &eta_dot[range.clone()]);
+            let mut quad = 0.0;
+            let mut quad_dot = 0.0;
+            for j in 0..r {
+                let row = &g0[j * r..(j + 1) * r];
+                let g0e = dot(row, e) / link.length;
+                self.scratch.g0_eta[range.start + j] = g0e;
+                quad += e[j] * g0e;
+                quad_dot += ed[j] * dot(row, ed) / link.length;
+            }
+            if self.options.foreshortening {
+                lengths[i] = link.length - 0.5 * quad;
+                length_dot[i] = -dot(&self.scratch.g0_eta[range.clone()], ed);
+                length_ddot0[i] = -quad_dot;
+                for j in range {
+                    self.scratch.length_gradient[j] = -self.scratch.g0_eta[j];
+                }
+            } else {
+                lengths[i] = link.length;
+                self.scratch.length_gradient[range].fill(0.0);
+            }
+        }
+        let motion = if self.options.foreshortening {
+            self.counters.forward_kinematics_solves += 1;
+            let drive = LegDrive {
+                rho: rho.map(|r| r[0]),
+                rho_dot: rho.map(|r| r[1]),
+                rho_ddot: rho.map(|r| r[2]),
+                length: lengths,
+                length_dot,
+                length_ddot: length_ddot0,
+            };
+            geometry
+                .forward_motion(&drive, &nominal.pose)
+                .map_err(|source| DynamicsError::Kinematics { t, source })?
+        } else {
+            nominal
+        };
+        let pose = motion.pose;
+        let (p, v) = (
+            Vector2::new(pose.x, pose.y),
+            Vector2::new(motion.velocity.x, motion.velocity.y),
+        );
+        let omega = motion.velocity.z;
+        let a0 = motion.acceleration;
+        let closure = geometry.closure(&pose, rho.map(|r| r[0]), lengths);
+        let singular = |measure: f64| DynamicsError::SingularInverseDynamics {
+            t,
+            measure,
+            threshold: geometry.thresholds.type_ii,
+        };
+        let f_inv = closure
+            .pose_jacobian
+            .try_inverse()
+            .ok_or_else(|| singular(0.0))?;
+        let q_of_s = f_inv * Matrix3::from_diagonal(&Vector3::from(lengths));
+        let mut out = Kinetics {
+            nominal,
+            pose,
+            velocity: motion.velocity,
+            acceleration0: a0,
+            q_of_s,
+            lengths,
+            rho,
+            e: [Vector2::zeros(); 3],
+            n: [Vector2::zeros(); 3],
+            beta: [0.0; 3],
+            beta_dot: [0.0; 3],
+            beta0: Vector3::zeros(),
+            beta_s: Matrix3::zeros(),
+            tension0: Vector3::zeros(),
+            tension_s: Matrix3::zeros(),
+            tension_m: Matrix3::zeros(),
+            sin_ab: [0.0; 3],
+            cos_ab: [0.0; 3],
+        };
+        // Columns E_i = (e_i, r_i x e_i) and N_i = (n_i, r_i x n_i) of the platform balance.
+        let mut e_cols = Matrix3::zeros();
+        let mut n_cols = Matrix3::zeros();
+        let mut measure_cols = Matrix3::zeros();
+        let centroid = pose.rotate(&geometry.platform_centroid());
+        let radius = geometry.platform_radius().max(f64::MIN_POSITIVE);
+        let mut moment0 = Vector3::zeros();
+        let mut moment_s = Matrix3::zeros();
+        for (i, leg) in geometry.legs.iter().enumerate() {
+            let link = &self.links[i];
+            let range = self.offsets[i]..self.offsets[i] + link.r;
+            let u = leg.guide.direction.into_inner();
+            let r_i = pose.rotate(&leg.attachment);
+            let chord = p + r_i - leg.guide.anchor.coords - rho[i][0] * u;
+            let e = chord / lengths[i];
+            let nrm = Vector2::new(-e.y, e.x);
+            let c_dot = v + omega * Vector2::new(-r_i.y, r_i.x);
+            let beta_dot = (c_dot - rho[i][1] * u).dot(&nrm) / lengths[i];
+            let big_n = Vector3::new(nrm.x, nrm.y, cross(&r_i, &nrm));
+            let sin_ab = u.dot(&nrm);
+            let cos_ab = u.dot(&e);
+            out.beta0[i] = (big_n.dot(&a0)
+                - omega * omega * r_i.dot(&nrm)
+                - rho[i][2] * sin_ab
+                - 2.0 * length_dot[i] * beta_dot)
+                / lengths[i];
+            let row = big_n.transpose() * q_of_s / lengths[i];
+            out.beta_s.set_row(i, &row);
+            e_cols.set_column(i, &Vector3::new(e.x, e.y, cross(&r_i, &e)));
+            n_cols.set_column(i, &big_n);
+            let column = Vector3::new(e.x, e.y, cross(&(r_i - centroid), &e) / radius);
+            measure_cols.set_column(i, &column.normalize());
+            // Moment about B_i of the link's inertia forces (the part independent of eta'').
+            let mut m0 =
+                link.inertia_b * out.beta0[i] + 0.5 * link.mass * link.length * rho[i][2] * sin_ab;
+            if self.options.elastic_reactions {
+                m0 -= rho[i][2] * cos_ab * dot(&link.mass_psi, &eta[range]);
+            }
+            moment0[i] = m0 / lengths[i];
+            moment_s.set_row(i, &(row * (link.inertia_b / lengths[i])));
+            out.e[i] = e;
+            out.n[i] = nrm;
+            out.beta[i] = e.y.atan2(e.x);
+            out.beta_dot[i] = beta_dot;
+            out.sin_ab[i] = sin_ab;
+            out.cos_ab[i] = cos_ab;
+        }
+        // Type-II measure of the actual chords, as [`crate::equilibrium_measure`].
+        let measure = measure_cols.determinant().abs();
+        if measure.is_nan() || measure < geometry.thresholds.type_ii {
+            return Err(singular(measure));
+        }
+        let e_inv = e_cols.try_inverse().ok_or_else(|| singular(measure))?;
+        let mp = Vector3::new(
+            self.machine.platform_mass,
+            self.machine.platform_mass,
+            self.machine.platform_inertia,
+        );
+        out.tension0 = e_inv * (-a0.component_mul(&mp) - n_cols * moment0);
+        out.tension_s = e_inv * (-(Matrix3::from_diagonal(&mp) * q_of_s) - n_cols * moment_s);
+        if self.options.elastic_reactions {
+            let scale = Vector3::from(std::array::from_fn::<f64, 3, _>(|i| {
+                self.links[i].length / lengths[i]
+            }));
+            out.tension_m = -(e_inv * n_cols * Matrix3::from_diagonal(&scale));
+        }
+        Ok(out)
+    }
+
+    /// Assembles and solves `A eta'' = g`; `eta''` is left in `scratch.rhs`.
+    fn solve_accelerations(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        kin: &Kinetics,
+    ) -> Result<(), DynamicsError> {
+        let n = self.modes;
+        let (eta, eta_dot) = y.split_at(n);
+        let Scratch {
+            matrix,
+            rhs,
+            g0_eta,
+            length_gradient,
+        } = &mut self.scratch;
+        matrix.fill(0.0);
+        for (i, link) in self.links.iter().enumerate() {
+            let r = link.r;
+            let off = self.offsets[i];
+            let (e, ed) = (&eta[off..off + r], &eta_dot[off..off + r]);
+            let rho_a = link.mass / link.length;
+            let (rho_ddot, b_dot) = (kin.rho[i][2], kin.beta_dot[i]);
+            // Axial force N(x) = T + P0' + P1 x + P2 x^2 with the tension T at C unknown.
+            let p1 = rho_a * rho_ddot * kin.cos_ab[i];
+            let p2 = -0.5 * rho_a * b_dot * b_dot;
+            let p0_known = -(p1 * link.length + p2 * link.length * link.length);
+            let (c0, c1, c2) = (p0_known / link.length, p1, p2 * link.length);
+            let g = &mut rhs[off..off + r];
+            for (j, gj) in g.iter_mut().enumerate() {
+                *gj = -link.mass_psi[j] * rho_ddot * kin.sin_ab[i]
+                    - link.length * link.mass_xi_psi[j] * kin.beta0[i]
+                    - g0_eta[off + j] * kin.tension0[i];
+            }
+            mat_vec_acc(&link.flexural, e, -1.0, g);
+            mat_vec_acc(&link.geometric[0], e, -c0, g);
+            mat_vec_acc(&link.geometric[1], e, -c1, g);
+            mat_vec_acc(&link.geometric[2], e, -c2, g);
+            mat_vec_acc(&link.modal_mass, e, b_dot * b_dot, g);
+            mat_vec_acc(&link.damping, ed, -1.0, g);
+            // A: M on the diagonal block, + l x_i Bs_ij dL_j^T + k_i (Ts_ij dL_j^T + Tm_ij x_j^T).
+            for j in 0..r {
+                let row = (off + j) * n;
+                for k in 0..r {
+                    matrix[row + off + k] = link.modal_mass[j * r + k];
+                }
+                let lx = link.length * link.mass_xi_psi[j];
+                let kj = g0_eta[off + j];
+                for (c, other) in self.links.iter().enumerate() {
+                    let oc = self.offsets[c];
+                    let ws = lx * kin.beta_s[(i, c)] + kj * kin.tension_s[(i, c)];
+                    let wm = kj * kin.tension_m[(i, c)];
+                    for k in 0..other.r {
+                        matrix[row + oc + k] +=
+                            ws * length_gradient[oc + k] + wm * other.mass_xi_psi[k];
+                    }
+                }
+            }
+        }
+        self.counters.acceleration_solves += 1;
+        solve_in_place(matrix, rhs).map_err(|column| {
+            DynamicsError::Inconsistent(format!(
+                "at t = {t} s the coupled mass matrix is singular (zero pivot in column {column})"
+            ))
+        })
+    }
+
+    /// `(s, m)`: `s_j = dL_j . eta_j''`, `m_j = m_xipsi_j . eta_j''` for `eta''` in `scratch.rhs`.
+    fn reduced(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let mut s = Vector3::zeros();
+        let mut m = Vector3::zeros();
+        for (i, link) in self.links.iter().enumerate() {
+            let range = self.offsets[i]..self.offsets[i] + link.r;
+            let acc = &self.scratch.rhs[range.clone()];
+            s[i] = dot(&self.scratch.length_gradient[range], acc);
+            m[i] = dot(&link.mass_xi_psi, acc);
+        }
+        (s, m)
+    }
+
+    /// Modal accelerations `eta''` at `(t, y)` (allocating; for outputs and tests).
+    ///
+    /// # Errors
+    /// Kinematic failure (forward or inverse), a type-II singular pose, a singular mass matrix.
+    pub fn modal_accelerations(&mut self, t: f64, y: &[f64]) -> Result<Vec<f64>, DynamicsError> {
+        self.check_state(y)?;
+        let kin = self.kinetics(t, y)?;
+        self.solve_accelerations(t, y, &kin)?;
+        Ok(self.scratch.rhs.clone())
+    }
+
+    /// Platform motion, chord kinematics, axial forces, mid-point deflections and driving
+    /// forces at `(t, y)`.
+    ///
+    /// # Errors
+    /// As [`CoupledSystem::modal_accelerations`].
+    pub fn output(&mut self, t: f64, y: &[f64]) -> Result<CoupledOutput, DynamicsError> {
+        self.check_state(y)?;
+        let kin = self.kinetics(t, y)?;
+        self.solve_accelerations(t, y, &kin)?;
+        let (s, m) = self.reduced();
+        let n = self.modes;
+        let (eta, eta_dot) = y.split_at(n);
+        let acceleration = kin.acceleration0 + kin.q_of_s * s;
+        let beta_ddot = kin.beta0 + kin.beta_s * s;
+        let tension = kin.tension0 + kin.tension_s * s + kin.tension_m * m;
+        let mut out = CoupledOutput {
+            t,
+            nominal: kin.nominal,
+            platform: PlatformMotion {
+                pose: kin.pose,
+                velocity: kin.velocity,
+                acceleration,
+            },
+            chord_length: kin.lengths,
+            chord_angle: [[0.0; 3]; 3],
+            axial_force_b: [0.0; 3],
+            axial_force_c: [0.0; 3],
+            midpoint_deflection: [0.0; 3],
+            driving_force: [0.0; 3],
+            axial_stretch: [0.0; 3],
+            stretch_pose_correction: [0.0; 3],
+        };
+        for (i, link) in self.links.iter().enumerate() {
+            let range = self.offsets[i]..self.offsets[i] + link.r;
+            let (e, ed, acc) = (
+                &eta[range.clone()],
+                &eta_dot[range.clone()],
+                &self.scratch.rhs[range],
+            );
+            let (l, mass) = (link.length, link.mass);
+            let (rho_ddot, b_dot, b_ddot) = (kin.rho[i][2], kin.beta_dot[i], beta_ddot[i]);
+            out.chord_angle[i] = [kin.beta[i], b_dot, b_ddot];
+            out.axial_force_c[i] = tension[i];
+            out.axial_force_b[i] =
+                tension[i] - mass * (rho_ddot * kin.cos_ab[i] - 0.5 * b_dot * b_dot * l);
+            out.midpoint_deflection[i] = dot(&link.psi_mid, e);
+            if let Some(stiffness) = self.options.axial_stiffness {
+                // int_0^l N dx for N(x) = P_B + rhoA rho'' cos x - rhoA b'^2 x^2 / 2.
+                let rho_a = mass / l;
+                let integral = out.axial_force_b[i] * l
+                    + 0.5 * rho_a * rho_ddot * kin.cos_ab[i] * l * l
+                    - rho_a * b_dot * b_dot * l * l * l / 6.0;
+                out.axial_stretch[i] = integral / stiffness[i];
+            }
+            // Slider force on the link from the link's force balance: the rigid chord inertia
+            // plus the elastic transverse and Coriolis/tangential parts, minus the force at C.
+            let u = self.machine.geometry.legs[i].guide.direction.into_inner();
+            let (ei, ni) = (kin.e[i], kin.n[i]);
+            let m_psi_eta = dot(&link.mass_psi, e);
+            let transverse = dot(&link.mass_psi, acc) - b_dot * b_dot * m_psi_eta;
+            let tangential = -2.0 * b_dot * dot(&link.mass_psi, ed) - b_ddot * m_psi_eta;
+            let inertia = mass * (rho_ddot * u + 0.5 * l * (b_ddot * ni - b_dot * b_dot * ei))
+                + transverse * ni
+                + tangential * ei;
+            let mom = link.inertia_b * b_ddot
+                + 0.5 * mass * l * rho_ddot * kin.sin_ab[i]
+                + if self.options.elastic_reactions {
+                    l * m[i] - rho_ddot * kin.cos_ab[i] * m_psi_eta
+                } else {
+                    0.0
+                };
+            let f_c = tension[i] * ei + (mom / kin.lengths[i]) * ni;
+            let f_b = inertia - f_c;
+            out.driving_force[i] = self.machine.slider_mass[i] * rho_ddot + f_b.dot(&u);
+        }
+        if self.options.axial_stiffness.is_some() {
+            // F dq = L stretch with F the closure's pose Jacobian, Q = F^-1 diag(L).
+            let dq = kin.q_of_s * Vector3::from(out.axial_stretch);
+            out.stretch_pose_correction = [dq.x, dq.y, dq.z];
+        }
+        Ok(out)
+    }
+
+    fn check_state(&self, y: &[f64]) -> Result<(), DynamicsError> {
+        if y.len() != 2 * self.modes {
+            return Err(DynamicsError::Inconsistent(format!(
+                "state has {} entries, the coupled system {}",
+                y.len(),
+                2 * self.modes
+            )));
+        }
+        Ok(())
+    }
+
+    fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {
+        if self.failure.is_none() {
+            self.failure = Some(error);
+        }
+        dy.fill(f64::NAN);
+    }
+}
+
+impl OdeSystem for CoupledSystem {
+    fn dim(&self) -> usize {
+        2 * self.modes
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.counters.rhs_evaluations += 1;
+        let kin = match self.kinetics(t, y) {
+            Ok(kin) => kin,
+            Err(e) => return self.fail(e, dy),
+        };
+        if let Err(e) = self.solve_accelerations(t, y, &kin) {
+            return self.fail(e, dy);
+        }
+        let n = self.modes;
+        dy[..n].copy_from_slice(&y[n..]);
+        dy[n..].copy_from_slice(&self.scratch.rhs);
+    }
+}
