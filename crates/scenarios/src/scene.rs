@@ -18,6 +18,7 @@ use kinematics::{
 };
 use nalgebra::{Point2, Unit, Vector2};
 use serde::{Deserialize, Serialize};
+use toml::de::{DeTable, DeValue};
 
 use crate::error::ScenarioError;
 use crate::link::{BasisConfig, MaterialConfig, SectionConfig, build_basis, build_section};
@@ -600,25 +601,55 @@ fn pose_from(values: [f64; 3]) -> Pose {
 }
 
 /// Parses scene text into the raw [`SceneFile`]; syntax, unknown keys and wrong types are
-/// [`ScenarioError::Input`] with line and column.
+/// [`ScenarioError::Input`] with line and column and the dotted key involved.
+///
+/// The TOML deserializer reports a byte span and a message but not the key path, so the
+/// path is recovered from a span-preserving parse of the same text ([`key_path_at`]). Where
+/// the deserializer only knows the enclosing table (an unknown key or an unknown variant
+/// inside a tagged table), the offending key or value is searched for inside that table; a
+/// missing key is named after the table that lacks it; a syntax error is named after the
+/// key assigned (or the table opened) on its line.
 ///
 /// # Errors
 /// As described.
 pub fn parse_scene(file: &str, text: &str) -> Result<SceneFile, ScenarioError> {
     toml::from_str(text).map_err(|e| {
         let message = e.message().trim().to_string();
+        let named = |prefix: &str| {
+            message
+                .strip_prefix(prefix)
+                .and_then(|rest| rest.split('`').next())
+                .map(str::to_string)
+        };
+        let syntax_error = DeTable::parse(text).is_err();
         let mut key = String::new();
         let location = e.span().map(|span| {
-            let mut offset = span.start;
-            // For an unknown field the parser points at the enclosing table: find the key.
-            if let Some(name) = message
-                .strip_prefix("unknown field `")
-                .and_then(|rest| rest.split('`').next())
-            {
-                key = name.to_string();
-                if let Some(found) = find_key_from(text, offset, name) {
+            let mut offset = span.start.min(text.len());
+            if syntax_error {
+                key = key_on_line(text, offset);
+            } else if let Some(name) = named("unknown field `") {
+                if let Some(found) = find_key_within(text, span.clone(), &name)
+                    .or_else(|| find_key_from(text, offset, &name))
+                {
                     offset = found;
                 }
+                key = key_path_at(text, offset..offset + 1);
+                if !key.ends_with(name.as_str()) {
+                    key = join_key(&key, &name);
+                }
+            } else if let Some(name) = named("missing field `") {
+                key = join_key(&key_path_at(text, span.clone()), &name);
+            } else {
+                if let Some(variant) = named("unknown variant `") {
+                    let quoted = [format!("\"{variant}\""), format!("'{variant}'")];
+                    if let Some(found) = quoted.iter().find_map(|q| {
+                        text.get(span.clone())
+                            .and_then(|region| region.find(q.as_str()))
+                    }) {
+                        offset += found;
+                    }
+                }
+                key = key_path_at(text, offset..offset + 1);
             }
             let (line, column) = line_column(text, offset);
             crate::error::Location {
@@ -627,11 +658,122 @@ pub fn parse_scene(file: &str, text: &str) -> Result<SceneFile, ScenarioError> {
                 column,
             }
         });
+        if key.is_empty() {
+            if let Some(name) = named("missing field `") {
+                key = name;
+            }
+        }
         ScenarioError::Input {
             location,
             key,
             message,
         }
+    })
+}
+
+fn join_key(parent: &str, name: &str) -> String {
+    if parent.is_empty() {
+        name.to_string()
+    } else {
+        format!("{parent}.{name}")
+    }
+}
+
+/// Dotted key path (array elements numbered from 0) of the deepest entry whose key or
+/// value span holds all of `span` (byte offsets in `text`); empty when none does or `span`
+/// is the root table's.
+fn key_path_at(text: &str, span: std::ops::Range<usize>) -> String {
+    fn holds(outer: std::ops::Range<usize>, inner: &std::ops::Range<usize>) -> bool {
+        outer.start <= inner.start && inner.end <= outer.end.max(outer.start + 1)
+    }
+    fn search(value: &DeValue<'_>, span: &std::ops::Range<usize>, path: &mut Vec<String>) -> bool {
+        match value {
+            DeValue::Table(table) => {
+                for (key, item) in table.iter() {
+                    path.push(key.get_ref().to_string());
+                    let covers = holds(key.span(), span) || holds(item.span(), span);
+                    if search(item.get_ref(), span, path) || covers {
+                        return true;
+                    }
+                    path.pop();
+                }
+                false
+            }
+            DeValue::Array(items) => {
+                for (k, item) in items.iter().enumerate() {
+                    path.push(k.to_string());
+                    if search(item.get_ref(), span, path) || holds(item.span(), span) {
+                        return true;
+                    }
+                    path.pop();
+                }
+                false
+            }
+            _ => false,
+        }
+    }
+    let Ok(root) = DeTable::parse(text) else {
+        return String::new();
+    };
+    if root.span() == span {
+        // The deserializer names the root table (e.g. for a missing top-level table).
+        return String::new();
+    }
+    let mut path = Vec::new();
+    search(&DeValue::Table(root.into_inner()), &span, &mut path);
+    path.join(".")
+}
+
+/// For a syntax error at `offset`: the key assigned on that line (`key = ...`) or the table
+/// opened there (`[table`), prefixed with the last table header above it.
+fn key_on_line(text: &str, offset: usize) -> String {
+    let offset = offset.min(text.len());
+    // An error at the end of a line belongs to that line.
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[line_start..]
+        .find('\n')
+        .map_or(text.len(), |i| line_start + i);
+    let line = text[line_start..line_end].trim();
+    let header_name = |l: &str| {
+        l.trim_start_matches('[')
+            .split([']', '#'])
+            .next()
+            .unwrap_or("")
+            .trim()
+            .to_string()
+    };
+    if line.starts_with('[') {
+        return header_name(line);
+    }
+    let assigned = line.split('=').next().unwrap_or("").trim();
+    let table = text[..line_start]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['))
+        .map(header_name)
+        .unwrap_or_default();
+    if line.contains('=') {
+        join_key(&table, assigned)
+    } else {
+        table
+    }
+}
+
+/// Byte offset of `key =` inside `span` of `text` (e.g. in an inline table), if there.
+fn find_key_within(text: &str, span: std::ops::Range<usize>, key: &str) -> Option<usize> {
+    let end = span.end.min(text.len());
+    let start = span.start.min(end);
+    let region = text.get(start..end)?;
+    let is_ident = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+    region.match_indices(key).find_map(|(at, _)| {
+        let before_ok = region[..at]
+            .chars()
+            .next_back()
+            .is_none_or(|c| !is_ident(c));
+        let after = &region[at + key.len()..];
+        let after_ok = after.trim_start_matches([' ', '\t']).starts_with('=');
+        (before_ok && after_ok).then_some(start + at)
     })
 }
 
@@ -859,8 +1001,17 @@ impl Scene {
             _ => t1 - t0,
         };
         let checks = ((t1 - t0) / period_hint * 400.0).clamp(2000.0, 200_000.0) as usize;
-        validate_trajectory(&machine.geometry, trajectory.as_ref(), t0, t1, checks)
-            .map_err(|e| c.error("trajectory", format!("leaves the usable workspace: {e}")))?;
+        validate_trajectory(&machine.geometry, trajectory.as_ref(), t0, t1, checks).map_err(
+            |e| {
+                c.error(
+                    "trajectory",
+                    format!(
+                        "leaves the usable workspace (expected every pose from {t0} s to {t1} s \
+                         reachable, inside the slider travel and clear of singularities): {e}"
+                    ),
+                )
+            },
+        )?;
         // --- model
         let mo = &raw.model;
         let mut formulation = c.choice(
