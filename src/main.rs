@@ -24,6 +24,10 @@ enum Command {
     Kinematics(cli::kinematics::KinematicsArgs),
     /// Natural frequencies of a single link under an axial load.
     Beam(cli::beam::BeamArgs),
+    /// Run a parameter study: many scenes in parallel, one results table.
+    Study(cli::study::StudyArgs),
+    /// Merge the output directories of a sharded study into one results table.
+    Merge(cli::study::MergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -33,6 +37,8 @@ fn main() -> ExitCode {
         Command::Check(a) => cli::run::check(a),
         Command::Kinematics(a) => cli::kinematics::run(a),
         Command::Beam(a) => cli::beam::run(a),
+        Command::Study(a) => cli::study::study(a),
+        Command::Merge(a) => cli::study::merge(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -15,6 +15,7 @@ mod output;
 pub mod plot;
 mod run;
 mod scene;
+pub mod study;
 
 pub use error::{Location, ScenarioError};
 pub use locate::{line_column, locate};
@@ -24,3 +25,4 @@ pub use scene::{
     IntegratorConfig, LegConfig, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig,
     OutputKind, Scene, SceneFile, TimeConfig, TrajectoryConfig, parse_scene,
 };
+pub use study::{Study, StudyError, StudyOptions, merge_studies, run_study};
