@@ -16,6 +16,7 @@ pub mod plot;
 mod run;
 mod scene;
 pub mod study;
+pub mod work_precision;
 
 pub use error::{Location, ScenarioError};
 pub use locate::{line_column, locate};
