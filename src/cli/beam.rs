@@ -3,14 +3,14 @@
 //!
 //! The link file (see `configs/link_paper.toml` and `docs/beam.md`) gives the material, the
 //! section, the length, the assumed-mode basis, the number of modes, the coupling and the load.
-//! Its TOML structs live here for now; they will move to the scenarios layer.
+//! The material, section and basis tables are the scenarios layer's ([`scenarios::link`]),
+//! shared with scene files.
+
+use std::sync::Arc;
 
 use super::Failure;
-use beam::{
-    AxialLoad, Basis, ClassicalBasis, Coupling, EndCondition, EndConditions, HermiteBasis,
-    LinkFrequencies, ModalIntegrals, Section, SineBasis, SteppedSection, TaperedSection,
-    UniformSection, frequencies,
-};
+use beam::{AxialLoad, Basis, Coupling, LinkFrequencies, ModalIntegrals, frequencies};
+use scenarios::link::{BasisConfig, MaterialConfig, SectionConfig, build_basis, build_section};
 use serde::Deserialize;
 
 /// Arguments of `flexprr beam`.
@@ -44,111 +44,6 @@ pub struct LinkFile {
     /// Axial force, tension positive (default: none).
     #[serde(default)]
     pub load: LoadConfig,
-}
-
-/// Material constants.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialConfig {
-    /// Young's modulus `E` (Pa).
-    pub youngs_modulus: f64,
-    /// Density (kg/m^3).
-    pub density: f64,
-}
-
-/// Rectangular cross-section of in-plane (bending) thickness `t` and out-of-plane height `h`.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum SectionConfig {
-    /// Constant `t` and `h`: `EI = E h t^3 / 12`, `rhoA = density t h`.
-    Uniform {
-        /// In-plane thickness `t` (m).
-        thickness: f64,
-        /// Out-of-plane height `h` (m).
-        height: f64,
-    },
-    /// Thickness linear from `thickness_start` (slider end) to `thickness_end`.
-    Tapered {
-        /// Thickness at `xi = 0` (m).
-        thickness_start: f64,
-        /// Thickness at `xi = 1` (m).
-        thickness_end: f64,
-        /// Out-of-plane height (m).
-        height: f64,
-    },
-    /// Piecewise-constant rectangles.
-    Stepped {
-        /// Pieces in order along the link.
-        steps: Vec<StepConfig>,
-    },
-}
-
-/// One piece of a stepped section.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StepConfig {
-    /// Where the piece ends, as a fraction `xi` of the length (the last one is 1).
-    pub end: f64,
-    /// In-plane thickness (m).
-    pub thickness: f64,
-    /// Out-of-plane height (m).
-    pub height: f64,
-}
-
-/// End conditions, `"<at slider>-<at platform>"`.
-#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-#[allow(missing_docs)]
-pub enum EndsConfig {
-    #[default]
-    PinnedPinned,
-    PinnedClamped,
-    PinnedFree,
-    ClampedPinned,
-    ClampedClamped,
-    ClampedFree,
-    FreePinned,
-    FreeClamped,
-    FreeFree,
-}
-
-impl EndsConfig {
-    fn to_ends(self) -> EndConditions {
-        use EndCondition::{Clamped, Free, Pinned};
-        let (left, right) = match self {
-            EndsConfig::PinnedPinned => (Pinned, Pinned),
-            EndsConfig::PinnedClamped => (Pinned, Clamped),
-            EndsConfig::PinnedFree => (Pinned, Free),
-            EndsConfig::ClampedPinned => (Clamped, Pinned),
-            EndsConfig::ClampedClamped => (Clamped, Clamped),
-            EndsConfig::ClampedFree => (Clamped, Free),
-            EndsConfig::FreePinned => (Free, Pinned),
-            EndsConfig::FreeClamped => (Free, Clamped),
-            EndsConfig::FreeFree => (Free, Free),
-        };
-        EndConditions::new(left, right)
-    }
-}
-
-/// Assumed-mode basis.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum BasisConfig {
-    /// `sin(j pi xi)` (pinned-pinned; the paper's).
-    Sine,
-    /// Euler-Bernoulli eigenfunctions of a uniform beam with the given ends.
-    Classical {
-        /// End conditions, e.g. `"clamped-free"`.
-        ends: EndsConfig,
-    },
-    /// Hermite cubic finite elements.
-    Hermite {
-        /// Number of elements.
-        elements: usize,
-        /// End conditions (default `"pinned-pinned"`).
-        #[serde(default)]
-        ends: EndsConfig,
-    },
 }
 
 /// Frequency coupling.
@@ -221,7 +116,7 @@ fn find_key(text: &str, from: usize, key: &str) -> Option<usize> {
 
 /// A link built from a file: basis, section and its integrals.
 struct Link {
-    basis: Box<dyn Basis>,
+    basis: Arc<dyn Basis>,
     ei_at_start: f64,
     rho_a_at_start: f64,
     integrals: ModalIntegrals,
@@ -229,60 +124,20 @@ struct Link {
 }
 
 fn build_link(file: &LinkFile) -> Result<Link, String> {
-    let e = file.material.youngs_modulus;
-    let rho = file.material.density;
-    let section: Box<dyn Section> = match &file.section {
-        SectionConfig::Uniform { thickness, height } => Box::new(
-            UniformSection::rectangle(e, rho, *thickness, *height)
-                .map_err(|e| format!("section: {e}"))?,
-        ),
-        SectionConfig::Tapered {
-            thickness_start,
-            thickness_end,
-            height,
-        } => Box::new(
-            TaperedSection::new(e, rho, *thickness_start, *thickness_end, *height)
-                .map_err(|e| format!("section: {e}"))?,
-        ),
-        SectionConfig::Stepped { steps } => {
-            let pieces = steps
-                .iter()
-                .enumerate()
-                .map(|(k, s)| {
-                    UniformSection::rectangle(e, rho, s.thickness, s.height)
-                        .map(|u| (s.end, u))
-                        .map_err(|e| format!("section.steps[{k}]: {e}"))
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            Box::new(SteppedSection::new(pieces).map_err(|e| format!("section.steps: {e}"))?)
+    let section = build_section(&file.material, &file.section)
+        .map_err(|(key, message)| format!("{key}: {message}"))?;
+    let basis = build_basis(&file.basis, file.modes)
+        .map_err(|(key, message)| format!("{key}: {message}"))?;
+    if let BasisConfig::Hermite { elements, .. } = file.basis {
+        if file.modes == 0 || file.modes > basis.len() {
+            return Err(format!(
+                "modes = {} must be between 1 and the {} nodal unknowns of {} elements",
+                file.modes,
+                basis.len(),
+                elements
+            ));
         }
-    };
-    let (basis, reported): (Box<dyn Basis>, usize) = match file.basis {
-        BasisConfig::Sine => (
-            Box::new(SineBasis::new(file.modes).map_err(|e| format!("modes: {e}"))?),
-            file.modes,
-        ),
-        BasisConfig::Classical { ends } => (
-            Box::new(
-                ClassicalBasis::new(ends.to_ends(), file.modes)
-                    .map_err(|e| format!("basis: {e}"))?,
-            ),
-            file.modes,
-        ),
-        BasisConfig::Hermite { elements, ends } => {
-            let basis =
-                HermiteBasis::new(elements, ends.to_ends()).map_err(|e| format!("basis: {e}"))?;
-            if file.modes == 0 || file.modes > basis.len() {
-                return Err(format!(
-                    "modes = {} must be between 1 and the {} nodal unknowns of {} elements",
-                    file.modes,
-                    basis.len(),
-                    elements
-                ));
-            }
-            (Box::new(basis), file.modes)
-        }
-    };
+    }
     let integrals = ModalIntegrals::compute(basis.as_ref(), section.as_ref(), file.length)
         .map_err(|e| format!("modal integrals: {e}"))?;
     Ok(Link {
@@ -290,7 +145,7 @@ fn build_link(file: &LinkFile) -> Result<Link, String> {
         rho_a_at_start: section.mass_per_length(0.0),
         basis,
         integrals,
-        reported,
+        reported: file.modes,
     })
 }
 

@@ -604,7 +604,7 @@ fn pose_from(values: [f64; 3]) -> Pose {
 /// [`ScenarioError::Input`] with line and column and the dotted key involved.
 ///
 /// The TOML deserializer reports a byte span and a message but not the key path, so the
-/// path is recovered from a span-preserving parse of the same text ([`key_path_at`]). Where
+/// path is recovered from a span-preserving parse of the same text. Where
 /// the deserializer only knows the enclosing table (an unknown key or an unknown variant
 /// inside a tagged table), the offending key or value is searched for inside that table; a
 /// missing key is named after the table that lacks it; a syntax error is named after the
