@@ -19,7 +19,7 @@
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use kinematics::{LegState, MachineState};
-use nalgebra::Vector2;
+use nalgebra::{Vector2, Vector3};
 
 use crate::{DynamicsError, Machine};
 
@@ -139,16 +139,14 @@ pub fn inverse_dynamics(
         g[1] -= t_i * leg.n.y;
         g[2] -= t_i * cross(&r, &leg.n);
     }
-    // Cramer's rule on the 3x3 system A f = g.
-    let det = det3(&a);
-    let mut f = [0.0; 3];
-    for (k, fk) in f.iter_mut().enumerate() {
-        let mut ak = a;
-        for row in 0..3 {
-            ak[row][k] = g[row];
-        }
-        *fk = det3(&ak) / det;
-    }
+    // Cramer's rule on the 3x3 system A f = g without copying A: with the columns a_k of A,
+    // det A = a_0 . (a_1 x a_2) and f_k = g . (a_{k+1} x a_{k+2}) / det A (indices mod 3).
+    let column = |k: usize| Vector3::new(a[0][k], a[1][k], a[2][k]);
+    let (a0, a1, a2) = (column(0), column(1), column(2));
+    let (c12, c20, c01) = (a1.cross(&a2), a2.cross(&a0), a0.cross(&a1));
+    let det = a0.dot(&c12);
+    let g = Vector3::from(g);
+    let f = [g.dot(&c12) / det, g.dot(&c20) / det, g.dot(&c01) / det];
     let mut out = JointReactions {
         slider_on_link: [Vector2::zeros(); 3],
         platform_on_link: [Vector2::zeros(); 3],

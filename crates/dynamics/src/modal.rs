@@ -63,6 +63,9 @@ impl ModalDamping {
 struct LinkOperators {
     r: usize,
     length: f64,
+    /// `[M^-1 Kf, M^-1 G0, M^-1 G1, M^-1 G2]` entry by entry (row-major), interleaved so that
+    /// the right-hand side reads one contiguous stream per row.
+    stiffness: Vec<[f64; 4]>,
     flexural: Vec<f64>,
     geometric: [Vec<f64>; 3],
     damping: Vec<f64>,
@@ -183,10 +186,22 @@ impl LinkOperators {
             });
             to_row_major(&(&phi * &diag * phi.transpose() * &ints.mass))
         };
+        let flexural = apply(&ints.stiffness);
+        let stiffness = (0..r * r)
+            .map(|idx| {
+                [
+                    flexural[idx],
+                    geometric[0][idx],
+                    geometric[1][idx],
+                    geometric[2][idx],
+                ]
+            })
+            .collect();
         Ok(Self {
             r,
             length: ints.length,
-            flexural: apply(&ints.stiffness),
+            stiffness,
+            flexural,
             geometric,
             damping: damping_op,
             rho_forcing: vec_apply(&ints.mass_psi, 1.0),
@@ -321,6 +336,7 @@ impl ModalSystem {
     ///
     /// # Errors
     /// Kinematic failure or a singular inverse dynamics, with the time.
+    #[inline]
     pub fn instant(&mut self, t: f64) -> Result<Instant, DynamicsError> {
         let motion = self.trajectory.motion(t);
         let state = self
@@ -351,6 +367,7 @@ impl ModalSystem {
     }
 
     /// Modal accelerations `eta''` for the state `y` at the instant `inst`, written into `out`.
+    #[inline]
     fn accelerations(&self, inst: &Instant, y: &[f64], out: &mut [f64]) {
         let n = self.modes;
         let (eta, eta_dot) = y.split_at(n);
@@ -374,28 +391,28 @@ impl ModalSystem {
             let r = op.r;
             let eta_i = &eta[off..off + r];
             let eta_dot_i = &eta_dot[off..off + r];
-            let [g0, g1, g2] = &op.geometric;
-            for j in 0..r {
-                let row = j * r..(j + 1) * r;
+            let out_i = &mut out[off..off + r];
+            // Row j of M^-1 (Kf + Kp) from the interleaved operators: one contiguous stream.
+            for (j, (row, acc_j)) in op
+                .stiffness
+                .chunks_exact(r)
+                .zip(out_i.iter_mut())
+                .enumerate()
+            {
+                let stiffness: f64 = row
+                    .iter()
+                    .zip(eta_i)
+                    .map(|(k, e)| (k[0] + c0 * k[1] + c1 * k[2] + c2 * k[3]) * e)
+                    .sum();
                 let mut acc = rho_coef * op.rho_forcing[j]
                     + beta_coef * op.beta_forcing[j]
-                    + softening * eta_i[j];
-                let (kf, a0, a1, a2) = (
-                    &op.flexural[row.clone()],
-                    &g0[row.clone()],
-                    &g1[row.clone()],
-                    &g2[row.clone()],
-                );
-                for k in 0..r {
-                    acc -= (kf[k] + c0 * a0[k] + c1 * a1[k] + c2 * a2[k]) * eta_i[k];
-                }
+                    + softening * eta_i[j]
+                    - stiffness;
                 if !op.damping.is_empty() {
-                    let d = &op.damping[row];
-                    for k in 0..r {
-                        acc -= d[k] * eta_dot_i[k];
-                    }
+                    let d = &op.damping[j * r..(j + 1) * r];
+                    acc -= d.iter().zip(eta_dot_i).map(|(d, v)| d * v).sum::<f64>();
                 }
-                out[off + j] = acc;
+                *acc_j = acc;
             }
         }
     }
