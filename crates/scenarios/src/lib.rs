@@ -9,6 +9,7 @@
 //! ```
 
 mod error;
+pub mod classify;
 pub mod link;
 mod locate;
 mod output;
