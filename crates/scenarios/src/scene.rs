@@ -552,7 +552,7 @@ impl Checker<'_> {
         } else {
             Err(self.error(
                 key,
-                format!("expected a positive number ({unit}), got {value}"),
+                format!("expected a positive number ({unit}), got {value:?}"),
             ))
         }
     }
@@ -562,7 +562,7 @@ impl Checker<'_> {
         } else {
             Err(self.error(
                 key,
-                format!("expected a non-negative number ({unit}), got {value}"),
+                format!("expected a non-negative number ({unit}), got {value:?}"),
             ))
         }
     }
@@ -570,7 +570,7 @@ impl Checker<'_> {
         if value.is_finite() {
             Ok(value)
         } else {
-            Err(self.error(key, format!("expected a finite number, got {value}")))
+            Err(self.error(key, format!("expected a finite number, got {value:?}")))
         }
     }
     fn choice<T: Copy>(
@@ -623,10 +623,12 @@ pub fn parse_scene(file: &str, text: &str) -> Result<SceneFile, ScenarioError> {
         };
         let syntax_error = DeTable::parse(text).is_err();
         let mut key = String::new();
+        let mut missing_value = false;
         let location = e.span().map(|span| {
             let mut offset = span.start.min(text.len());
             if syntax_error {
                 key = key_on_line(text, offset);
+                missing_value = value_is_missing(text, offset);
             } else if let Some(name) = named("unknown field `") {
                 if let Some(found) = find_key_within(text, span.clone(), &name)
                     .or_else(|| find_key_from(text, offset, &name))
@@ -650,6 +652,12 @@ pub fn parse_scene(file: &str, text: &str) -> Result<SceneFile, ScenarioError> {
                     }
                 }
                 key = key_path_at(text, offset..offset + 1);
+                // Inside a tagged table (trajectory, section, basis) the deserializer only
+                // knows the table: find the entry holding the offending value.
+                if let Some((found, entry)) = entry_with_value(text, &key, &message) {
+                    offset = found;
+                    key = join_key(&key, &entry);
+                }
             }
             let (line, column) = line_column(text, offset);
             crate::error::Location {
@@ -663,6 +671,11 @@ pub fn parse_scene(file: &str, text: &str) -> Result<SceneFile, ScenarioError> {
                 key = name;
             }
         }
+        let message = if missing_value {
+            format!("expected a value after `=` ({message})")
+        } else {
+            message
+        };
         ScenarioError::Input {
             location,
             key,
@@ -722,6 +735,66 @@ fn key_path_at(text: &str, span: std::ops::Range<usize>) -> String {
     let mut path = Vec::new();
     search(&DeValue::Table(root.into_inner()), &span, &mut path);
     path.join(".")
+}
+
+/// For an "invalid type" or "invalid value" message that names the offending value
+/// (`` boolean `true` ``, `` string "0.1" ``, `` integer `-5` ``, `` floating point `0.5` ``),
+/// the one entry of the table at `table_path` holding that value: its offset and name.
+/// `None` when `table_path` is not a table, the message names no value, or the value is not
+/// found exactly once.
+fn entry_with_value(text: &str, table_path: &str, message: &str) -> Option<(usize, String)> {
+    let rest = message
+        .strip_prefix("invalid type: ")
+        .or_else(|| message.strip_prefix("invalid value: "))?;
+    let described = rest.split(", expected").next()?;
+    let literal = if let Some((_, quoted)) = described.split_once('"') {
+        quoted.rsplit_once('"')?.0
+    } else {
+        described.split('`').nth(1)?
+    };
+    let root = DeTable::parse(text).ok()?;
+    let mut current = DeValue::Table(root.into_inner());
+    for part in table_path.split('.').filter(|p| !p.is_empty()) {
+        let next = match part.parse::<usize>() {
+            Ok(index) => current.get(index),
+            Err(_) => current.get(part),
+        }?;
+        current = next.get_ref().clone();
+    }
+    let DeValue::Table(table) = &current else {
+        return None;
+    };
+    let same = |source: &str| {
+        let source = source.trim();
+        let unquoted = source.trim_matches(['"', '\'']);
+        let as_number = |s: &str| s.replace('_', "").parse::<f64>().ok().map(f64::to_bits);
+        unquoted == literal
+            || (as_number(source).is_some() && as_number(source) == as_number(literal))
+    };
+    let mut hits = table.iter().filter(|(_, value)| {
+        !matches!(value.get_ref(), DeValue::Table(_) | DeValue::Array(_))
+            && text.get(value.span()).is_some_and(same)
+    });
+    let (key, _) = hits.next()?;
+    if hits.next().is_some() {
+        return None;
+    }
+    Some((key.span().start, key.get_ref().to_string()))
+}
+
+/// Whether the line holding `offset` is `key =` with nothing (or only a comment) after it.
+fn value_is_missing(text: &str, offset: usize) -> bool {
+    let offset = offset.min(text.len());
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line = text[line_start..].lines().next().unwrap_or("");
+    match line.split_once('=') {
+        Some((assigned, value)) => {
+            !assigned.trim().is_empty()
+                && !assigned.contains(['{', '[', '"'])
+                && value.split('#').next().unwrap_or("").trim().is_empty()
+        }
+        None => false,
+    }
 }
 
 /// For a syntax error at `offset`: the key assigned on that line (`key = ...`) or the table

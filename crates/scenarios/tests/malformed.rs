@@ -146,7 +146,7 @@ fn syntax_error_missing_value() {
         &text,
         "\nplatform_mass",
         "machine.half_travel",
-        &["expected"],
+        &["expected a value after `=`"],
     );
 }
 
@@ -291,7 +291,7 @@ fn negative_rtol() {
         &text,
         "rtol",
         "integrator.rtol",
-        &["expected a positive number", "got -0.000001"],
+        &["expected a positive number", "got -1e-6"],
     );
 }
 
@@ -302,7 +302,7 @@ fn negative_atol() {
         &text,
         "atol",
         "integrator.atol",
-        &["expected a non-negative number", "got -0.000000000001"],
+        &["expected a non-negative number", "got -1e-12"],
     );
 }
 
@@ -623,5 +623,64 @@ fn zero_duration_move() {
         "duration",
         "trajectory.duration",
         &["expected a positive number (s)", "got 0"],
+    );
+}
+
+#[test]
+fn unknown_key_in_a_leg_of_a_general_layout() {
+    let legs = "layout = \"general\"\n\
+        [[machine.legs]]\n\
+        anchor = [0.2232, -0.1289]\n\
+        direction_deg = 150.0\n\
+        travel = [-0.2, 0.2]\n\
+        attachment = [0.05, -0.0289]\n\
+        stiffness = 1e6\n";
+    let text = edit(
+        "[machine]\nlayout = \"radial\"\nalpha_deg = [150.0, 270.0, 30.0]\nplatform_side = 0.1\n\
+         half_travel = 0.2\nplatform_mass = 0.2\nslider_mass = 0.5\n",
+        &format!("[machine]\n{legs}"),
+    );
+    rejects(
+        &text,
+        "stiffness",
+        "machine.legs.0.stiffness",
+        &["unknown field `stiffness`", "`anchor`", "`branch`"],
+    );
+}
+
+#[test]
+fn boolean_where_a_number_is_expected() {
+    let text = edit("frequency = 2.0\n", "frequency = true\n");
+    rejects(
+        &text,
+        "frequency",
+        "trajectory.frequency",
+        &["invalid type: boolean `true`", "expected f64"],
+    );
+}
+
+#[test]
+fn stepped_section_not_reaching_the_platform_end() {
+    let text = edit(
+        "section = { kind = \"uniform\", thickness = 0.002, height = 0.03 }",
+        "section = { kind = \"stepped\", steps = [{ end = 0.5, thickness = 0.002, height = 0.03 }, \
+         { end = 0.9, thickness = 0.003, height = 0.03 }] }",
+    );
+    rejects(
+        &text,
+        "steps",
+        "links.section.steps",
+        &["end = 0.9", "must be 1"],
+    );
+}
+
+#[test]
+fn string_for_a_number_inside_an_inline_section_table() {
+    let text = edit("height = 0.03 }", "height = \"0.03\" }");
+    rejects(
+        &text,
+        "height",
+        "links.section.height",
+        &["invalid type: string \"0.03\"", "expected f64"],
     );
 }
