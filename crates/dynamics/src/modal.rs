@@ -338,15 +338,35 @@ impl ModalSystem {
     /// Kinematic failure or a singular inverse dynamics, with the time.
     #[inline]
     pub fn instant(&mut self, t: f64) -> Result<Instant, DynamicsError> {
+        let state = self.kinematic_state(t)?;
+        let (reactions, loads) = self.axial_loads(&state, t)?;
+        Ok(Instant {
+            state,
+            reactions,
+            loads,
+        })
+    }
+
+    /// Inverse kinematics of the prescribed motion at `t`.
+    #[inline]
+    fn kinematic_state(&self, t: f64) -> Result<MachineState, DynamicsError> {
         let motion = self.trajectory.motion(t);
-        let state = self
-            .machine
+        self.machine
             .geometry
             .inverse_kinematics_unchecked(&motion)
-            .map_err(|source| DynamicsError::Kinematics { t, source })?;
+            .map_err(|source| DynamicsError::Kinematics { t, source })
+    }
+
+    /// Rigid joint reactions (if the axial model needs them) and the axial load of each link.
+    #[inline]
+    fn axial_loads(
+        &mut self,
+        state: &MachineState,
+        t: f64,
+    ) -> Result<(Option<JointReactions>, [AxialLoad; 3]), DynamicsError> {
         let reactions = if self.axial.needs_inverse_dynamics() {
             self.counters.inverse_dynamics_solves += 1;
-            Some(inverse_dynamics(&self.machine, &state, None, t)?)
+            Some(inverse_dynamics(&self.machine, state, None, t)?)
         } else {
             None
         };
@@ -359,22 +379,25 @@ impl ModalSystem {
                 index: i,
             })
         });
-        Ok(Instant {
-            state,
-            reactions,
-            loads,
-        })
+        Ok((reactions, loads))
     }
 
-    /// Modal accelerations `eta''` for the state `y` at the instant `inst`, written into `out`.
+    /// Modal accelerations `eta''` for the state `y` at the kinematic state `state` with the
+    /// axial loads `loads`, written into `out`.
     #[inline]
-    fn accelerations(&self, inst: &Instant, y: &[f64], out: &mut [f64]) {
+    fn accelerations(
+        &self,
+        state: &MachineState,
+        loads: &[AxialLoad; 3],
+        y: &[f64],
+        out: &mut [f64],
+    ) {
         let n = self.modes;
         let (eta, eta_dot) = y.split_at(n);
         for (i, op) in self.ops.iter().enumerate() {
-            let leg = &inst.state.legs[i];
+            let leg = &state.legs[i];
             let u = self.machine.geometry.legs[i].guide.direction.into_inner();
-            let load = &inst.loads[i];
+            let load = &loads[i];
             let (c0, c1, c2) = (load.p0 / op.length, load.p1, load.p2 * op.length);
             let sin_ab = u.dot(&leg.n); // sin(a - b)
             let mut rho_coef = -leg.rho_ddot * sin_ab;
@@ -424,7 +447,7 @@ impl ModalSystem {
     pub fn modal_accelerations(&mut self, t: f64, y: &[f64]) -> Result<Vec<f64>, DynamicsError> {
         let inst = self.instant(t)?;
         let mut out = vec![0.0; self.modes];
-        self.accelerations(&inst, y, &mut out);
+        self.accelerations(&inst.state, &inst.loads, y, &mut out);
         Ok(out)
     }
 
@@ -461,14 +484,19 @@ impl OdeSystem for ModalSystem {
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
         self.counters.rhs_evaluations += 1;
-        let inst = match self.instant(t) {
-            Ok(inst) => inst,
+        // The kinematic state and the loads are used in place (no `Instant` is assembled).
+        let state = match self.kinematic_state(t) {
+            Ok(state) => state,
+            Err(e) => return self.fail(e, dy),
+        };
+        let loads = match self.axial_loads(&state, t) {
+            Ok((_, loads)) => loads,
             Err(e) => return self.fail(e, dy),
         };
         let n = self.modes;
         dy[..n].copy_from_slice(&y[n..]);
         let (_, acc) = dy.split_at_mut(n);
-        self.accelerations(&inst, y, acc);
+        self.accelerations(&state, &loads, y, acc);
     }
 
     /// `J = [[0, I], [-M^-1 K(t) (+ b'^2 I), -M^-1 C]]`, block diagonal per link.
