@@ -597,14 +597,17 @@ impl Study {
             message,
         };
         let raw: StudyFile = toml::from_str(text).map_err(|e| {
-            let at = e
-                .span()
-                .map(|span| {
-                    let (line, column) = crate::locate::line_column(text, span.start);
-                    format!("line {line}, column {column}: ")
-                })
-                .unwrap_or_default();
-            input("", format!("{at}{}", e.message().trim()))
+            let (mut key, mut at) = (String::new(), String::new());
+            if let Some(span) = e.span() {
+                let (line, column) = crate::locate::line_column(text, span.start);
+                at = format!("line {line}, column {column}: ");
+                // The key assigned on that line, if any, names the problem.
+                if let Some((name, _)) = text.lines().nth(line - 1).and_then(|l| l.split_once('='))
+                {
+                    key = name.trim().to_string();
+                }
+            }
+            input(&key, format!("{at}{}", e.message().trim()))
         })?;
         let mut base = match (&raw.base, &raw.scene) {
             (Some(base), None) => {

@@ -1,0 +1,209 @@
+//! `flexprr study` and `flexprr merge` as a user runs them: a study killed midway leaves only
+//! complete case records, and `--resume` completes it with the table of an uninterrupted run.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn flexprr() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_flexprr"))
+}
+
+fn configs() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
+}
+
+/// A study of `cases` frequencies-only cases of the paper's scene.
+fn write_study(dir: &Path, cases: usize) -> PathBuf {
+    let base = configs().join("paper_f20.toml");
+    let text = format!(
+        r#"
+name = "kill_resume"
+base = {base:?}
+quantities = [
+    {{ kind = "frequency_range", link = 1, mode = 1 }},
+    {{ kind = "buckling", link = 1 }},
+]
+[set.output]
+requests = ["frequencies"]
+compare_without_axial_force = false
+plots = false
+[set.time]
+end = 0.2
+output_step = 1e-4
+[[axis]]
+key = "trajectory.frequency"
+range = {{ start = 5.0, end = 35.0, count = {cases} }}
+"#,
+        base = base.display().to_string()
+    );
+    let path = dir.join("study.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn case_files(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(dir.join("cases"))
+        .map(|entries| {
+            entries
+                .map(|e| e.unwrap().path())
+                .filter(|p| p.extension().is_some_and(|e| e == "json"))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+#[test]
+fn killed_study_resumes_to_the_table_of_an_uninterrupted_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases = 150;
+    let study = write_study(tmp.path(), cases);
+
+    let reference = tmp.path().join("reference");
+    let status = flexprr()
+        .args(["study", "--quiet", "--threads", "2", "--out"])
+        .arg(&reference)
+        .arg(&study)
+        .status()
+        .unwrap();
+    assert!(status.success());
+
+    // Start on one thread and kill it once a few cases are recorded.
+    let cut = tmp.path().join("cut");
+    let mut child = flexprr()
+        .args(["study", "--quiet", "--threads", "1", "--out"])
+        .arg(&cut)
+        .arg(&study)
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut finished_before_kill = false;
+    loop {
+        if case_files(&cut).len() >= 3 {
+            break;
+        }
+        if child.try_wait().unwrap().is_some() {
+            finished_before_kill = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        !finished_before_kill,
+        "the study ended before it could be killed"
+    );
+
+    // Consistent: every record is complete JSON, and the table was not written.
+    let recorded = case_files(&cut);
+    assert!(
+        recorded.len() >= 3 && recorded.len() < cases,
+        "{}",
+        recorded.len()
+    );
+    for path in &recorded {
+        let text = std::fs::read_to_string(path).unwrap();
+        let record: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(record["status"], "ok");
+    }
+    assert!(!cut.join("results.csv").exists());
+
+    // Without --resume the directory is protected; with it the study completes.
+    let refused = flexprr()
+        .args(["study", "--quiet", "--out"])
+        .arg(&cut)
+        .arg(&study)
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
+    let resumed = flexprr()
+        .args(["study", "--quiet", "--resume", "--out"])
+        .arg(&cut)
+        .arg(&study)
+        .output()
+        .unwrap();
+    assert!(resumed.status.success());
+    let report = String::from_utf8_lossy(&resumed.stdout);
+    assert!(
+        report.contains(&format!("{} resumed", recorded.len())),
+        "{report}"
+    );
+
+    let table = std::fs::read_to_string(cut.join("results.csv")).unwrap();
+    assert_eq!(
+        table,
+        std::fs::read_to_string(reference.join("results.csv")).unwrap()
+    );
+    assert_eq!(table.lines().count(), cases + 1);
+}
+
+#[test]
+fn shards_merge_into_the_single_run_table_and_errors_have_exit_codes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = write_study(tmp.path(), 7);
+    let single = tmp.path().join("single");
+    assert!(
+        flexprr()
+            .args(["study", "--quiet", "--out"])
+            .arg(&single)
+            .arg(&study)
+            .status()
+            .unwrap()
+            .success()
+    );
+    let mut shards = Vec::new();
+    for k in 1..=2 {
+        let dir = tmp.path().join(format!("shard{k}"));
+        assert!(
+            flexprr()
+                .args(["study", "--quiet", "--shard", &format!("{k}/2"), "--out"])
+                .arg(&dir)
+                .arg(&study)
+                .status()
+                .unwrap()
+                .success()
+        );
+        shards.push(dir);
+    }
+    // One shard alone is incomplete: run failure (1).
+    let merged = tmp.path().join("merged");
+    let partial = flexprr()
+        .args(["merge", "--out"])
+        .arg(&merged)
+        .arg(&shards[0])
+        .output()
+        .unwrap();
+    assert_eq!(partial.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&partial.stderr).contains("3 of 7 cases missing"));
+    let ok = flexprr()
+        .args(["merge", "--out"])
+        .arg(&merged)
+        .args(&shards)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    assert_eq!(
+        std::fs::read_to_string(merged.join("results.csv")).unwrap(),
+        std::fs::read_to_string(single.join("results.csv")).unwrap()
+    );
+
+    // A bad study file and a bad shard are bad input (2).
+    let bad = tmp.path().join("bad.toml");
+    std::fs::write(&bad, "base = \"nowhere.toml\"\ncombine = \"diagonal\"\n").unwrap();
+    let out = flexprr()
+        .args(["study", "--out"])
+        .arg(tmp.path().join("x"))
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("combine"));
+    let out = flexprr()
+        .args(["study", "--shard", "3/2", "--out"])
+        .arg(tmp.path().join("x"))
+        .arg(&study)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
