@@ -35,10 +35,12 @@
 //! diagonal modal mass plus low-rank terms. It is assembled into preallocated storage and
 //! solved by Gaussian elimination with partial pivoting: the right-hand side allocates nothing.
 //!
-//! Linearised about `eta = 0` (so `L = l`, the platform on its nominal path, `T` the rigid
-//! inverse-dynamics value) the equations are exactly the consistent KED equations of
-//! model.md section 6; with [`CoupledOptions::ked_limit`] (no foreshortening in the closure,
-//! no elastic inertia in the reactions) they are those equations for every `eta`.
+//! With [`CoupledOptions::ked_limit`] (no foreshortening in the closure, no elastic inertia in
+//! the reactions) these are the consistent KED equations of model.md section 6 for every
+//! `eta`. Linearised about `eta = 0` with the rigid motion prescribed they are those equations
+//! plus only the geometric stiffness of the tension that the forced `eta''` adds to the joint
+//! reactions; with foreshortening, `L'' = -(1/l) eta^T G0 eta''` adds a first-order coupling
+//! between the links through the platform (tests in `tests/coupled.rs`).
 
 use std::str::FromStr;
 use std::sync::Arc;
@@ -77,23 +79,16 @@ impl std::fmt::Display for CouplingModel {
     }
 }
 
-/// A coupling name that is neither `"ked"` nor `"coupled"`.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown coupling {given:?}: expected \"ked\" or \"coupled\"")]
-pub struct UnknownCoupling {
-    /// The name given.
-    pub given: String,
-}
-
 impl FromStr for CouplingModel {
-    type Err = UnknownCoupling;
+    type Err = DynamicsError;
+    /// `"ked"` or `"coupled"`; anything else is [`DynamicsError::Inconsistent`] naming it.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "ked" => Ok(CouplingModel::Ked),
             "coupled" => Ok(CouplingModel::Coupled),
-            _ => Err(UnknownCoupling {
-                given: s.to_string(),
-            }),
+            _ => Err(DynamicsError::Inconsistent(format!(
+                "unknown coupling {s:?}: expected \"ked\" or \"coupled\""
+            ))),
         }
     }
 }

@@ -23,9 +23,7 @@ pub mod paper;
 pub use axial::{
     AxialForceModel, AxialInput, JointReactionAxialForce, NoAxialForce, PaperAxialForce, end_forces,
 };
-pub use coupled::{
-    CoupledCounters, CoupledOptions, CoupledOutput, CoupledSystem, CouplingModel, UnknownCoupling,
-};
+pub use coupled::{CoupledCounters, CoupledOptions, CoupledOutput, CoupledSystem, CouplingModel};
 pub use error::DynamicsError;
 pub use formulation::{AxialModel, Formulation};
 pub use frequencies::{BucklingInterval, FrequencyHistory, FrequencyTracker, ModeRange};
