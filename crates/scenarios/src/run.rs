@@ -197,7 +197,7 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
 
     if wants(OutputKind::Kinematics) {
         let mut table = Table::new("kinematics", &t);
-        let mut cols = vec![Vec::with_capacity(n_out); 3 + 18];
+        let mut cols = columns(3 + 18, n_out);
         for &tk in &t {
             let motion = scene.trajectory.motion(tk);
             let state = machine
@@ -253,10 +253,10 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
             other => other,
         }
         .model();
-        let mut driving = vec![Vec::with_capacity(n_out); 3];
-        let mut driving_flex = vec![Vec::with_capacity(n_out); 3];
-        let mut reactions_cols = vec![Vec::with_capacity(n_out); 12];
-        let mut axial_cols = vec![Vec::with_capacity(n_out); 6];
+        let mut driving = columns(3, n_out);
+        let mut driving_flex = columns(3, n_out);
+        let mut reactions_cols = columns(12, n_out);
+        let mut axial_cols = columns(6, n_out);
         for (k, &tk) in t.iter().enumerate() {
             let motion = scene.trajectory.motion(tk);
             let state = machine
@@ -289,15 +289,15 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
                 stats.inverse_dynamics_solves += 1;
                 let flex =
                     inverse_dynamics(&machine, &state, Some(&elastic), tk).map_err(run_err)?;
-                for i in 0..3 {
-                    driving_flex[i].push(flex.driving_force[i]);
+                for (column, force) in driving_flex.iter_mut().zip(flex.driving_force) {
+                    column.push(force);
                 }
             }
         }
         if wants(OutputKind::DrivingForces) {
             let mut table = Table::new("driving_forces", &t);
-            for i in 0..3 {
-                table.push(format!("F_a_{}_rigid_N", i + 1), driving[i].clone());
+            for (i, column) in driving.iter().enumerate() {
+                table.push(format!("F_a_{}_rigid_N", i + 1), column.clone());
             }
             if solution.is_some() {
                 for i in 0..3 {
@@ -341,8 +341,8 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
         let hist = FrequencyHistory::sample(&mut system, &t).map_err(run_err)?;
         stats.inverse_dynamics_solves += system.counters().inverse_dynamics_solves - before;
         let mut table = Table::new("frequencies", &t);
-        for i in 0..3 {
-            for j in 0..modes[i] {
+        for (i, &r) in modes.iter().enumerate() {
+            for j in 0..r {
                 table.push(
                     format!("f_{}_{}_Hz", i + 1, j + 1),
                     hist.omega_squared[i][j]
@@ -409,8 +409,7 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
         }
         if wants(OutputKind::ModalForces) {
             let mut table = Table::new("modal_forces", &t);
-            let mut cols: Vec<Vec<f64>> =
-                vec![Vec::with_capacity(n_out); 3 * (modes[0] + modes[1] + modes[2])];
+            let mut cols: Vec<Vec<f64>> = columns(3 * (modes[0] + modes[1] + modes[2]), n_out);
             for &tk in &t {
                 let state = machine
                     .geometry
@@ -419,11 +418,11 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
                         run_err(dynamics::DynamicsError::Kinematics { t: tk, source })
                     })?;
                 let mut c = 0;
-                for i in 0..3 {
+                for (i, &r) in modes.iter().enumerate() {
                     let leg = &state.legs[i];
                     let u = machine.geometry.legs[i].guide.direction.into_inner();
                     let ints = &machine.links[i].integrals;
-                    for j in 0..modes[i] {
+                    for j in 0..r {
                         cols[c].push(-leg.rho_ddot * u.dot(&leg.n) * ints.mass_psi[j]);
                         cols[c + 1].push(-ints.length * leg.beta_ddot * ints.mass_xi_psi[j]);
                         cols[c + 2]
@@ -496,6 +495,11 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
         frequencies,
         stats,
     })
+}
+
+/// `count` empty columns, each with room for `rows` values.
+fn columns(count: usize, rows: usize) -> Vec<Vec<f64>> {
+    (0..count).map(|_| Vec::with_capacity(rows)).collect()
 }
 
 fn dynamics_hz(omega_squared: f64) -> f64 {
