@@ -853,6 +853,9 @@ impl Study {
                 return fail(record, CaseStatus::Failed, format!("panic: {what}"));
             }
         };
+        if let Some(message) = divergence(&scene, &result) {
+            return fail(record, CaseStatus::Failed, message);
+        }
         let mut values = Vec::with_capacity(record.quantities.len());
         for q in &self.quantities {
             match q.derive(&result) {
@@ -871,6 +874,45 @@ impl Study {
             .filter(|c| shard.is_none_or(|s| s.contains(c.id)))
             .collect()
     }
+}
+
+/// Why a finished run is not physical: a non-finite value in a table, or a deflection larger
+/// than the link itself (the small-deflection model has diverged, typically after buckling).
+fn divergence(scene: &Scene, result: &RunResult) -> Option<String> {
+    let length = scene.file.links.length;
+    for table in &result.tables {
+        let t = table.column("t_s").unwrap_or(&[]);
+        for (name, values) in table.columns.iter().zip(&table.data).skip(1) {
+            let deflection = table.name == "deflections";
+            let bad = values
+                .iter()
+                .position(|v| !v.is_finite() || (deflection && v.abs() > length));
+            if let Some(k) = bad {
+                let at = t.get(k).copied().unwrap_or(f64::NAN);
+                return Some(if deflection && values[k].is_finite() {
+                    format!(
+                        "diverged: {name} = {:.3e} m at t = {at:.5} s exceeds the link length {length} m{}",
+                        values[k],
+                        if result
+                            .frequencies
+                            .as_ref()
+                            .is_some_and(|h| !h.buckling.is_empty())
+                        {
+                            " (a link buckles)"
+                        } else {
+                            ""
+                        }
+                    )
+                } else {
+                    format!(
+                        "diverged: {}.{name} = {} at t = {at:.5} s",
+                        table.name, values[k]
+                    )
+                });
+            }
+        }
+    }
+    None
 }
 
 /// Slice `index` (1-based) of `count`: the cases with `id % count == index - 1`.

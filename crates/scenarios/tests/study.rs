@@ -464,3 +464,29 @@ values = [["deflections"], ["frequencies"]]
     let w: f64 = records[&2].quantities[0].parse().unwrap();
     assert!(w.is_finite() && w > 0.0);
 }
+
+/// A 1 mm link at 20 Hz buckles (its frequency history has a buckling interval); the
+/// integrated deflection then grows past the link length, and the case is recorded as a
+/// divergence instead of tabulating a meaningless peak.
+#[test]
+fn buckling_divergence_is_a_recorded_failure() {
+    let s = study_with(
+        r#"
+quantities = [{ kind = "peak_deflection", link = 1 }, { kind = "buckling", link = 1 }]
+[[axis]]
+key = "links.section.thickness"
+values = [0.001, 0.004]
+"#,
+        r#"requests = ["deflections", "frequencies"]"#,
+        "end = 0.1\noutput_step = 1e-4",
+    );
+    let (thin, _) = s.run_case(&s.cases[0]);
+    assert_eq!(thin.status, CaseStatus::Failed);
+    assert!(thin.error.contains("diverged"), "{}", thin.error);
+    assert!(thin.error.contains("a link buckles"), "{}", thin.error);
+    let (thick, _) = s.run_case(&s.cases[1]);
+    assert_eq!(thick.status, CaseStatus::Ok, "{}", thick.error);
+    assert_eq!(thick.quantities[1], "no");
+    let w: f64 = thick.quantities[0].parse().unwrap();
+    assert!(w > 0.0 && w < 0.01 * 0.2, "{w}");
+}
