@@ -109,7 +109,7 @@ fn unknown_key_is_bad_input_with_line_and_key() {
     assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
     let line = text.lines().position(|l| l.starts_with("heigth")).unwrap() + 1;
-    assert!(stderr.contains(&format!("line {line}")), "{stderr}");
+    assert!(stderr.contains(&format!(":{line}:")), "{stderr}");
     assert!(stderr.contains("heigth"), "{stderr}");
 }
 

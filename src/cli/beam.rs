@@ -72,46 +72,10 @@ pub struct LoadConfig {
     pub p2: f64,
 }
 
-/// Parses a link file; errors say where (line, column) and which key.
-///
-/// For an unknown key inside a tagged table (`[section]`, `[basis]`) the TOML parser only
-/// knows the table's span, so the key itself is looked up from there.
-pub fn parse_link_file(text: &str) -> Result<LinkFile, String> {
-    toml::from_str(text).map_err(|e| {
-        let message = e.message().trim().to_string();
-        let Some(span) = e.span() else {
-            return message;
-        };
-        let mut offset = span.start.min(text.len());
-        if let Some(key) = message
-            .strip_prefix("unknown field `")
-            .and_then(|rest| rest.split('`').next())
-        {
-            if let Some(found) = find_key(text, offset, key) {
-                offset = found;
-            }
-        }
-        let before = &text[..offset];
-        let line = before.matches('\n').count() + 1;
-        let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-        format!("line {line}, column {column}: {message}")
-    })
-}
-
-/// Byte offset of the first line at or after `from` that assigns `key`.
-fn find_key(text: &str, from: usize, key: &str) -> Option<usize> {
-    let line_start = text[..from].rfind('\n').map_or(0, |i| i + 1);
-    let mut offset = line_start;
-    for line in text[line_start..].split_inclusive('\n') {
-        let trimmed = line.trim_start();
-        if let Some(rest) = trimmed.strip_prefix(key) {
-            if rest.trim_start().starts_with('=') {
-                return Some(offset + (line.len() - trimmed.len()));
-            }
-        }
-        offset += line.len();
-    }
-    None
+/// Parses a link file; errors say where (`file:line:column`), which key and what was expected
+/// (the same reporting as scene files).
+pub fn parse_link_file(file: &str, text: &str) -> Result<LinkFile, String> {
+    scenarios::parse_toml(file, text).map_err(|e| e.to_string())
 }
 
 /// A link built from a file: basis, section and its integrals.
@@ -154,7 +118,7 @@ pub fn run(args: BeamArgs) -> Result<(), Failure> {
     let path = args.file.display().to_string();
     let text = std::fs::read_to_string(&args.file)
         .map_err(|e| Failure::bad_input(format!("{path}: cannot read: {e}")))?;
-    let file = parse_link_file(&text).map_err(|e| Failure::bad_input(format!("{path}: {e}")))?;
+    let file = parse_link_file(&path, &text).map_err(Failure::bad_input)?;
     let link = build_link(&file).map_err(|e| Failure::bad_input(format!("{path}: {e}")))?;
     let load = AxialLoad {
         p0: file.load.p0,
@@ -292,8 +256,8 @@ mod tests {
     #[test]
     fn unknown_key_is_reported_with_line_and_column() {
         let text = "length = 0.2\nmodes = 3\nlenght = 1\n";
-        let err = parse_link_file(text).unwrap_err();
-        assert!(err.contains("line 3"), "{err}");
+        let err = parse_link_file("link.toml", text).unwrap_err();
+        assert!(err.contains("link.toml:3:1"), "{err}");
         assert!(err.contains("lenght"), "{err}");
     }
 
@@ -302,7 +266,7 @@ mod tests {
         let text = "length = 0.2\nmodes = 3\n[material]\nyoungs_modulus = 7e10\ndensity = 2770.0\n\
                     [section]\nkind = \"uniform\"\nthickness = 0.002\nheight = 0.03\nwidth = 1\n\
                     [basis]\nkind = \"sine\"\n";
-        let err = parse_link_file(text).unwrap_err();
-        assert!(err.contains("width"), "{err}");
+        let err = parse_link_file("link.toml", text).unwrap_err();
+        assert!(err.contains("section.width"), "{err}");
     }
 }

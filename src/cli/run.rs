@@ -144,10 +144,11 @@ pub fn check(args: CheckArgs) -> Result<(), Failure> {
     let scene = Scene::load(&args.scene).map_err(failure)?;
     let requests: Vec<&str> = scene.outputs.iter().map(|k| k.name()).collect();
     println!(
-        "{}: ok ({} formulation, {} sine/basis modes per link, {} integrator, {} output times, outputs: {})",
+        "{}: ok ({} formulation, {} modes per link ({}), {} integrator, {} output times, outputs: {})",
         args.scene.display(),
         scene.formulation.name(),
         scene.machine.links[0].modes(),
+        scene.machine.links[0].basis.name(),
         scene.method.name(),
         scene.output_times.len(),
         requests.join(", ")

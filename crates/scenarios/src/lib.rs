@@ -8,8 +8,8 @@
 //! write_outputs(&scene, &result, std::path::Path::new("out/paper_f20")).unwrap();
 //! ```
 
-mod error;
 pub mod classify;
+mod error;
 pub mod link;
 mod locate;
 mod output;
@@ -25,6 +25,6 @@ pub use output::{summary_json, table_one_markdown, write_outputs};
 pub use run::{RunResult, RunStats, Table, integrate, run};
 pub use scene::{
     IntegratorConfig, LegConfig, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig,
-    OutputKind, Scene, SceneFile, TimeConfig, TrajectoryConfig, parse_scene,
+    OutputKind, Scene, SceneFile, TimeConfig, TrajectoryConfig, parse_scene, parse_toml,
 };
 pub use study::{Study, StudyError, StudyOptions, merge_studies, run_study};

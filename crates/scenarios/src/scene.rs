@@ -613,6 +613,18 @@ fn pose_from(values: [f64; 3]) -> Pose {
 /// # Errors
 /// As described.
 pub fn parse_scene(file: &str, text: &str) -> Result<SceneFile, ScenarioError> {
+    parse_toml(file, text)
+}
+
+/// Parses any TOML input file (scenes, link files, studies) into `T`, turning serde's errors
+/// into [`ScenarioError::Input`] with `file:line:column`, the dotted key and what was expected.
+///
+/// # Errors
+/// As described.
+pub fn parse_toml<T: serde::de::DeserializeOwned>(
+    file: &str,
+    text: &str,
+) -> Result<T, ScenarioError> {
     toml::from_str(text).map_err(|e| {
         let message = e.message().trim().to_string();
         let named = |prefix: &str| {
