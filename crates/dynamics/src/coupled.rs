@@ -31,9 +31,10 @@
 //! part of the links' axial inertia in `N(x)`) are left out.
 //!
 //! `eta''` enters `b''` (through `q''` and `L''`) and `T` (through `q''` and `Mom`), so the
-//! accelerations solve a small linear system per evaluation: `A eta'' = g` with `A` the block
-//! diagonal modal mass plus low-rank terms. It is assembled into preallocated storage and
-//! solved by Gaussian elimination with partial pivoting: the right-hand side allocates nothing.
+//! accelerations solve a linear system per evaluation, `A eta'' = g` with `A` the block
+//! diagonal modal mass plus low-rank terms; it reduces to a 6x6 system for the chord-length
+//! and moment projections of `eta''` (see `solve_accelerations`), solved on the stack: the
+//! right-hand side allocates nothing.
 //!
 //! With [`CoupledOptions::ked_limit`] (no foreshortening in the closure, no elastic inertia in
 //! the reactions) these are the consistent KED equations of model.md section 6 for every
@@ -47,10 +48,13 @@ use std::sync::Arc;
 
 use faer::{Mat, Side};
 use integrators::OdeSystem;
-use kinematics::{LegDrive, PlatformMotion, Pose, Trajectory};
+use kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 use crate::{DynamicsError, Machine, ModalDamping};
+
+/// Newton iterations allowed for the platform pose (it starts within a millimetre).
+const FORWARD_ITERATIONS: usize = 20;
 
 /// Which model of the links' interaction with the rigid machine a scene uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -195,7 +199,7 @@ impl CoupledOutput {
     }
 }
 
-/// Per-link constants, matrices row-major `r x r`.
+/// Per-link constants, matrices row-major `r x r`; `inv_*` have `M^-1` applied.
 #[derive(Debug, Clone)]
 struct LinkData {
     r: usize,
@@ -203,12 +207,17 @@ struct LinkData {
     mass: f64,
     /// Inertia about `B`: `I_G + m l^2 / 4` (kg m^2).
     inertia_b: f64,
-    modal_mass: Vec<f64>,
-    flexural: Vec<f64>,
-    geometric: [Vec<f64>; 3],
-    damping: Vec<f64>,
+    /// `G0` (for `delta` and `dL / d eta`).
+    g0: Vec<f64>,
+    inv_flexural: Vec<f64>,
+    inv_geometric: [Vec<f64>; 3],
+    inv_damping: Vec<f64>,
     mass_psi: Vec<f64>,
     mass_xi_psi: Vec<f64>,
+    inv_mass_psi: Vec<f64>,
+    inv_mass_xi_psi: Vec<f64>,
+    /// `m_xipsi . M^-1 m_xipsi`.
+    xi_psi_inv_xi_psi: f64,
     /// `psi_j(1/2)`.
     psi_mid: Vec<f64>,
 }
@@ -302,21 +311,44 @@ impl LinkData {
         damping: &ModalDamping,
         index: usize,
     ) -> Result<Self, DynamicsError> {
+        use faer::linalg::solvers::DenseSolveCore;
         let ints = &link.integrals;
         let r = ints.r();
         let l = ints.length;
         let m = ints.total_mass;
+        let m_inv = ints
+            .mass
+            .llt(Side::Lower)
+            .map_err(|_| {
+                DynamicsError::Inconsistent(format!(
+                    "the modal mass matrix of link {} is not positive definite",
+                    index + 1
+                ))
+            })?
+            .inverse();
+        let apply = |a: &Mat<f64>| row_major(&(&m_inv * a));
+        let apply_vec = |v: &[f64]| -> Vec<f64> {
+            (0..r)
+                .map(|i| (0..r).map(|k| m_inv[(i, k)] * v[k]).sum())
+                .collect()
+        };
+        let damping = damping_matrix(link, damping, index)?;
+        let damping = Mat::from_fn(r, r, |i, j| damping[i * r + j]);
+        let inv_mass_xi_psi = apply_vec(&ints.mass_xi_psi);
         Ok(Self {
             r,
             length: l,
             mass: m,
             inertia_b: link.centroid_inertia + 0.25 * m * l * l,
-            modal_mass: row_major(&ints.mass),
-            flexural: row_major(&ints.stiffness),
-            geometric: std::array::from_fn(|n| row_major(&ints.g[n])),
-            damping: damping_matrix(link, damping, index)?,
+            g0: row_major(&ints.g[0]),
+            inv_flexural: apply(&ints.stiffness),
+            inv_geometric: std::array::from_fn(|n| apply(&ints.g[n])),
+            inv_damping: apply(&damping),
             mass_psi: ints.mass_psi.clone(),
+            xi_psi_inv_xi_psi: dot(&ints.mass_xi_psi, &inv_mass_xi_psi),
             mass_xi_psi: ints.mass_xi_psi.clone(),
+            inv_mass_psi: apply_vec(&ints.mass_psi),
+            inv_mass_xi_psi,
             psi_mid: (0..r).map(|j| link.basis.eval(j, 0.5)[0]).collect(),
         })
     }
@@ -325,14 +357,14 @@ impl LinkData {
 /// Per-evaluation scratch, preallocated (sizes fixed by the machine).
 #[derive(Debug, Clone)]
 struct Scratch {
-    /// System matrix `A`, row-major `n x n`.
-    matrix: Vec<f64>,
-    /// Right-hand side, then the solution `eta''`.
-    rhs: Vec<f64>,
     /// `G0 eta_i / l` per link, stacked (`n`).
     g0_eta: Vec<f64>,
+    /// `M^-1 G0 eta_i / l`, stacked (`n`).
+    inv_g0_eta: Vec<f64>,
     /// `dL_i / d eta_i`, stacked (`n`).
     length_gradient: Vec<f64>,
+    /// The modal accelerations `eta''` of the last evaluation (`n`).
+    acceleration: Vec<f64>,
 }
 
 /// Linear-in-`eta''` pieces of one evaluation: `b'' = beta0 + Bs s`,
@@ -349,7 +381,6 @@ struct Kinetics {
     rho: [[f64; 3]; 3],
     e: [Vector2<f64>; 3],
     n: [Vector2<f64>; 3],
-    beta: [f64; 3],
     beta_dot: [f64; 3],
     beta0: Vector3<f64>,
     beta_s: Matrix3<f64>,
@@ -364,6 +395,8 @@ struct Kinetics {
 /// `y = (eta_1, eta_2, eta_3, eta_1', eta_2', eta_3')` as in [`crate::ModalSystem`].
 pub struct CoupledSystem {
     machine: Arc<Machine>,
+    /// Machine size for the closure's convergence test (m).
+    size: f64,
     trajectory: Arc<dyn Trajectory + Send + Sync>,
     damping: ModalDamping,
     options: CoupledOptions,
@@ -477,7 +510,19 @@ impl CoupledSystem {
         let links = [a?, b?, c?];
         let offsets = [0, links[0].r, links[0].r + links[1].r];
         let modes = offsets[2] + links[2].r;
+        let size = machine
+            .geometry
+            .legs
+            .iter()
+            .map(|leg| {
+                leg.guide.anchor.coords.norm()
+                    + leg.attachment.norm()
+                    + leg.link_length
+                    + leg.guide.travel.0.abs().max(leg.guide.travel.1.abs())
+            })
+            .fold(0.0, f64::max);
         Ok(Self {
+            size,
             machine,
             trajectory,
             damping,
@@ -486,10 +531,10 @@ impl CoupledSystem {
             offsets,
             modes,
             scratch: Scratch {
-                matrix: vec![0.0; modes * modes],
-                rhs: vec![0.0; modes],
                 g0_eta: vec![0.0; modes],
+                inv_g0_eta: vec![0.0; modes],
                 length_gradient: vec![0.0; modes],
+                acceleration: vec![0.0; modes],
             },
             counters: CoupledCounters::default(),
             failure: None,
@@ -542,20 +587,119 @@ impl CoupledSystem {
             let e = &eta[self.link_range(i)];
             let mut s = 0.0;
             for j in 0..link.r {
-                s += e[j] * dot(&link.geometric[0][j * link.r..(j + 1) * link.r], e);
+                s += e[j] * dot(&link.g0[j * link.r..(j + 1) * link.r], e);
             }
             0.5 * s / link.length
         })
     }
 
+    /// Platform pose, velocity and the part `a_0` of its acceleration independent of `eta''`
+    /// for chord lengths `L` (and rates), by Newton's method on the closure
+    /// `f_i = (|C_i - B_i|^2 - L_i^2) / 2 = 0` from the nominal pose (the deviation is a
+    /// fraction of a millimetre: two or three iterations), then implicit differentiation:
+    /// `F q' = (g.u) rho' + L L'`, `F q'' = (g.u) rho'' + L L'' + L'^2 - |g'|^2 + phi'^2 g.r`
+    /// (as [`kinematics::Geometry::forward_motion`], which this inlines to share `F^-1`).
+    /// Returns the motion and `F^-1`.
+    fn platform_motion(
+        &self,
+        t: f64,
+        nominal: &Pose,
+        rho: &[[f64; 3]; 3],
+        lengths: [f64; 3],
+        length_dot: [f64; 3],
+        length_ddot0: [f64; 3],
+    ) -> Result<(PlatformMotion, Matrix3<f64>), DynamicsError> {
+        let geometry = &self.machine.geometry;
+        let mut q = nominal.to_vector();
+        let tolerance = 64.0 * f64::EPSILON * self.size;
+        let mut g = [Vector2::zeros(); 3];
+        let mut r = [Vector2::zeros(); 3];
+        let mut f = Matrix3::zeros();
+        let mut residual = Vector3::zeros();
+        let mut iterations = 0;
+        loop {
+            let (sin, cos) = q.z.sin_cos();
+            let mut worst: f64 = 0.0;
+            for (i, leg) in geometry.legs.iter().enumerate() {
+                let c = leg.attachment;
+                r[i] = Vector2::new(cos * c.x - sin * c.y, sin * c.x + cos * c.y);
+                g[i] = Vector2::new(q.x, q.y) + r[i]
+                    - leg.guide.anchor.coords
+                    - rho[i][0] * leg.guide.direction.into_inner();
+                residual[i] = 0.5 * (g[i].norm_squared() - lengths[i] * lengths[i]);
+                f.set_row(
+                    i,
+                    &nalgebra::RowVector3::new(g[i].x, g[i].y, cross(&r[i], &g[i])),
+                );
+                worst = worst.max((residual[i] / lengths[i]).abs());
+            }
+            if worst <= tolerance {
+                break;
+            }
+            if iterations == FORWARD_ITERATIONS || !worst.is_finite() {
+                return Err(DynamicsError::Kinematics {
+                    t,
+                    source: kinematics::KinematicsError::NoConvergence {
+                        iterations,
+                        residual: worst,
+                    },
+                });
+            }
+            let step = f
+                .try_inverse()
+                .ok_or(DynamicsError::SingularInverseDynamics {
+                    t,
+                    measure: 0.0,
+                    threshold: geometry.thresholds.type_ii,
+                })?
+                * residual;
+            q -= step;
+            iterations += 1;
+        }
+        let f_inv = f
+            .try_inverse()
+            .ok_or(DynamicsError::SingularInverseDynamics {
+                t,
+                measure: 0.0,
+                threshold: geometry.thresholds.type_ii,
+            })?;
+        let mut rhs = Vector3::zeros();
+        for i in 0..3 {
+            let u = geometry.legs[i].guide.direction.into_inner();
+            rhs[i] = g[i].dot(&u) * rho[i][1] + lengths[i] * length_dot[i];
+        }
+        let velocity = f_inv * rhs;
+        let omega = velocity.z;
+        for i in 0..3 {
+            let u = geometry.legs[i].guide.direction.into_inner();
+            let g_dot = Vector2::new(velocity.x - omega * r[i].y, velocity.y + omega * r[i].x)
+                - rho[i][1] * u;
+            rhs[i] = g[i].dot(&u) * rho[i][2]
+                + lengths[i] * length_ddot0[i]
+                + length_dot[i] * length_dot[i]
+                - g_dot.norm_squared()
+                + omega * omega * g[i].dot(&r[i]);
+        }
+        let acceleration = f_inv * rhs;
+        Ok((
+            PlatformMotion {
+                pose: Pose::from_vector(&q),
+                velocity,
+                acceleration,
+            },
+            f_inv,
+        ))
+    }
+
     /// Rigid kinematics and the linear-in-`eta''` pieces at `(t, y)`; fills
-    /// `scratch.g0_eta` and `scratch.length_gradient`.
+    /// `scratch.g0_eta`, `scratch.inv_g0_eta` and `scratch.length_gradient`.
     fn kinetics(&mut self, t: f64, y: &[f64]) -> Result<Kinetics, DynamicsError> {
         let n = self.modes;
         let (eta, eta_dot) = y.split_at(n);
-        let geometry = &self.machine.geometry;
         let nominal = self.trajectory.motion(t);
-        let rigid = geometry
+        let rigid = self
+            .machine
+            .geometry
             .inverse_kinematics_unchecked(&nominal)
             .map_err(|source| DynamicsError::Kinematics { t, source })?;
         let rho: [[f64; 3]; 3] = std::array::from_fn(|i| {
@@ -568,16 +712,20 @@ impl CoupledSystem {
         for (i, link) in self.links.iter().enumerate() {
             let range = self.offsets[i]..self.offsets[i] + link.r;
             let r = link.r;
-            let g0 = &link.geometric[0];
             let (e, ed) = (&eta[range.clone()], &eta_dot[range.clone()]);
             let mut quad = 0.0;
             let mut quad_dot = 0.0;
             for j in 0..r {
-                let row = &g0[j * r..(j + 1) * r];
+                let row = &link.g0[j * r..(j + 1) * r];
                 let g0e = dot(row, e) / link.length;
                 self.scratch.g0_eta[range.start + j] = g0e;
                 quad += e[j] * g0e;
                 quad_dot += ed[j] * dot(row, ed) / link.length;
+            }
+            let inv_g0 = &link.inv_geometric[0];
+            for j in 0..r {
+                self.scratch.inv_g0_eta[range.start + j] =
+                    dot(&inv_g0[j * r..(j + 1) * r], e) / link.length;
             }
             if self.options.foreshortening {
                 lengths[i] = link.length - 0.5 * quad;
@@ -591,39 +739,34 @@ impl CoupledSystem {
                 self.scratch.length_gradient[range].fill(0.0);
             }
         }
-        let motion = if self.options.foreshortening {
+        let (motion, f_inv) = if self.options.foreshortening {
             self.counters.forward_kinematics_solves += 1;
-            let drive = LegDrive {
-                rho: rho.map(|r| r[0]),
-                rho_dot: rho.map(|r| r[1]),
-                rho_ddot: rho.map(|r| r[2]),
-                length: lengths,
-                length_dot,
-                length_ddot: length_ddot0,
-            };
-            geometry
-                .forward_motion(&drive, &nominal.pose)
-                .map_err(|source| DynamicsError::Kinematics { t, source })?
+            self.platform_motion(t, &nominal.pose, &rho, lengths, length_dot, length_ddot0)?
         } else {
-            nominal
+            // Chords of length l: the platform on its nominal path.
+            let closure = self
+                .machine
+                .geometry
+                .closure(&nominal.pose, rho.map(|r| r[0]), lengths);
+            let f_inv = closure.pose_jacobian.try_inverse().ok_or(
+                DynamicsError::SingularInverseDynamics {
+                    t,
+                    measure: 0.0,
+                    threshold: self.machine.geometry.thresholds.type_ii,
+                },
+            )?;
+            (nominal, f_inv)
         };
+        let geometry = &self.machine.geometry;
         let pose = motion.pose;
+        let (sin, cos) = pose.phi.sin_cos();
+        let rotate = |c: &Vector2<f64>| Vector2::new(cos * c.x - sin * c.y, sin * c.x + cos * c.y);
         let (p, v) = (
             Vector2::new(pose.x, pose.y),
             Vector2::new(motion.velocity.x, motion.velocity.y),
         );
         let omega = motion.velocity.z;
         let a0 = motion.acceleration;
-        let closure = geometry.closure(&pose, rho.map(|r| r[0]), lengths);
-        let singular = |measure: f64| DynamicsError::SingularInverseDynamics {
-            t,
-            measure,
-            threshold: geometry.thresholds.type_ii,
-        };
-        let f_inv = closure
-            .pose_jacobian
-            .try_inverse()
-            .ok_or_else(|| singular(0.0))?;
         let q_of_s = f_inv * Matrix3::from_diagonal(&Vector3::from(lengths));
         let mut out = Kinetics {
             nominal,
@@ -635,7 +778,6 @@ impl CoupledSystem {
             rho,
             e: [Vector2::zeros(); 3],
             n: [Vector2::zeros(); 3],
-            beta: [0.0; 3],
             beta_dot: [0.0; 3],
             beta0: Vector3::zeros(),
             beta_s: Matrix3::zeros(),
@@ -649,7 +791,7 @@ impl CoupledSystem {
         let mut e_cols = Matrix3::zeros();
         let mut n_cols = Matrix3::zeros();
         let mut measure_cols = Matrix3::zeros();
-        let centroid = pose.rotate(&geometry.platform_centroid());
+        let centroid = rotate(&geometry.platform_centroid());
         let radius = geometry.platform_radius().max(f64::MIN_POSITIVE);
         let mut moment0 = Vector3::zeros();
         let mut moment_s = Matrix3::zeros();
@@ -657,7 +799,7 @@ impl CoupledSystem {
             let link = &self.links[i];
             let range = self.offsets[i]..self.offsets[i] + link.r;
             let u = leg.guide.direction.into_inner();
-            let r_i = pose.rotate(&leg.attachment);
+            let r_i = rotate(&leg.attachment);
             let chord = p + r_i - leg.guide.anchor.coords - rho[i][0] * u;
             let e = chord / lengths[i];
             let nrm = Vector2::new(-e.y, e.x);
@@ -687,12 +829,16 @@ impl CoupledSystem {
             moment_s.set_row(i, &(row * (link.inertia_b / lengths[i])));
             out.e[i] = e;
             out.n[i] = nrm;
-            out.beta[i] = e.y.atan2(e.x);
             out.beta_dot[i] = beta_dot;
             out.sin_ab[i] = sin_ab;
             out.cos_ab[i] = cos_ab;
         }
         // Type-II measure of the actual chords, as [`crate::equilibrium_measure`].
+        let singular = |measure: f64| DynamicsError::SingularInverseDynamics {
+            t,
+            measure,
+            threshold: geometry.thresholds.type_ii,
+        };
         let measure = measure_cols.determinant().abs();
         if measure.is_nan() || measure < geometry.thresholds.type_ii {
             return Err(singular(measure));
@@ -714,22 +860,32 @@ impl CoupledSystem {
         Ok(out)
     }
 
-    /// Assembles and solves `A eta'' = g`; `eta''` is left in `scratch.rhs`.
+    /// Solves for `eta''` (left in `scratch.acceleration`) and returns `(s, m)`,
+    /// `s_j = dL_j . eta_j''`, `m_j = m_xipsi_j . eta_j''`.
+    ///
+    /// For link `i`, `M eta_i'' = g_i - l m_xipsi_i b_i'' - (G0 eta_i / l) T_i` with
+    /// `b'' = beta_0 + Bs s` and `T = T_0 + Ts s + Tm m`, so
+    /// `eta_i'' = a_i - l p_i (Bs s)_i - q_i (Ts s + Tm m)_i` with `a_i` the accelerations at
+    /// `s = m = 0`, `p_i = M^-1 m_xipsi_i` and `q_i = M^-1 G0 eta_i / l`. Projecting on `dL_i`
+    /// and `m_xipsi_i` gives a 6x6 system for `(s, m)` (the Sherman-Morrison-Woodbury
+    /// reduction of the `n x n` system, Golub & Van Loan, *Matrix Computations*, 4th ed.,
+    /// 2.1.4): cost linear in the modes per right-hand side after the `r x r` products.
     fn solve_accelerations(
         &mut self,
         t: f64,
         y: &[f64],
         kin: &Kinetics,
-    ) -> Result<(), DynamicsError> {
+    ) -> Result<(Vector3<f64>, Vector3<f64>), DynamicsError> {
         let n = self.modes;
         let (eta, eta_dot) = y.split_at(n);
         let Scratch {
-            matrix,
-            rhs,
-            g0_eta,
+            g0_eta: _,
+            inv_g0_eta,
             length_gradient,
+            acceleration,
         } = &mut self.scratch;
-        matrix.fill(0.0);
+        let mut w = [0.0; 36];
+        let mut c = [0.0; 6];
         for (i, link) in self.links.iter().enumerate() {
             let r = link.r;
             let off = self.offsets[i];
@@ -740,57 +896,58 @@ impl CoupledSystem {
             let p1 = rho_a * rho_ddot * kin.cos_ab[i];
             let p2 = -0.5 * rho_a * b_dot * b_dot;
             let p0_known = -(p1 * link.length + p2 * link.length * link.length);
-            let (c0, c1, c2) = (p0_known / link.length, p1, p2 * link.length);
-            let g = &mut rhs[off..off + r];
-            for (j, gj) in g.iter_mut().enumerate() {
-                *gj = -link.mass_psi[j] * rho_ddot * kin.sin_ab[i]
-                    - link.length * link.mass_xi_psi[j] * kin.beta0[i]
-                    - g0_eta[off + j] * kin.tension0[i];
+            let q = &inv_g0_eta[off..off + r];
+            let a = &mut acceleration[off..off + r];
+            let t0 = kin.tension0[i] + p0_known;
+            for (j, aj) in a.iter_mut().enumerate() {
+                *aj = -link.inv_mass_psi[j] * rho_ddot * kin.sin_ab[i]
+                    - link.length * link.inv_mass_xi_psi[j] * kin.beta0[i]
+                    - t0 * q[j]
+                    + b_dot * b_dot * e[j];
             }
-            mat_vec_acc(&link.flexural, e, -1.0, g);
-            mat_vec_acc(&link.geometric[0], e, -c0, g);
-            mat_vec_acc(&link.geometric[1], e, -c1, g);
-            mat_vec_acc(&link.geometric[2], e, -c2, g);
-            mat_vec_acc(&link.modal_mass, e, b_dot * b_dot, g);
-            mat_vec_acc(&link.damping, ed, -1.0, g);
-            // A: M on the diagonal block, + l x_i Bs_ij dL_j^T + k_i (Ts_ij dL_j^T + Tm_ij x_j^T).
-            for j in 0..r {
-                let row = (off + j) * n;
-                for k in 0..r {
-                    matrix[row + off + k] = link.modal_mass[j * r + k];
-                }
-                let lx = link.length * link.mass_xi_psi[j];
-                let kj = g0_eta[off + j];
-                for (c, other) in self.links.iter().enumerate() {
-                    let oc = self.offsets[c];
-                    let ws = lx * kin.beta_s[(i, c)] + kj * kin.tension_s[(i, c)];
-                    let wm = kj * kin.tension_m[(i, c)];
-                    for k in 0..other.r {
-                        matrix[row + oc + k] +=
-                            ws * length_gradient[oc + k] + wm * other.mass_xi_psi[k];
-                    }
-                }
+            mat_vec_acc(&link.inv_flexural, e, -1.0, a);
+            mat_vec_acc(&link.inv_geometric[1], e, -p1, a);
+            mat_vec_acc(&link.inv_geometric[2], e, -p2 * link.length, a);
+            mat_vec_acc(&link.inv_damping, ed, -1.0, a);
+            let dl = &length_gradient[off..off + r];
+            let p = &link.inv_mass_xi_psi;
+            let x = &link.mass_xi_psi;
+            let (dla, dlp, dlq) = (dot(dl, a), dot(dl, p), dot(dl, q));
+            let (xa, xq) = (dot(x, a), dot(x, q));
+            let xp = link.xi_psi_inv_xi_psi;
+            c[i] = dla;
+            c[3 + i] = xa;
+            let l = link.length;
+            for col in 0..3 {
+                let delta = if col == i { 1.0 } else { 0.0 };
+                w[i * 6 + col] =
+                    delta + dlp * l * kin.beta_s[(i, col)] + dlq * kin.tension_s[(i, col)];
+                w[i * 6 + 3 + col] = dlq * kin.tension_m[(i, col)];
+                w[(3 + i) * 6 + col] = xp * l * kin.beta_s[(i, col)] + xq * kin.tension_s[(i, col)];
+                w[(3 + i) * 6 + 3 + col] = delta + xq * kin.tension_m[(i, col)];
             }
         }
         self.counters.acceleration_solves += 1;
-        solve_in_place(matrix, rhs).map_err(|column| {
+        solve_in_place(&mut w, &mut c).map_err(|column| {
             DynamicsError::Inconsistent(format!(
                 "at t = {t} s the coupled mass matrix is singular (zero pivot in column {column})"
             ))
-        })
-    }
-
-    /// `(s, m)`: `s_j = dL_j . eta_j''`, `m_j = m_xipsi_j . eta_j''` for `eta''` in `scratch.rhs`.
-    fn reduced(&self) -> (Vector3<f64>, Vector3<f64>) {
-        let mut s = Vector3::zeros();
-        let mut m = Vector3::zeros();
+        })?;
+        let s = Vector3::new(c[0], c[1], c[2]);
+        let m = Vector3::new(c[3], c[4], c[5]);
+        let bs = kin.beta_s * s;
+        let tsm = kin.tension_s * s + kin.tension_m * m;
         for (i, link) in self.links.iter().enumerate() {
-            let range = self.offsets[i]..self.offsets[i] + link.r;
-            let acc = &self.scratch.rhs[range.clone()];
-            s[i] = dot(&self.scratch.length_gradient[range], acc);
-            m[i] = dot(&link.mass_xi_psi, acc);
+            let off = self.offsets[i];
+            let r = link.r;
+            let q = &inv_g0_eta[off..off + r];
+            let a = &mut acceleration[off..off + r];
+            let lb = link.length * bs[i];
+            for j in 0..r {
+                a[j] -= lb * link.inv_mass_xi_psi[j] + tsm[i] * q[j];
+            }
         }
-        (s, m)
+        Ok((s, m))
     }
 
     /// Modal accelerations `eta''` at `(t, y)` (allocating; for outputs and tests).
@@ -801,7 +958,7 @@ impl CoupledSystem {
         self.check_state(y)?;
         let kin = self.kinetics(t, y)?;
         self.solve_accelerations(t, y, &kin)?;
-        Ok(self.scratch.rhs.clone())
+        Ok(self.scratch.acceleration.clone())
     }
 
     /// Platform motion, chord kinematics, axial forces, mid-point deflections and driving
@@ -812,8 +969,7 @@ impl CoupledSystem {
     pub fn output(&mut self, t: f64, y: &[f64]) -> Result<CoupledOutput, DynamicsError> {
         self.check_state(y)?;
         let kin = self.kinetics(t, y)?;
-        self.solve_accelerations(t, y, &kin)?;
-        let (s, m) = self.reduced();
+        let (s, m) = self.solve_accelerations(t, y, &kin)?;
         let n = self.modes;
         let (eta, eta_dot) = y.split_at(n);
         let acceleration = kin.acceleration0 + kin.q_of_s * s;
@@ -841,11 +997,11 @@ impl CoupledSystem {
             let (e, ed, acc) = (
                 &eta[range.clone()],
                 &eta_dot[range.clone()],
-                &self.scratch.rhs[range],
+                &self.scratch.acceleration[range],
             );
             let (l, mass) = (link.length, link.mass);
             let (rho_ddot, b_dot, b_ddot) = (kin.rho[i][2], kin.beta_dot[i], beta_ddot[i]);
-            out.chord_angle[i] = [kin.beta[i], b_dot, b_ddot];
+            out.chord_angle[i] = [kin.e[i].y.atan2(kin.e[i].x), b_dot, b_ddot];
             out.axial_force_c[i] = tension[i];
             out.axial_force_b[i] =
                 tension[i] - mass * (rho_ddot * kin.cos_ab[i] - 0.5 * b_dot * b_dot * l);
@@ -922,6 +1078,6 @@ impl OdeSystem for CoupledSystem {
         }
         let n = self.modes;
         dy[..n].copy_from_slice(&y[n..]);
-        dy[n..].copy_from_slice(&self.scratch.rhs);
+        dy[n..].copy_from_slice(&self.scratch.acceleration);
     }
 }
