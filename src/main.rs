@@ -28,6 +28,8 @@ enum Command {
     Study(cli::study::StudyArgs),
     /// Merge the output directories of a sharded study into one results table.
     Merge(cli::study::MergeArgs),
+    /// Wall time against achieved error for each integrator over a ladder of tolerances.
+    WorkPrecision(cli::work_precision::WorkPrecisionArgs),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +41,7 @@ fn main() -> ExitCode {
         Command::Beam(a) => cli::beam::run(a),
         Command::Study(a) => cli::study::study(a),
         Command::Merge(a) => cli::study::merge(a),
+        Command::WorkPrecision(a) => cli::work_precision::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

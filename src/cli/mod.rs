@@ -5,6 +5,7 @@ pub mod beam;
 pub mod kinematics;
 pub mod run;
 pub mod study;
+pub mod work_precision;
 
 /// Exit code for bad input (scene file, arguments).
 pub const EXIT_BAD_INPUT: u8 = 2;

@@ -1,0 +1,158 @@
+//! `flexprr work-precision`: wall time against achieved error for each integrator over a
+//! ladder of tolerances, with optional rows of other packages merged in.
+
+use std::path::PathBuf;
+
+use scenarios::work_precision::{
+    Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, markdown_at_error, markdown_rows,
+    measure, read_csv, write_svg,
+};
+use scenarios::{Method, Scene};
+
+use super::Failure;
+use super::run::failure;
+
+/// Arguments of `flexprr work-precision`.
+#[derive(Debug, clap::Args)]
+pub struct WorkPrecisionArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Output directory (default `out/<scene name>/work_precision`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Relative tolerances of the ladder, comma-separated (default 1e-3 to 1e-12).
+    #[arg(long, value_delimiter = ',')]
+    pub tolerances: Option<Vec<f64>>,
+    /// Methods to measure, comma-separated (default abm,rk45,bdf).
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Option<Vec<String>>,
+    /// Timed runs per point (the median is reported).
+    #[arg(long, default_value_t = 7)]
+    pub repeats: usize,
+    /// Untimed warm-up runs per point.
+    #[arg(long, default_value_t = 2)]
+    pub warmup: usize,
+    /// Reference solution file to use instead of computing one (as written by this command).
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Rows of other packages to merge (CSV in the work_precision.csv format); repeatable.
+    #[arg(long)]
+    pub peers: Vec<PathBuf>,
+    /// Maximum relative error at which the methods are compared.
+    #[arg(long, default_value_t = 1e-6)]
+    pub target_error: f64,
+}
+
+/// Measures, merges the peers' rows and writes `work_precision.csv`, `work_precision.svg`,
+/// `work_precision.md` and `reference.csv`.
+pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
+    let scene = Scene::load(&args.scene).map_err(failure)?;
+    let mut config = WorkPrecisionConfig {
+        repeats: args.repeats,
+        warmup: args.warmup,
+        ..WorkPrecisionConfig::default()
+    };
+    if let Some(tolerances) = args.tolerances {
+        config.tolerances = tolerances;
+    }
+    if let Some(names) = args.methods {
+        config.methods = names
+            .iter()
+            .map(|name| {
+                Method::parse(name.trim()).ok_or_else(|| {
+                    Failure::bad_input(format!(
+                        "--methods: unknown method {name:?} (expected abm, rk45 or bdf)"
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?;
+    }
+    if !(args.target_error.is_finite() && args.target_error > 0.0) {
+        return Err(Failure::bad_input(format!(
+            "--target-error must be positive, got {}",
+            args.target_error
+        )));
+    }
+    config.validate().map_err(failure)?;
+    let out = args.out.unwrap_or_else(|| {
+        PathBuf::from("out")
+            .join(&scene.name)
+            .join("work_precision")
+    });
+    std::fs::create_dir_all(&out)
+        .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
+
+    let reference = match &args.reference {
+        Some(path) => Reference::read_csv(path).map_err(failure)?,
+        None => Reference::compute(&scene, &config).map_err(failure)?,
+    };
+    if let Some(a) = reference.agreement {
+        println!(
+            "reference: {} at rtol {:e}, checked with {}: agree to {:.1e} (end) / {:.1e} (max)",
+            reference.method, config.reference_rtol, reference.check_method, a.end, a.max
+        );
+    }
+    reference
+        .write_csv(&out.join("reference.csv"))
+        .map_err(failure)?;
+
+    let mut peers: Vec<WorkPrecisionRow> = Vec::new();
+    for path in &args.peers {
+        peers.extend(read_csv(path).map_err(failure)?);
+    }
+    println!(
+        "{:<8} {:>7} {:>10} {:>8} {:>9} {:>10} {:>10}",
+        "method", "rtol", "time_ms", "steps", "rhs", "end_err", "max_err"
+    );
+    let (mut rows, failures) = measure(&scene, &reference, &config, &mut |r| {
+        println!(
+            "{:<8} {:>7.0e} {:>10.3} {:>8} {:>9} {:>10.2e} {:>10.2e}",
+            r.method,
+            r.rtol,
+            1e3 * r.time_median_s,
+            r.accepted_steps.unwrap_or(0),
+            r.rhs_evaluations.unwrap_or(0),
+            r.end_error,
+            r.max_error
+        );
+    })
+    .map_err(failure)?;
+    for f in &failures {
+        eprintln!("failed: {f}");
+    }
+    rows.extend(peers);
+
+    let csv = csv_text(&rows).map_err(failure)?;
+    let write = |name: &str, text: &str| {
+        let path = out.join(name);
+        std::fs::write(&path, text).map_err(|e| Failure::run(format!("{}: {e}", path.display())))
+    };
+    write("work_precision.csv", &csv)?;
+    let at_error = markdown_at_error(&rows, args.target_error);
+    let mut md = format!(
+        "# Work-precision: {}\n\nAt equal achieved error (maximum over the output times, relative \
+         to the solution's size):\n\n{at_error}\nAll points:\n\n{}",
+        scene.name,
+        markdown_rows(&rows)
+    );
+    if !failures.is_empty() {
+        md.push_str("\nFailed points:\n\n");
+        for f in &failures {
+            md.push_str(&format!("- {f}\n"));
+        }
+    }
+    write("work_precision.md", &md)?;
+    write_svg(
+        &rows,
+        &out.join("work_precision.svg"),
+        &format!("Work-precision: {}", scene.name),
+    )
+    .map_err(failure)?;
+    println!("\n{at_error}");
+    println!(
+        "{} rows written to {}",
+        rows.len(),
+        out.join("work_precision.csv").display()
+    );
+    Ok(())
+}
