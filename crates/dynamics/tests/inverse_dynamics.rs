@@ -49,7 +49,7 @@ fn wobble() -> impl Strategy<Value = Wobble> {
     (
         prop::array::uniform3(0.0..0.03f64),
         prop::array::uniform3(1.0..25.0f64),
-        prop::array::uniform3(0.0..6.28f64),
+        prop::array::uniform3(0.0..std::f64::consts::TAU),
     )
         .prop_map(|(amp, freq, phase)| Wobble {
             amp: [amp[0], amp[1], amp[2] * 3.0],
