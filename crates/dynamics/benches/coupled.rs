@@ -75,6 +75,22 @@ fn benches(c: &mut Criterion) {
     group.bench_function("coupled_f20_bdf_rtol1e-8", |b| {
         b.iter(|| black_box(run(&bdf, &mut systems().1)))
     });
+    // The tolerance of docs/performance.md's paper-scene table.
+    let loose = Options::default().rtol(1e-6).atol(1e-10);
+    let abm_loose = Abm::new(loose.clone());
+    let rk45_loose = Rk45::new(loose);
+    group.bench_function("ked_f20_abm_rtol1e-6", |b| {
+        b.iter(|| black_box(run(&abm_loose, &mut systems().0)))
+    });
+    group.bench_function("coupled_f20_abm_rtol1e-6", |b| {
+        b.iter(|| black_box(run(&abm_loose, &mut systems().1)))
+    });
+    group.bench_function("ked_f20_rk45_rtol1e-6", |b| {
+        b.iter(|| black_box(run(&rk45_loose, &mut systems().0)))
+    });
+    group.bench_function("coupled_f20_rk45_rtol1e-6", |b| {
+        b.iter(|| black_box(run(&rk45_loose, &mut systems().1)))
+    });
     group.finish();
 }
 
