@@ -98,7 +98,7 @@ proptest! {
 
     /// Both couplings off: the coupled right-hand side is the consistent KED one, whose axial
     /// force comes from `inverse_dynamics` and the joint-reaction model instead of the
-    /// platform balance assembled here.
+    /// platform balance assembled here; undamped and with modal damping.
     #[test]
     fn ked_limit_has_the_consistent_ked_rhs(
         seed in prop::array::uniform18(-1.0f64..1.0),
@@ -112,6 +112,13 @@ proptest! {
         c.rhs(t, &y, &mut dc);
         k.rhs(t, &y, &mut dk);
         prop_assert!(rel_diff(&dc[9..], &dk[9..]) < 1e-11, "{dc:?} vs {dk:?}");
+        // Modal damping, one ratio per mode: the coupled model forms its damping matrix itself.
+        let damping = ModalDamping { ratios: vec![0.01, 0.02, 0.05] };
+        let mut c = CoupledSystem::new(machine(), circle(20.0), damping.clone(), CoupledOptions::ked_limit()).unwrap();
+        let mut k = ModalSystem::new(machine(), circle(20.0), Formulation::consistent(), damping).unwrap();
+        c.rhs(t, &y, &mut dc);
+        k.rhs(t, &y, &mut dk);
+        prop_assert!(rel_diff(&dc[9..], &dk[9..]) < 1e-11, "damped: {dc:?} vs {dk:?}");
     }
 }
 
