@@ -490,3 +490,33 @@ values = [0.001, 0.004]
     let w: f64 = thick.quantities[0].parse().unwrap();
     assert!(w > 0.0 && w < 0.01 * 0.2, "{w}");
 }
+
+/// `case_outputs` writes each case's full outputs next to its record; the record reader
+/// ignores those directories, and the plots are drawn from the table.
+#[test]
+fn case_outputs_and_plots_are_written_on_request() {
+    let s = study(
+        r#"
+quantities = [{ kind = "frequency_range", link = 1, mode = 1 }]
+[[axis]]
+key = "trajectory.frequency"
+values = [5.0, 10.0]
+[[plot]]
+file = "range.svg"
+x = "trajectory.frequency"
+y = ["f_min_1_1_Hz"]
+"#,
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let opts = StudyOptions {
+        case_outputs: true,
+        ..options(2)
+    };
+    run_study(&s, tmp.path(), &opts, &|_, _| {}).unwrap();
+    for id in 0..2 {
+        let table = read(&tmp.path().join(format!("cases/{id:06}/frequencies.csv")));
+        assert!(table.starts_with("t_s,f_1_1_Hz"), "{}", &table[..40]);
+    }
+    assert_eq!(read_case_records(tmp.path()).unwrap().len(), 2);
+    assert!(read(&tmp.path().join("range.svg")).contains("<svg"));
+}
