@@ -105,9 +105,10 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
     let written = write_outputs(&scene, &result, &out).map_err(Failure::run)?;
     let stats = &result.stats;
     println!(
-        "{}: {} formulation, {} outputs written to {} in {:.3} s",
+        "{}: {} formulation, {} model, {} outputs written to {} in {:.3} s",
         scene.name,
         scene.formulation.name(),
+        scene.coupling.name(),
         written.len(),
         out.display(),
         stats.wall_time_s

@@ -102,6 +102,7 @@ pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
         "flexprr_version": env!("CARGO_PKG_VERSION"),
         "formulation": {
             "name": f.name(),
+            "coupling": scene.coupling.name(),
             "axial_force": format!("{:?}", f.axial),
             "geometric_stiffness": f.geometric_stiffness.name(),
             "coriolis_forcing": f.coriolis_forcing,
@@ -352,6 +353,28 @@ fn plot_specs<'a>(scene: &Scene, result: &'a RunResult) -> Vec<PlotSpec<'a>> {
                 y_label: "axial force (N)".into(),
                 series: s,
             }],
+        ));
+    }
+    if let Some(t) = result.table("platform_deviation") {
+        let position = [("dx_m", "dx"), ("dy_m", "dy")]
+            .iter()
+            .filter_map(|(c, l)| series(t, c, l, false))
+            .collect();
+        let angle = series(t, "dphi_rad", "dphi", false).into_iter().collect();
+        specs.push((
+            "platform_deviation.svg".into(),
+            format!("{name}: platform deviation from the nominal path (coupled model)"),
+            "t (s)",
+            vec![
+                Panel {
+                    y_label: "position deviation (m)".into(),
+                    series: position,
+                },
+                Panel {
+                    y_label: "orientation deviation (rad)".into(),
+                    series: angle,
+                },
+            ],
         ));
     }
     if let Some(t) = result.table("kinematics") {

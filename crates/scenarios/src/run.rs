@@ -5,8 +5,8 @@
 use std::time::Instant as Clock;
 
 use dynamics::{
-    AxialInput, AxialModel, FrequencyHistory, ModalSystem, end_forces, inverse_dynamics,
-    rigid_kinetic_energy,
+    AxialInput, AxialModel, CoupledOptions, CoupledSystem, CouplingModel, FrequencyHistory,
+    ModalSystem, end_forces, inverse_dynamics, rigid_kinetic_energy,
 };
 use integrators::{Abm, Bdf, Integrator, OdeSystem, Rk45, Solution, Stats};
 
@@ -121,28 +121,67 @@ pub fn integrate(
     system: &mut ModalSystem,
     report: &mut dyn FnMut(f64),
 ) -> Result<Solution, ScenarioError> {
-    let t = &scene.output_times;
     let y0 = system.initial_state();
-    let (t0, span) = (t[0], t[t.len() - 1] - t[0]);
-    let result = {
-        let mut wrapped = Progress {
-            inner: &mut *system,
-            t0,
-            span,
-            calls: 0,
-            report,
-        };
-        let opts = scene.options.clone();
-        match scene.method {
-            Method::Abm => Abm::new(opts).solve(&mut wrapped, t0, &y0, t),
-            Method::Rk45 => Rk45::new(opts).solve(&mut wrapped, t0, &y0, t),
-            Method::Bdf => Bdf::new(opts).solve(&mut wrapped, t0, &y0, t),
-        }
-    };
+    let result = solve_with(scene, system, &y0, report);
     result.map_err(|e| match system.take_failure() {
         Some(cause) => ScenarioError::Run(format!("{cause} (integrator: {e})")),
         None => ScenarioError::Run(format!("{} integrator: {e}", scene.method.name())),
     })
+}
+
+/// Solves any system over the scene's output times with the scene's method and options.
+fn solve_with<S: OdeSystem>(
+    scene: &Scene,
+    system: &mut S,
+    y0: &[f64],
+    report: &mut dyn FnMut(f64),
+) -> Result<Solution, integrators::IntegratorError> {
+    let t = &scene.output_times;
+    let (t0, span) = (t[0], t[t.len() - 1] - t[0]);
+    let mut wrapped = Progress {
+        inner: system,
+        t0,
+        span,
+        calls: 0,
+        report,
+    };
+    let opts = scene.options.clone();
+    match scene.method {
+        Method::Abm => Abm::new(opts).solve(&mut wrapped, t0, y0, t),
+        Method::Rk45 => Rk45::new(opts).solve(&mut wrapped, t0, y0, t),
+        Method::Bdf => Bdf::new(opts).solve(&mut wrapped, t0, y0, t),
+    }
+}
+
+/// Integrates the coupled model (platform moved by the links' foreshortening) of a scene.
+///
+/// # Errors
+/// [`ScenarioError::Run`] with the integrator's or the system's reason and the time.
+pub fn integrate_coupled(
+    scene: &Scene,
+    report: &mut dyn FnMut(f64),
+) -> Result<(Solution, CoupledSystem), ScenarioError> {
+    let options = CoupledOptions {
+        axial_stiffness: Some([scene.axial_stiffness; 3]),
+        ..CoupledOptions::full()
+    };
+    let mut system = CoupledSystem::new(
+        scene.machine.clone(),
+        scene.trajectory.clone(),
+        scene.damping.clone(),
+        options,
+    )
+    .map_err(|e| ScenarioError::Run(e.to_string()))?;
+    let y0 = system.initial_state();
+    let solution =
+        solve_with(scene, &mut system, &y0, report).map_err(|e| match system.take_failure() {
+            Some(cause) => ScenarioError::Run(format!("{cause} (integrator: {e})")),
+            None => ScenarioError::Run(format!(
+                "{} integrator on the coupled model: {e}",
+                scene.method.name()
+            )),
+        })?;
+    Ok((solution, system))
 }
 
 fn new_system(scene: &Scene, axial_off: bool) -> Result<ModalSystem, ScenarioError> {
@@ -176,8 +215,23 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
     let modes: [usize; 3] = std::array::from_fn(|i| machine.links[i].modes());
     let run_err = |e: dynamics::DynamicsError| ScenarioError::Run(e.to_string());
 
-    // The modal ODE, only when an output needs it.
-    let solution = if scene.needs_integration() {
+    // The coupled model replaces the KED integration (and gives the actual axial and
+    // driving forces and the platform's deviation).
+    let coupled = if scene.coupling == CouplingModel::Coupled
+        && (scene.needs_integration()
+            || wants(OutputKind::AxialForces)
+            || wants(OutputKind::DrivingForces))
+    {
+        let (sol, csys) = integrate_coupled(scene, report)?;
+        stats.integrated = true;
+        stats.integrator = Some(sol.stats.clone());
+        stats.rhs_evaluations += csys.counters().rhs_evaluations;
+        Some((sol, csys))
+    } else {
+        None
+    };
+    // The KED modal ODE, only when an output needs it.
+    let solution = if coupled.is_none() && scene.needs_integration() {
         stats.integrated = true;
         let sol = integrate(scene, &mut system, report)?;
         stats.integrator = Some(sol.stats.clone());
@@ -185,6 +239,7 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
     } else {
         None
     };
+    let mut coupled_states: Option<Solution> = None;
     let without_axial = if solution.is_some() && scene.file.output.compare_without_axial_force {
         let mut plain = new_system(scene, true)?;
         let sol = integrate(scene, &mut plain, &mut |_| {})?;
@@ -368,7 +423,58 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
         None
     };
 
-    if let Some(sol) = &solution {
+    if let Some((sol, mut csys)) = coupled {
+        let mut deviation = columns(6, n_out);
+        let mut forces = columns(10, n_out);
+        for (k, &tk) in t.iter().enumerate() {
+            let out = csys.output(tk, sol.y(k)).map_err(run_err)?;
+            let (plain, stretched) = (out.pose_deviation(), out.pose_deviation_with_stretch());
+            for q in 0..3 {
+                deviation[q].push(plain[q]);
+                deviation[3 + q].push(stretched[q]);
+            }
+            for i in 0..3 {
+                forces[3 * i].push(out.axial_force_b[i]);
+                forces[3 * i + 1].push(out.axial_force_c[i]);
+                forces[3 * i + 2].push(out.driving_force[i]);
+            }
+            forces[9].push(
+                csys.chord_shortening(&sol.y(k)[..csys.modes()])
+                    .iter()
+                    .fold(0.0, |m: f64, d| m.max(*d)),
+            );
+        }
+        let mut table = Table::new("platform_deviation", &t);
+        for (name, col) in [
+            "dx_m",
+            "dy_m",
+            "dphi_rad",
+            "dx_with_stretch_m",
+            "dy_with_stretch_m",
+            "dphi_with_stretch_rad",
+        ]
+        .into_iter()
+        .zip(deviation)
+        {
+            table.push(name, col);
+        }
+        tables.push(table);
+        let mut table = Table::new("coupled_forces", &t);
+        let mut cols = forces.into_iter();
+        for i in 1..=3 {
+            for name in ["P_B_{}_N", "P_C_{}_N", "F_a_{}_N"] {
+                table.push(
+                    name.replace("{}", &i.to_string()),
+                    cols.next().unwrap_or_default(),
+                );
+            }
+        }
+        table.push("max_chord_shortening_m", cols.next().unwrap_or_default());
+        tables.push(table);
+        coupled_states = Some(sol);
+    }
+
+    if let Some(sol) = solution.as_ref().or(coupled_states.as_ref()) {
         let range = |i: usize| system.link_range(i);
         if wants(OutputKind::Modes) {
             let mut table = Table::new("modes", &t);

@@ -10,7 +10,9 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
-use dynamics::{AxialModel, Coupling, Formulation, LinkModel, Machine, ModalDamping};
+use dynamics::{
+    AxialModel, Coupling, CouplingModel, Formulation, LinkModel, Machine, ModalDamping,
+};
 use integrators::Options;
 use kinematics::{
     Branch, Circle, Geometry, Guide, Leg, Line, PointToPoint, Pose, Profile, Trajectory,
@@ -519,6 +521,10 @@ pub struct Scene {
     pub output_times: Vec<f64>,
     /// Requested outputs.
     pub outputs: BTreeSet<OutputKind>,
+    /// KED (prescribed rigid motion) or the coupled model.
+    pub coupling: CouplingModel,
+    /// Mean axial stiffness `EA` of the links (N), for the coupled model's stretch output.
+    pub axial_stiffness: f64,
 }
 
 impl std::fmt::Debug for Scene {
@@ -982,6 +988,9 @@ impl Scene {
             .map_err(|(k, msg)| c.error(&format!("links.{k}"), msg))?;
         let link = LinkModel::new(basis, section.as_ref(), length)
             .map_err(|e| c.error("links", e.to_string()))?;
+        // Mean cross-section area from the mass: EA for the coupled model's stretch output.
+        let axial_stiffness =
+            links.material.youngs_modulus * link.mass() / (length * links.material.density);
         // --- geometry
         let geometry = match m.layout.as_str() {
             "radial" => {
@@ -1148,16 +1157,21 @@ impl Scene {
                 ),
             ));
         }
-        c.choice("model.coupling", &mo.coupling, &[("ked", ())])
-            .map_err(|_| {
-                c.error(
-                    "model.coupling",
-                    format!(
-                        "unknown value \"{}\": this version offers \"ked\" only",
-                        mo.coupling
-                    ),
-                )
-            })?;
+        let coupling = c.choice(
+            "model.coupling",
+            &mo.coupling,
+            &[
+                ("ked", CouplingModel::Ked),
+                ("coupled", CouplingModel::Coupled),
+            ],
+        )?;
+        if coupling == CouplingModel::Coupled && formulation != Formulation::consistent() {
+            return Err(c.error(
+                "model.coupling",
+                "the coupled model is built on the consistent equations (actual chord tension, full Kp, \
+                 softening, no F_fg): set model.formulation = \"consistent\" without overrides",
+            ));
+        }
         let damping = ModalDamping {
             ratios: mo.damping.clone(),
         };
@@ -1235,6 +1249,8 @@ impl Scene {
             options,
             output_times,
             outputs,
+            coupling,
+            axial_stiffness,
         })
     }
 
