@@ -10,8 +10,10 @@
 //! The full-length runs are `flexprr run configs/stress/<scene>.toml`; the table of all
 //! cases is printed by `cargo test --release --test stress -- --ignored --nocapture`.
 
-use scenarios::classify::{Attempt, Failure, Limits, Outcome, attempt};
-use scenarios::{Method, ScenarioError, Scene, SceneFile, parse_scene, run};
+use scenarios::classify::{
+    Attempt, Failure, Limits, Outcome, RUNAWAY_DEFLECTION_FRACTION, attempt, deflection_excess,
+};
+use scenarios::{Method, ScenarioError, Scene, SceneFile, integrate, parse_scene, run};
 
 const METHODS: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
 
@@ -351,6 +353,49 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
             assert!(hi < 0.1 && (hi - lo) / lo < 0.01, "{name}: peaks {peaks:?}");
         }
     }
+}
+
+/// The after-the-run check `deflection_excess` (proposed for `scenarios::run`) on a plain
+/// `scenarios::integrate`: at 40 Hz the buckling link 3 passes half its length at the output
+/// sample after the stepwise check of `attempt` found it; the bounded 30 Hz run passes.
+#[test]
+fn runaway_check_after_a_plain_run() {
+    let check = |name: &str| {
+        let s = scene(name, |_| {});
+        let mut system = dynamics::ModalSystem::new(
+            s.machine.clone(),
+            s.trajectory.clone(),
+            s.formulation,
+            s.damping.clone(),
+        )
+        .expect("model");
+        let solution = integrate(&s, &mut system, &mut |_| {}).expect("integrates");
+        let stepwise = attempt(
+            &s,
+            s.method,
+            &Limits {
+                deflection_fraction: RUNAWAY_DEFLECTION_FRACTION,
+            },
+        );
+        (
+            deflection_excess(&s, &system, &solution, RUNAWAY_DEFLECTION_FRACTION),
+            stepwise,
+        )
+    };
+    let (excess, stepwise) = check("high_speed_f40");
+    let (Some(Failure::Diverged { link, t, .. }), Err(Failure::Diverged { t: t_step, .. })) =
+        (&excess, &stepwise.result)
+    else {
+        panic!("40 Hz: {excess:?}, {:?}", stepwise.result);
+    };
+    assert_eq!(*link, 2);
+    // Outputs every 0.1 ms: the first sample at or after the accepted step.
+    assert!(
+        *t >= *t_step - 1e-4 && *t <= *t_step + 1e-4,
+        "{t} vs {t_step}"
+    );
+    let (excess, stepwise) = check("high_speed_f30");
+    assert!(excess.is_none() && stepwise.result.is_ok(), "{excess:?}");
 }
 
 /// A move into the home pose (platform at the origin, phi = 0: the three link lines meet at

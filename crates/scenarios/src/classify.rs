@@ -286,6 +286,43 @@ pub fn deflection_error(
     (scale > 0.0).then(|| worst / scale)
 }
 
+/// A deflection limit for catching runaway growth after a run, as a fraction of the link
+/// length: half the length. Far beyond the small-deflection range (the paper's own 30 Hz
+/// scene peaks near a quarter of it), so it only catches a link whose linear model grows
+/// exponentially, e.g. while it buckles. Use with [`deflection_excess`].
+pub const RUNAWAY_DEFLECTION_FRACTION: f64 = 0.5;
+
+/// The first output sample of `solution` (a run of `system`, built from `scene`) at which a
+/// link's deflection at `xi = 0.1, ..., 0.9` exceeds `fraction` of its length, as a
+/// [`Failure::Diverged`]; `None` if there is none.
+pub fn deflection_excess(
+    scene: &Scene,
+    system: &ModalSystem,
+    solution: &Solution,
+    fraction: f64,
+) -> Option<Failure> {
+    let model = DeflectionModel::new(scene, system, &GUARD_POINTS);
+    for k in 0..solution.len() {
+        let y = solution.y(k);
+        for i in 0..3 {
+            let limit = fraction * scene.machine.links[i].length();
+            for (p, xi) in GUARD_POINTS.iter().enumerate() {
+                let w = model.deflection(i, p, y);
+                if w.is_nan() || w.abs() > limit {
+                    return Some(Failure::Diverged {
+                        link: i,
+                        t: solution.t[k],
+                        xi: *xi,
+                        deflection_m: w,
+                        limit_m: limit,
+                    });
+                }
+            }
+        }
+    }
+    None
+}
+
 /// Integrates the scene's modal ODE with `method` and the scene's options, checking the
 /// deflections after every accepted step against `limits`. Never panics on a failed run:
 /// the failure is in [`Attempt::result`].
