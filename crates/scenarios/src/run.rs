@@ -123,10 +123,20 @@ pub fn integrate(
 ) -> Result<Solution, ScenarioError> {
     let y0 = system.initial_state();
     let result = solve_with(scene, system, &y0, report);
-    result.map_err(|e| match system.take_failure() {
+    let solution = result.map_err(|e| match system.take_failure() {
         Some(cause) => ScenarioError::Run(format!("{cause} (integrator: {e})")),
         None => ScenarioError::Run(format!("{} integrator: {e}", scene.method.name())),
-    })
+    })?;
+    // The linear (small-deflection) model grows without bound while a link buckles: a run
+    // whose deflection passes half the link length reports that instead of returning
+    // deflections of kilometres.
+    let fraction = crate::classify::RUNAWAY_DEFLECTION_FRACTION;
+    match crate::classify::deflection_excess(scene, system, &solution, fraction) {
+        Some(excess) => Err(ScenarioError::Run(format!(
+            "diverged: {excess}; the small-deflection model has left its range (a link buckles, or the tolerance is too loose); request \"frequencies\" to see the buckling intervals"
+        ))),
+        None => Ok(solution),
+    }
 }
 
 /// Solves any system over the scene's output times with the scene's method and options.

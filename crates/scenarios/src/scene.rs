@@ -1097,11 +1097,23 @@ impl Scene {
         let checks = ((t1 - t0) / period_hint * 400.0).clamp(2000.0, 200_000.0) as usize;
         validate_trajectory(&machine.geometry, trajectory.as_ref(), t0, t1, checks).map_err(
             |e| {
+                let pose = match &e {
+                    kinematics::KinematicsError::AtTime { t, .. } => {
+                        let p = trajectory.motion(*t).pose;
+                        format!(
+                            " (pose x = {:.4} m, y = {:.4} m, phi = {:.2} deg)",
+                            p.x,
+                            p.y,
+                            p.phi.to_degrees()
+                        )
+                    }
+                    _ => String::new(),
+                };
                 c.error(
                     "trajectory",
                     format!(
                         "leaves the usable workspace (expected every pose from {t0} s to {t1} s \
-                         reachable, inside the slider travel and clear of singularities): {e}"
+                         reachable, inside the slider travel and clear of singularities): {e}{pose}"
                     ),
                 )
             },
