@@ -222,89 +222,6 @@ struct LinkData {
     psi_mid: Vec<f64>,
 }
 
-fn row_major(m: &Mat<f64>) -> Vec<f64> {
-    let (r, c) = (m.nrows(), m.ncols());
-    (0..r)
-        .flat_map(|i| (0..c).map(move |j| (i, j)))
-        .map(|(i, j)| m[(i, j)])
-        .collect()
-}
-
-/// Modal damping matrix `C = M Phi diag(2 zeta_j omega_j) Phi^T M` with `Phi` the
-/// `M`-orthonormal modes of `(Kf, M)`. With `M = L L^T` and `V` the eigenvectors of
-/// `L^-1 Kf L^-T`, `M Phi = L V`, so `C = L V D V^T L^T` (row-major result).
-fn damping_matrix(
-    link: &crate::LinkModel,
-    damping: &ModalDamping,
-    index: usize,
-) -> Result<Vec<f64>, DynamicsError> {
-    let ints = &link.integrals;
-    let r = ints.r();
-    if damping.ratios.iter().all(|z| z.abs() <= 0.0) {
-        return Ok(vec![0.0; r * r]);
-    }
-    if damping.ratios.len() > 1 && damping.ratios.len() != r {
-        return Err(DynamicsError::Inconsistent(format!(
-            "modal damping lists {} ratios but link {} has {r} modes (give one ratio for all, or one per mode)",
-            damping.ratios.len(),
-            index + 1
-        )));
-    }
-    if let Some(z) = damping
-        .ratios
-        .iter()
-        .find(|z| !(z.is_finite() && **z >= 0.0))
-    {
-        return Err(DynamicsError::InvalidParameter {
-            quantity: "damping ratio".into(),
-            value: *z,
-            reason: "must be finite and non-negative",
-        });
-    }
-    let not_pd = || {
-        DynamicsError::Inconsistent(format!(
-            "the modal mass matrix of link {} is not positive definite",
-            index + 1
-        ))
-    };
-    let llt = ints.mass.llt(Side::Lower).map_err(|_| not_pd())?;
-    let l = llt.L().to_owned();
-    // L^-1 by forward substitution on the identity.
-    let mut l_inv = Mat::<f64>::identity(r, r);
-    for c in 0..r {
-        for i in 0..r {
-            let mut sum = l_inv[(i, c)];
-            for p in 0..i {
-                sum -= l[(i, p)] * l_inv[(p, c)];
-            }
-            l_inv[(i, c)] = sum / l[(i, i)];
-        }
-    }
-    let a = &l_inv * &ints.stiffness * l_inv.transpose();
-    let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
-        DynamicsError::Inconsistent(format!("eigen-decomposition failed for link {}", index + 1))
-    })?;
-    let v = eig.U().to_owned();
-    let s = eig.S();
-    let ratio = |j: usize| {
-        if damping.ratios.len() == 1 {
-            damping.ratios[0]
-        } else {
-            damping.ratios[j]
-        }
-    };
-    let d = Mat::from_fn(r, r, |i, j| {
-        if i == j {
-            2.0 * ratio(i) * s[i].max(0.0).sqrt()
-        } else {
-            0.0
-        }
-    });
-    let lv = &l * &v;
-    Ok(row_major(&(&lv * &d * lv.transpose())))
-}
-
 impl LinkData {
     fn new(
         link: &crate::LinkModel,
@@ -326,13 +243,14 @@ impl LinkData {
                 ))
             })?
             .inverse();
-        let apply = |a: &Mat<f64>| row_major(&(&m_inv * a));
+        let apply = |a: &Mat<f64>| crate::modal::to_row_major(&(&m_inv * a));
         let apply_vec = |v: &[f64]| -> Vec<f64> {
             (0..r)
                 .map(|i| (0..r).map(|k| m_inv[(i, k)] * v[k]).sum())
                 .collect()
         };
-        let damping = damping_matrix(link, damping, index)?;
+        let damping = crate::modal::damping_matrix(link, damping, index)?
+            .map_or_else(|| vec![0.0; r * r], |c| crate::modal::to_row_major(&c));
         let damping = Mat::from_fn(r, r, |i, j| damping[i * r + j]);
         let inv_mass_xi_psi = apply_vec(&ints.mass_xi_psi);
         Ok(Self {
@@ -340,7 +258,7 @@ impl LinkData {
             length: l,
             mass: m,
             inertia_b: link.centroid_inertia + 0.25 * m * l * l,
-            g0: row_major(&ints.g[0]),
+            g0: crate::modal::to_row_major(&ints.g[0]),
             inv_flexural: apply(&ints.stiffness),
             inv_geometric: std::array::from_fn(|n| apply(&ints.g[n])),
             inv_damping: apply(&damping),

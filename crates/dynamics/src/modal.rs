@@ -73,7 +73,8 @@ struct LinkOperators {
     beta_forcing: Vec<f64>,
 }
 
-fn to_row_major(m: &Mat<f64>) -> Vec<f64> {
+/// A matrix as a row-major vector.
+pub(crate) fn to_row_major(m: &Mat<f64>) -> Vec<f64> {
     let (r, c) = (m.nrows(), m.ncols());
     let mut out = Vec::with_capacity(r * c);
     for i in 0..r {
@@ -96,6 +97,71 @@ fn forward_substitute(l: &Mat<f64>, b: &mut Mat<f64>) {
             b[(i, c)] = sum / l[(i, i)];
         }
     }
+}
+
+/// The modal damping matrix `C = M Phi diag(2 zeta_j omega_j) Phi^T M` of one link, with
+/// `Phi` the `M`-orthonormal modes of `(Kf, M)`; `None` when there is no damping.
+///
+/// With `M = L L^T` and `V` the eigenvectors of `L^-1 Kf L^-T` (eigenvalues `omega_j^2`),
+/// `M Phi = L V`, so `C = L V D V^T L^T` (Golub & Van Loan, *Matrix Computations*, 8.7.2).
+/// Shared by the KED ([`ModalSystem`]) and coupled models.
+///
+/// # Errors
+/// A ratio list whose length is neither 1 nor `r`, a negative or non-finite ratio, a mass
+/// matrix that is not positive definite, or a failed eigen-decomposition.
+pub(crate) fn damping_matrix(
+    link: &crate::LinkModel,
+    damping: &ModalDamping,
+    index: usize,
+) -> Result<Option<Mat<f64>>, DynamicsError> {
+    if damping.is_none() {
+        return Ok(None);
+    }
+    let ints = &link.integrals;
+    let r = ints.r();
+    if damping.ratios.len() > 1 && damping.ratios.len() != r {
+        return Err(DynamicsError::Inconsistent(format!(
+            "modal damping lists {} ratios but link {} has {r} modes (give one ratio for all, or one per mode)",
+            damping.ratios.len(),
+            index + 1
+        )));
+    }
+    if let Some(z) = damping
+        .ratios
+        .iter()
+        .find(|z| !(z.is_finite() && **z >= 0.0))
+    {
+        return Err(DynamicsError::InvalidParameter {
+            quantity: "damping ratio".into(),
+            value: *z,
+            reason: "must be finite and non-negative",
+        });
+    }
+    let llt = ints.mass.llt(Side::Lower).map_err(|_| {
+        DynamicsError::Inconsistent(format!(
+            "the modal mass matrix of link {} is not positive definite",
+            index + 1
+        ))
+    })?;
+    let l = llt.L().to_owned();
+    let mut x = ints.stiffness.clone();
+    forward_substitute(&l, &mut x); // L^-1 Kf
+    let mut a = x.transpose().to_owned();
+    forward_substitute(&l, &mut a); // L^-1 (L^-1 Kf)^T = L^-1 Kf L^-T
+    let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
+        DynamicsError::Inconsistent(format!("eigen-decomposition failed for link {}", index + 1))
+    })?;
+    let s = eig.S();
+    let d = Mat::from_fn(r, r, |i, j| {
+        if i == j {
+            2.0 * damping.ratio(i) * s[i].max(0.0).sqrt()
+        } else {
+            0.0
+        }
+    });
+    let lv = &l * eig.U();
+    Ok(Some(&lv * &d * lv.transpose()))
 }
 
 impl LinkOperators {
@@ -130,62 +196,7 @@ impl LinkOperators {
                 .map(|i| scale * (0..r).map(|k| m_inv[(i, k)] * v[k]).sum::<f64>())
                 .collect()
         };
-        let damping_op = if damping.is_none() {
-            Vec::new()
-        } else {
-            if damping.ratios.len() > 1 && damping.ratios.len() != r {
-                return Err(DynamicsError::Inconsistent(format!(
-                    "modal damping lists {} ratios but link {} has {r} modes (give one ratio for all, or one per mode)",
-                    damping.ratios.len(),
-                    index + 1
-                )));
-            }
-            if let Some(z) = damping
-                .ratios
-                .iter()
-                .find(|z| !(z.is_finite() && **z >= 0.0))
-            {
-                return Err(DynamicsError::InvalidParameter {
-                    quantity: "damping ratio".into(),
-                    value: *z,
-                    reason: "must be finite and non-negative",
-                });
-            }
-            // Phi = L^-T V with V the eigenvectors of L^-1 Kf L^-T.
-            let l = llt.L().to_owned();
-            let mut x = ints.stiffness.clone();
-            forward_substitute(&l, &mut x); // L^-1 Kf
-            let mut a = x.transpose().to_owned();
-            forward_substitute(&l, &mut a); // L^-1 (L^-1 Kf)^T = L^-1 Kf L^-T
-            let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-            let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
-                DynamicsError::Inconsistent(format!(
-                    "eigen-decomposition failed for link {}",
-                    index + 1
-                ))
-            })?;
-            let v = eig.U().to_owned();
-            let s = eig.S();
-            // Phi = L^-T V: solve L^T Phi = V by back substitution.
-            let mut phi = v.clone();
-            for c in 0..r {
-                for i in (0..r).rev() {
-                    let mut sum = phi[(i, c)];
-                    for p in i + 1..r {
-                        sum -= l[(p, i)] * phi[(p, c)];
-                    }
-                    phi[(i, c)] = sum / l[(i, i)];
-                }
-            }
-            let diag = Mat::from_fn(r, r, |i, j| {
-                if i == j {
-                    2.0 * damping.ratio(i) * s[i].max(0.0).sqrt()
-                } else {
-                    0.0
-                }
-            });
-            to_row_major(&(&phi * &diag * phi.transpose() * &ints.mass))
-        };
+        let damping_op = damping_matrix(link, damping, index)?.map_or_else(Vec::new, |c| apply(&c));
         let flexural = apply(&ints.stiffness);
         let stiffness = (0..r * r)
             .map(|idx| {
