@@ -15,21 +15,22 @@ use std::cell::RefCell;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use dynamics::ModalSystem;
+
 use integrators::OdeSystem;
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, Dim, Dyn, OVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
 use scenarios::Scene;
 use scenarios::work_precision::{
-    DEFAULT_TOLERANCES, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, modal_system,
+    DEFAULT_TOLERANCES, Reference, SceneSystem, WorkPrecisionConfig, WorkPrecisionRow, csv_text,
+    modal_system,
     time_runs,
 };
 
 /// The modal system behind `ode_solvers`' `&self` interface (the flexprr system keeps work
 /// counters, hence `&mut self`).
 struct Modal<'a> {
-    system: &'a RefCell<ModalSystem>,
+    system: &'a RefCell<SceneSystem>,
 }
 
 impl<D: Dim> System<f64, OVector<f64, D>> for Modal<'_>
@@ -64,7 +65,7 @@ type Outcome = (Vec<f64>, (usize, usize, usize));
 
 fn solve<D: Dim>(
     peer: Peer,
-    system: &RefCell<ModalSystem>,
+    system: &RefCell<SceneSystem>,
     dim: D,
     t_out: &[f64],
     rtol: f64,

@@ -24,8 +24,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant as Clock;
 
-use dynamics::ModalSystem;
-use integrators::{Abm, Bdf, Integrator, IntegratorError, Options, Rk45, Solution};
+use dynamics::{CoupledOptions, CoupledSystem, CouplingModel, ModalSystem};
+use integrators::{Abm, Bdf, Integrator, IntegratorError, OdeSystem, Options, Rk45, Solution};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -154,24 +154,102 @@ pub struct Reference {
     pub agreement: Option<AchievedError>,
 }
 
-/// Builds the scene's modal system.
+/// The ODE a scene integrates: the KED modal system or the coupled model
+/// (`model.coupling`), behind one [`OdeSystem`] so every method and tolerance runs on either.
+#[derive(Debug)]
+pub enum SceneSystem {
+    /// Prescribed rigid motion ([`ModalSystem`]).
+    Ked(ModalSystem),
+    /// The coupled model ([`CoupledSystem`]).
+    Coupled(Box<CoupledSystem>),
+}
+
+impl SceneSystem {
+    /// The zero initial state.
+    pub fn initial_state(&self) -> Vec<f64> {
+        match self {
+            SceneSystem::Ked(s) => s.initial_state(),
+            SceneSystem::Coupled(s) => s.initial_state(),
+        }
+    }
+    /// Number of modal coordinates.
+    pub fn modes(&self) -> usize {
+        match self {
+            SceneSystem::Ked(s) => s.modes(),
+            SceneSystem::Coupled(s) => s.modes(),
+        }
+    }
+    /// The first failure met inside the right-hand side.
+    pub fn take_failure(&mut self) -> Option<dynamics::DynamicsError> {
+        match self {
+            SceneSystem::Ked(s) => s.take_failure(),
+            SceneSystem::Coupled(s) => s.take_failure(),
+        }
+    }
+}
+
+impl OdeSystem for SceneSystem {
+    fn dim(&self) -> usize {
+        2 * self.modes()
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+        match self {
+            SceneSystem::Ked(s) => s.rhs(t, y, dy),
+            SceneSystem::Coupled(s) => s.rhs(t, y, dy),
+        }
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: faer::MatMut<'_, f64>) {
+        match self {
+            SceneSystem::Ked(s) => s.jacobian(t, y, jac),
+            SceneSystem::Coupled(s) => s.jacobian(t, y, jac),
+        }
+    }
+    fn has_analytic_jacobian(&self) -> bool {
+        match self {
+            SceneSystem::Ked(s) => s.has_analytic_jacobian(),
+            SceneSystem::Coupled(s) => s.has_analytic_jacobian(),
+        }
+    }
+    fn jacobian_rhs_evaluations(&self) -> usize {
+        match self {
+            SceneSystem::Ked(s) => s.jacobian_rhs_evaluations(),
+            SceneSystem::Coupled(s) => s.jacobian_rhs_evaluations(),
+        }
+    }
+}
+
+/// Builds the system the scene integrates (KED or coupled).
 ///
 /// # Errors
-/// [`ScenarioError::Run`] when the modal operators cannot be formed.
-pub fn modal_system(scene: &Scene) -> Result<ModalSystem, ScenarioError> {
-    ModalSystem::new(
-        scene.machine.clone(),
-        scene.trajectory.clone(),
-        scene.formulation,
-        scene.damping.clone(),
-    )
-    .map_err(|e| ScenarioError::Run(e.to_string()))
+/// [`ScenarioError::Run`] when the operators cannot be formed.
+pub fn modal_system(scene: &Scene) -> Result<SceneSystem, ScenarioError> {
+    let run = |e: dynamics::DynamicsError| ScenarioError::Run(e.to_string());
+    Ok(match scene.coupling {
+        CouplingModel::Ked => SceneSystem::Ked(
+            ModalSystem::new(
+                scene.machine.clone(),
+                scene.trajectory.clone(),
+                scene.formulation,
+                scene.damping.clone(),
+            )
+            .map_err(run)?,
+        ),
+        CouplingModel::Coupled => SceneSystem::Coupled(Box::new(
+            CoupledSystem::new(
+                scene.machine.clone(),
+                scene.trajectory.clone(),
+                scene.damping.clone(),
+                CoupledOptions::full(),
+            )
+            .map_err(run)?,
+        )),
+    })
 }
 
 fn solve_with(
     method: Method,
     options: Options,
-    system: &mut ModalSystem,
+    system: &mut SceneSystem,
     y0: &[f64],
     t_out: &[f64],
 ) -> Result<Solution, IntegratorError> {
@@ -183,7 +261,7 @@ fn solve_with(
     }
 }
 
-fn run_error(system: &mut ModalSystem, method: Method, rtol: f64, e: &IntegratorError) -> String {
+fn run_error(system: &mut SceneSystem, method: Method, rtol: f64, e: &IntegratorError) -> String {
     match system.take_failure() {
         Some(cause) => format!(
             "{} at rtol {rtol:e}: {cause} (integrator: {e})",
