@@ -66,8 +66,6 @@ struct LinkOperators {
     /// `[M^-1 Kf, M^-1 G0, M^-1 G1, M^-1 G2]` entry by entry (row-major), interleaved so that
     /// the right-hand side reads one contiguous stream per row.
     stiffness: Vec<[f64; 4]>,
-    flexural: Vec<f64>,
-    geometric: [Vec<f64>; 3],
     damping: Vec<f64>,
     rho_forcing: Vec<f64>,
     beta_forcing: Vec<f64>,
@@ -181,7 +179,7 @@ impl LinkOperators {
         })?;
         let m_inv = llt.inverse();
         let apply = |m: &Mat<f64>| to_row_major(&(&m_inv * m));
-        let geometric = std::array::from_fn(|n| {
+        let geometric: [Vec<f64>; 3] = std::array::from_fn(|n| {
             let g = &ints.g[n];
             match coupling {
                 Coupling::Full => apply(g),
@@ -212,8 +210,6 @@ impl LinkOperators {
             r,
             length: ints.length,
             stiffness,
-            flexural,
-            geometric,
             damping: damping_op,
             rho_forcing: vec_apply(&ints.mass_psi, 1.0),
             beta_forcing: vec_apply(&ints.mass_xi_psi, ints.length),
@@ -542,10 +538,8 @@ impl OdeSystem for ModalSystem {
             for j in 0..r {
                 for k in 0..r {
                     let idx = j * r + k;
-                    let mut v = -(op.flexural[idx]
-                        + c0 * op.geometric[0][idx]
-                        + c1 * op.geometric[1][idx]
-                        + c2 * op.geometric[2][idx]);
+                    let [kf, g0, g1, g2] = op.stiffness[idx];
+                    let mut v = -(kf + c0 * g0 + c1 * g1 + c2 * g2);
                     if j == k {
                         v += softening;
                     }
