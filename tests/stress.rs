@@ -11,7 +11,7 @@
 //! cases is printed by `cargo test --release --test stress -- --ignored --nocapture`.
 
 use scenarios::classify::{
-    Attempt, Failure, Limits, Outcome, RUNAWAY_DEFLECTION_FRACTION, attempt, deflection_excess,
+    Attempt, Failure, Limits, Outcome, RUNAWAY_DEFLECTION_FRACTION, attempt,
 };
 use scenarios::{Method, ScenarioError, Scene, SceneFile, integrate, parse_scene, run};
 

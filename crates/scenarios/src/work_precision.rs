@@ -159,7 +159,7 @@ pub struct Reference {
 #[derive(Debug)]
 pub enum SceneSystem {
     /// Prescribed rigid motion ([`ModalSystem`]).
-    Ked(ModalSystem),
+    Ked(Box<ModalSystem>),
     /// The coupled model ([`CoupledSystem`]).
     Coupled(Box<CoupledSystem>),
 }
@@ -225,7 +225,7 @@ impl OdeSystem for SceneSystem {
 pub fn modal_system(scene: &Scene) -> Result<SceneSystem, ScenarioError> {
     let run = |e: dynamics::DynamicsError| ScenarioError::Run(e.to_string());
     Ok(match scene.coupling {
-        CouplingModel::Ked => SceneSystem::Ked(
+        CouplingModel::Ked => SceneSystem::Ked(Box::new(
             ModalSystem::new(
                 scene.machine.clone(),
                 scene.trajectory.clone(),
@@ -233,7 +233,7 @@ pub fn modal_system(scene: &Scene) -> Result<SceneSystem, ScenarioError> {
                 scene.damping.clone(),
             )
             .map_err(run)?,
-        ),
+        )),
         CouplingModel::Coupled => SceneSystem::Coupled(Box::new(
             CoupledSystem::new(
                 scene.machine.clone(),

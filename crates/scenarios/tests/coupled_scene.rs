@@ -52,10 +52,10 @@ fn relative_l2(scene: &Scene) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for row in external().iter().filter(|r| r[0] <= 0.1 + 1e-12) {
         let k = (row[0] / 2.5e-4).round() as usize;
-        for i in 1..=3 {
+        for (i, external) in row.iter().enumerate().skip(1) {
             let ours = table.column(&format!("w_{i}_xi0.5_m")).unwrap()[k];
-            num += (ours - row[i]).powi(2);
-            den += row[i].powi(2);
+            num += (ours - external).powi(2);
+            den += external.powi(2);
         }
     }
     (num / den).sqrt()
