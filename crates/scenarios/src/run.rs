@@ -8,10 +8,10 @@ use dynamics::{
     AxialInput, AxialModel, CoupledOptions, CoupledSystem, CouplingModel, FrequencyHistory,
     ModalSystem, end_forces, inverse_dynamics, rigid_kinetic_energy,
 };
-use integrators::{Abm, Bdf, Integrator, OdeSystem, Rk45, Solution, Stats};
+use integrators::{OdeSystem, Solution, Stats};
 
 use crate::error::ScenarioError;
-use crate::scene::{Method, OutputKind, Scene};
+use crate::scene::{OutputKind, Scene};
 
 /// A time-series table: first column `t_s`, then named columns with units in their names.
 #[derive(Debug, Clone, PartialEq)]
@@ -155,12 +155,9 @@ fn solve_with<S: OdeSystem>(
         calls: 0,
         report,
     };
-    let opts = scene.options.clone();
-    match scene.method {
-        Method::Abm => Abm::new(opts).solve(&mut wrapped, t0, y0, t),
-        Method::Rk45 => Rk45::new(opts).solve(&mut wrapped, t0, y0, t),
-        Method::Bdf => Bdf::new(opts).solve(&mut wrapped, t0, y0, t),
-    }
+    scene
+        .method
+        .solve(scene.options.clone(), &mut wrapped, y0, t)
 }
 
 /// Integrates the coupled model (platform moved by the links' foreshortening) of a scene.

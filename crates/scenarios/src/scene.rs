@@ -496,6 +496,26 @@ impl Method {
             Method::Bdf => "bdf",
         }
     }
+
+    /// Integrates `system` from `y0` at `t_out[0]` with this method, output at `t_out`.
+    ///
+    /// # Errors
+    /// The integrator's error.
+    pub fn solve<S: integrators::OdeSystem>(
+        self,
+        options: integrators::Options,
+        system: &mut S,
+        y0: &[f64],
+        t_out: &[f64],
+    ) -> Result<integrators::Solution, integrators::IntegratorError> {
+        use integrators::{Abm, Bdf, Integrator, Rk45};
+        let t0 = t_out[0];
+        match self {
+            Method::Abm => Abm::new(options).solve(system, t0, y0, t_out),
+            Method::Rk45 => Rk45::new(options).solve(system, t0, y0, t_out),
+            Method::Bdf => Bdf::new(options).solve(system, t0, y0, t_out),
+        }
+    }
 }
 
 /// A validated, built scene: ready to run.

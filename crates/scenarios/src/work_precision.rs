@@ -25,7 +25,7 @@ use std::path::Path;
 use std::time::Instant as Clock;
 
 use dynamics::{CoupledOptions, CoupledSystem, CouplingModel, ModalSystem};
-use integrators::{Abm, Bdf, Integrator, IntegratorError, OdeSystem, Options, Rk45, Solution};
+use integrators::{IntegratorError, OdeSystem, Options};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -246,21 +246,6 @@ pub fn modal_system(scene: &Scene) -> Result<SceneSystem, ScenarioError> {
     })
 }
 
-fn solve_with(
-    method: Method,
-    options: Options,
-    system: &mut SceneSystem,
-    y0: &[f64],
-    t_out: &[f64],
-) -> Result<Solution, IntegratorError> {
-    let t0 = t_out[0];
-    match method {
-        Method::Abm => Abm::new(options).solve(system, t0, y0, t_out),
-        Method::Rk45 => Rk45::new(options).solve(system, t0, y0, t_out),
-        Method::Bdf => Bdf::new(options).solve(system, t0, y0, t_out),
-    }
-}
-
 fn run_error(system: &mut SceneSystem, method: Method, rtol: f64, e: &IntegratorError) -> String {
     match system.take_failure() {
         Some(cause) => format!(
@@ -338,14 +323,14 @@ impl Reference {
         let modes = system.modes();
         // A pilot run gives the size of the displacements for the absolute tolerance.
         let pilot_rtol = 1e-8;
-        let pilot = solve_with(
-            Method::Abm,
-            scene.options.clone().rtol(pilot_rtol),
-            &mut system,
-            &y0,
-            &t_out,
-        )
-        .map_err(|e| ScenarioError::Run(run_error(&mut system, Method::Abm, pilot_rtol, &e)))?;
+        let pilot = Method::Abm
+            .solve(
+                scene.options.clone().rtol(pilot_rtol),
+                &mut system,
+                &y0,
+                &t_out,
+            )
+            .map_err(|e| ScenarioError::Run(run_error(&mut system, Method::Abm, pilot_rtol, &e)))?;
         let pilot = Self::from_states(t_out.clone(), pilot.states, modes)
             .map_err(|e| ScenarioError::Run(format!("pilot run for the reference: {e}")))?;
         let rtol = config.reference_rtol;
@@ -353,7 +338,8 @@ impl Reference {
             .rtol(rtol)
             .atol(rtol * pilot.displacement_size);
         let mut solve = |method: Method| {
-            solve_with(method, options.clone(), &mut system, &y0, &t_out)
+            method
+                .solve(options.clone(), &mut system, &y0, &t_out)
                 .map_err(|e| ScenarioError::Run(run_error(&mut system, method, rtol, &e)))
         };
         let main = solve(Method::Rk45)?;
@@ -616,7 +602,7 @@ pub fn measure(
             let atol = reference.atol(rtol);
             let options = Options::default().rtol(rtol).atol(atol);
             let timed = time_runs(config.warmup, config.repeats, || {
-                solve_with(method, options.clone(), &mut system, &y0, t_out)
+                method.solve(options.clone(), &mut system, &y0, t_out)
             });
             let (solution, timing) = match timed {
                 Ok(ok) => ok,
