@@ -13,8 +13,8 @@
 //!
 //! See `docs/architecture.md` for how the layers join.
 
-pub use beam;
-pub use dynamics;
-pub use integrators;
-pub use kinematics;
-pub use scenarios;
+pub use flexprr_beam;
+pub use flexprr_dynamics;
+pub use flexprr_integrators;
+pub use flexprr_kinematics;
+pub use flexprr_scenarios;

@@ -1,7 +1,7 @@
 //! Verification of the consistent formulation (model.md section 6) by two independent means.
 //!
 //! 1. **A second discretization.** The same transverse equation is discretized with cubic
-//!    Hermite finite elements (`beam::HermiteBasis`, pinned-pinned: nodal deflections and
+//!    Hermite finite elements (`flexprr_beam::HermiteBasis`, pinned-pinned: nodal deflections and
 //!    slopes, full consistent mass and stiffness matrices) instead of the sine modes. Both are
 //!    Galerkin projections of one PDE, so as elements and modes are added the mid-point
 //!    deflection histories of the three links on the paper's f = 20 Hz scene must converge to
@@ -31,14 +31,14 @@
 use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 
-use beam::{Basis, GaussLegendre, HermiteBasis, SineBasis, UniformSection};
-use dynamics::{
+use flexprr_beam::{Basis, GaussLegendre, HermiteBasis, SineBasis, UniformSection};
+use flexprr_dynamics::{
     Formulation, LinkModel, Machine, ModalDamping, ModalSystem, inverse_dynamics_full, paper,
 };
-use integrators::{Abm, Integrator, OdeSystem, Options};
-use kinematics::Geometry;
+use flexprr_integrators::{Abm, Integrator, OdeSystem, Options};
+use flexprr_kinematics::Geometry;
 
-/// The paper's machine (model.md sections 1-2, as `dynamics::paper::machine` builds it) with
+/// The paper's machine (model.md sections 1-2, as `flexprr_dynamics::paper::machine` builds it) with
 /// the links discretized by `basis`.
 fn machine_with(basis: Arc<dyn Basis>) -> Arc<Machine> {
     let alpha = paper::ALPHA_DEG.map(f64::to_radians);

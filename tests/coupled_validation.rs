@@ -9,8 +9,10 @@
 
 use std::sync::Arc;
 
-use dynamics::{CoupledOptions, CoupledSystem, Formulation, ModalDamping, ModalSystem, paper};
-use integrators::{Integrator, Options, Rk45};
+use flexprr_dynamics::{
+    CoupledOptions, CoupledSystem, Formulation, ModalDamping, ModalSystem, paper,
+};
+use flexprr_integrators::{Integrator, Options, Rk45};
 
 /// One external history: columns of the CSV by name.
 struct External {

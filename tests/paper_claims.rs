@@ -16,10 +16,10 @@
 
 use std::sync::Arc;
 
-use dynamics::{
+use flexprr_dynamics::{
     AxialModel, Formulation, FrequencyHistory, ModalDamping, ModalSystem, inverse_dynamics, paper,
 };
-use integrators::{Abm, Integrator, Options};
+use flexprr_integrators::{Abm, Integrator, Options};
 
 fn system(frequency: f64, formulation: Formulation) -> ModalSystem {
     let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());

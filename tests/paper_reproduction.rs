@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use dynamics::{Formulation, FrequencyHistory, ModalDamping, ModalSystem, paper};
+use flexprr_dynamics::{Formulation, FrequencyHistory, ModalDamping, ModalSystem, paper};
 
 fn system(frequency: f64, formulation: Formulation) -> ModalSystem {
     let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
@@ -99,7 +99,7 @@ fn relative_error(a: &[f64], b: &[f64]) -> f64 {
 /// displacements and the velocities, with each of the three integrators.
 #[test]
 fn reference_state_at_0_2_s_with_every_integrator() {
-    use integrators::{Abm, Bdf, Integrator, Options, Rk45};
+    use flexprr_integrators::{Abm, Bdf, Integrator, Options, Rk45};
     let reference = reference_state();
     let (eta_ref, rate_ref) = reference.split_at(9);
     let check = |name: &str, y: &[f64]| {

@@ -10,10 +10,10 @@
 //! The full-length runs are `flexprr run configs/stress/<scene>.toml`; the table of all
 //! cases is printed by `cargo test --release --test stress -- --ignored --nocapture`.
 
-use scenarios::classify::{
+use flexprr_scenarios::classify::{
     Attempt, Failure, Limits, Outcome, RUNAWAY_DEFLECTION_FRACTION, attempt,
 };
-use scenarios::{Method, ScenarioError, Scene, SceneFile, integrate, parse_scene, run};
+use flexprr_scenarios::{Method, ScenarioError, Scene, SceneFile, integrate, parse_scene, run};
 
 const METHODS: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
 
@@ -152,8 +152,8 @@ fn many_modes_explicit_methods_solve_or_report_stiffness() {
                     matches!(
                         reason,
                         Failure::Integrator {
-                            error: integrators::IntegratorError::TooManySteps { .. }
-                                | integrators::IntegratorError::Stiff { .. },
+                            error: flexprr_integrators::IntegratorError::TooManySteps { .. }
+                                | flexprr_integrators::IntegratorError::Stiff { .. },
                             ..
                         }
                     ) || a.stats.stiffness_detected_at.is_some(),
@@ -355,14 +355,14 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
     }
 }
 
-/// The after-the-run check `deflection_excess` (proposed for `scenarios::run`) on a plain
-/// `scenarios::integrate`: at 40 Hz the buckling link 3 passes half its length at the output
+/// The after-the-run check `deflection_excess` (proposed for `flexprr_scenarios::run`) on a plain
+/// `flexprr_scenarios::integrate`: at 40 Hz the buckling link 3 passes half its length at the output
 /// sample after the stepwise check of `attempt` found it; the bounded 30 Hz run passes.
 #[test]
 fn runaway_check_after_a_plain_run() {
     let check = |name: &str| {
         let s = scene(name, |_| {});
-        let mut system = dynamics::ModalSystem::new(
+        let mut system = flexprr_dynamics::ModalSystem::new(
             s.machine.clone(),
             s.trajectory.clone(),
             s.formulation,
@@ -438,7 +438,7 @@ fn last_revolution_amplitude_drift(a: &Attempt, r: &Attempt, period: f64) -> f64
         r.result.as_ref().expect("solved"),
     );
     let t_end = sol.t[sol.len() - 1];
-    let peak = |s: &integrators::Solution| {
+    let peak = |s: &flexprr_integrators::Solution| {
         (0..s.len())
             .filter(|&k| s.t[k] >= t_end - period)
             .map(|k| {
@@ -511,7 +511,7 @@ fn max_step_extremes() {
         let a = attempt(&s, m, &Limits::default());
         match &a.result {
             Err(Failure::Integrator {
-                error: integrators::IntegratorError::TooManySteps { t, max_steps },
+                error: flexprr_integrators::IntegratorError::TooManySteps { t, max_steps },
                 ..
             }) => {
                 assert_eq!(*max_steps, 20_000);

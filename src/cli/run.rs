@@ -4,7 +4,9 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use scenarios::{ScenarioError, Scene, run as run_scene, table_one_markdown, write_outputs};
+use flexprr_scenarios::{
+    ScenarioError, Scene, run as run_scene, table_one_markdown, write_outputs,
+};
 
 use super::Failure;
 

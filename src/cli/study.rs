@@ -4,9 +4,9 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use flexprr_scenarios::study::{CaseStatus, Shard, Study, StudyError, StudyOptions};
+use flexprr_scenarios::{merge_studies, run_study};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use scenarios::study::{CaseStatus, Shard, Study, StudyError, StudyOptions};
-use scenarios::{merge_studies, run_study};
 
 use super::Failure;
 

@@ -10,7 +10,7 @@
 //! (or the paper's diagonal eq. 22).
 //!
 //! ```
-//! use beam::{AxialLoad, Coupling, ModalIntegrals, SineBasis, UniformSection, frequencies};
+//! use flexprr_beam::{AxialLoad, Coupling, ModalIntegrals, SineBasis, UniformSection, frequencies};
 //! // The paper's link: l = 0.2 m, t = 2 mm, h = 30 mm, aluminium (E = 7.3e10 Pa).
 //! let section = UniformSection::rectangle(7.3e10, 2770.0, 0.002, 0.03).unwrap();
 //! let integrals = ModalIntegrals::compute(&SineBasis::new(3).unwrap(), &section, 0.2).unwrap();

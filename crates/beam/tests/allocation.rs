@@ -2,8 +2,10 @@
 //! wrapping global allocator; this test binary holds only this test so nothing else runs
 //! concurrently while counting).
 
-use beam::{AxialLoad, Coupling, FrequencySolver, HermiteBasis, ModalIntegrals, UniformSection};
 use faer::Mat;
+use flexprr_beam::{
+    AxialLoad, Coupling, FrequencySolver, HermiteBasis, ModalIntegrals, UniformSection,
+};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 

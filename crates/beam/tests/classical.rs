@@ -2,7 +2,7 @@
 //! orthogonality, Rayleigh quotients, boundary conditions at high mode numbers, and a
 //! second method (Hermite finite elements with the same ends).
 
-use beam::{
+use flexprr_beam::{
     Basis, ClassicalBasis, Coupling, EndCondition, EndConditions, HermiteBasis, ModalIntegrals,
     UniformSection, frequencies,
 };
@@ -182,16 +182,16 @@ fn pinned_free_rigid_rotation_is_neutral_unloaded_and_stiffened_by_tension() {
     let mi =
         ModalIntegrals::compute(&ClassicalBasis::pinned_free(3).unwrap(), &section, 1.0).unwrap();
     let f = frequencies(&mi, &Default::default(), Coupling::Full).unwrap();
-    assert_eq!(f.modes[0].state, beam::ModeState::Neutral);
+    assert_eq!(f.modes[0].state, flexprr_beam::ModeState::Neutral);
     assert!(f.modes[0].frequency_hz.abs() < 1e-12);
     // Under tension P the rigid rotation has omega^2 = P int psi'^2 / (l int rhoA psi^2)
     // = 3P / 1 for psi = sqrt(3) xi, coupled weakly to the elastic modes (Full <= Rayleigh).
-    let load = beam::AxialLoad::uniform(2.0);
+    let load = flexprr_beam::AxialLoad::uniform(2.0);
     let f = frequencies(&mi, &load, Coupling::Diagonal).unwrap();
     assert!((f.modes[0].omega_squared - 6.0).abs() < 1e-12);
     assert_eq!(f.critical_load_factor, None);
     let f = frequencies(&mi, &load.scaled(-1.0), Coupling::Full).unwrap();
-    assert_eq!(f.modes[0].state, beam::ModeState::Buckled);
+    assert_eq!(f.modes[0].state, flexprr_beam::ModeState::Buckled);
     assert!(f.critical_load_factor.unwrap() < 1e-9);
 }
 
@@ -211,7 +211,7 @@ fn critical_load_factor_makes_the_stiffness_singular() {
     // Law: at lambda_c the lowest eigenvalue crosses zero (stable just below, buckled just
     // above), for a non-uniform load, with and without a rigid-body mode (the latter takes
     // the bisection path, the former the buckling eigenproblem).
-    use beam::{AxialLoad, ModeState, SineBasis};
+    use flexprr_beam::{AxialLoad, ModeState, SineBasis};
     let section = UniformSection::rectangle(7.1e10, 2770.0, 0.002, 0.03).unwrap();
     let sine = SineBasis::new(6).unwrap();
     let cantilever = ClassicalBasis::clamped_free(6).unwrap();

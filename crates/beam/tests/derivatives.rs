@@ -1,7 +1,7 @@
 //! Every basis' first and second derivatives against central differences of the function
 //! (and of the first derivative), at random points and modes.
 
-use beam::{Basis, ClassicalBasis, EndCondition, EndConditions, HermiteBasis, SineBasis};
+use flexprr_beam::{Basis, ClassicalBasis, EndCondition, EndConditions, HermiteBasis, SineBasis};
 use proptest::prelude::*;
 
 /// Checks psi' and psi'' at xi by central differences with step h (error O(h^2)).

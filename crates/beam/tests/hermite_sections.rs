@@ -2,7 +2,7 @@
 //! against the exact sine-basis frequencies) and non-uniform sections (closed forms and a
 //! second method).
 
-use beam::{
+use flexprr_beam::{
     AxialLoad, Coupling, EndCondition, EndConditions, HermiteBasis, ModalIntegrals, SineBasis,
     SteppedSection, TaperedSection, UniformSection, frequencies,
 };

@@ -1,7 +1,7 @@
 //! Gauss-Legendre rules against the laws they must satisfy: exactness up to degree 2n - 1,
 //! failure at degree 2n, symmetry, weight sums.
 
-use beam::{CompositeRule, GaussLegendre};
+use flexprr_beam::{CompositeRule, GaussLegendre};
 use proptest::prelude::*;
 
 /// Legendre polynomial P_n by its explicit sum (independent of the recurrence in the crate):

@@ -1,11 +1,11 @@
 //! Sine basis (the paper's): modal integrals against their closed forms, the paper's
 //! frequencies, the exact axially loaded frequencies and an external FE code's values.
 
-use beam::{
+use faer::Mat;
+use flexprr_beam::{
     AxialLoad, Coupling, FrequencySolver, ModalIntegrals, ModeState, SineBasis, UniformSection,
     frequencies,
 };
-use faer::Mat;
 use std::f64::consts::PI;
 
 /// The paper's link (model.md section 2).
@@ -301,8 +301,8 @@ fn public_types_are_thread_safe() {
     fn send_sync<T: Send + Sync>() {}
     send_sync::<FrequencySolver>();
     send_sync::<ModalIntegrals>();
-    send_sync::<beam::LinkFrequencies>();
-    send_sync::<beam::BeamError>();
-    send_sync::<beam::ClassicalBasis>();
-    send_sync::<beam::HermiteBasis>();
+    send_sync::<flexprr_beam::LinkFrequencies>();
+    send_sync::<flexprr_beam::BeamError>();
+    send_sync::<flexprr_beam::ClassicalBasis>();
+    send_sync::<flexprr_beam::HermiteBasis>();
 }

@@ -8,8 +8,10 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use dynamics::{CoupledOptions, CoupledSystem, Formulation, ModalDamping, ModalSystem, paper};
-use integrators::{Abm, Bdf, Integrator, OdeSystem, Options, Rk45};
+use flexprr_dynamics::{
+    CoupledOptions, CoupledSystem, Formulation, ModalDamping, ModalSystem, paper,
+};
+use flexprr_integrators::{Abm, Bdf, Integrator, OdeSystem, Options, Rk45};
 
 fn systems() -> (ModalSystem, CoupledSystem) {
     let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());

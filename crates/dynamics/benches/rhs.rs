@@ -9,8 +9,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use dynamics::{Formulation, ModalDamping, ModalSystem, paper};
-use integrators::{Abm, Bdf, Integrator, OdeSystem, Options, Rk45};
+use flexprr_dynamics::{Formulation, ModalDamping, ModalSystem, paper};
+use flexprr_integrators::{Abm, Bdf, Integrator, OdeSystem, Options, Rk45};
 
 fn system(r: usize, formulation: Formulation) -> ModalSystem {
     let machine = Arc::new(paper::machine(r, paper::YOUNGS_MODULUS).expect("paper machine"));

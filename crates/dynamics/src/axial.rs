@@ -7,8 +7,8 @@
 //!   along-guide part of the slider's force on the link;
 //! * [`JointReactionAxialForce`]: `-F_B.e`, the whole reaction projected on the link.
 
-use beam::AxialLoad;
-use kinematics::LegState;
+use flexprr_beam::AxialLoad;
+use flexprr_kinematics::LegState;
 use nalgebra::Vector2;
 
 use crate::{JointReactions, LinkModel};

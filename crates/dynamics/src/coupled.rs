@@ -47,8 +47,8 @@ use std::str::FromStr;
 use std::sync::Arc;
 
 use faer::{Mat, Side};
-use integrators::OdeSystem;
-use kinematics::{PlatformMotion, Pose, Trajectory};
+use flexprr_integrators::OdeSystem;
+use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 use crate::{DynamicsError, Machine, ModalDamping};
@@ -516,7 +516,7 @@ impl CoupledSystem {
     /// `f_i = (|C_i - B_i|^2 - L_i^2) / 2 = 0` from the nominal pose (the deviation is a
     /// fraction of a millimetre: two or three iterations), then implicit differentiation:
     /// `F q' = (g.u) rho' + L L'`, `F q'' = (g.u) rho'' + L L'' + L'^2 - |g'|^2 + phi'^2 g.r`
-    /// (as [`kinematics::Geometry::forward_motion`], which this inlines to share `F^-1`).
+    /// (as [`flexprr_kinematics::Geometry::forward_motion`], which this inlines to share `F^-1`).
     /// Returns the motion and `F^-1`.
     fn platform_motion(
         &self,
@@ -557,7 +557,7 @@ impl CoupledSystem {
             if iterations == FORWARD_ITERATIONS || !worst.is_finite() {
                 return Err(DynamicsError::Kinematics {
                     t,
-                    source: kinematics::KinematicsError::NoConvergence {
+                    source: flexprr_kinematics::KinematicsError::NoConvergence {
                         iterations,
                         residual: worst,
                     },

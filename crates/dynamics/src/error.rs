@@ -12,7 +12,7 @@ pub enum DynamicsError {
         /// Time (s).
         t: f64,
         /// The kinematic failure.
-        source: kinematics::KinematicsError,
+        source: flexprr_kinematics::KinematicsError,
     },
     /// The platform equilibrium cannot be solved: the link lines are (nearly) concurrent or
     /// parallel, so the axial link forces are not determined (type-II singularity).
@@ -29,7 +29,7 @@ pub enum DynamicsError {
     },
     /// A beam-layer failure (basis, section, eigenproblem).
     #[error(transparent)]
-    Beam(#[from] beam::BeamError),
+    Beam(#[from] flexprr_beam::BeamError),
     /// Invalid machine or model parameters.
     #[error("invalid {quantity} = {value}: {reason}")]
     InvalidParameter {

@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use beam::Coupling;
+use flexprr_beam::Coupling;
 
 use crate::axial::{AxialForceModel, JointReactionAxialForce, NoAxialForce, PaperAxialForce};
 

@@ -8,8 +8,8 @@
 //! link is statically unstable (buckling) at that instant: it is reported as an interval with
 //! its margin, never as NaN.
 
-use beam::{AxialLoad, FrequencySolver};
 use faer::Mat;
+use flexprr_beam::{AxialLoad, FrequencySolver};
 
 use crate::{DynamicsError, ModalSystem};
 

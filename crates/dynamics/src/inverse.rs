@@ -18,7 +18,7 @@
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
-use kinematics::{LegState, MachineState};
+use flexprr_kinematics::{LegState, MachineState};
 use nalgebra::{Vector2, Vector3};
 
 use crate::{DynamicsError, Machine};
@@ -62,7 +62,7 @@ fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
 
 /// Normalised determinant of the platform equilibrium matrix (rows `(e_i, ((C_i - c̄) x e_i)/L)`
 /// scaled to unit length): the same dimensionless type-II measure as
-/// [`kinematics::SingularityMeasures::type_ii`].
+/// [`flexprr_kinematics::SingularityMeasures::type_ii`].
 pub fn equilibrium_measure(state: &MachineState) -> f64 {
     let legs = &state.legs;
     let centroid = (legs[0].c.coords + legs[1].c.coords + legs[2].c.coords) / 3.0;

@@ -5,7 +5,7 @@
 //! * [`AxialForceModel`]: the axial force `P(x)` in each link: none, the paper's eq. (12), or
 //!   the joint-reaction form (model.md section 5).
 //! * [`ModalSystem`]: the modal equations of the three links (eq. 16 or the consistent form
-//!   of model.md section 6) as an [`integrators::OdeSystem`] with an analytic Jacobian.
+//!   of model.md section 6) as an [`flexprr_integrators::OdeSystem`] with an analytic Jacobian.
 //! * [`FrequencyTracker`]: configuration-dependent frequencies (eq. 22 or the generalized
 //!   eigenproblem), buckling detection.
 //! * [`Formulation`]: the named formulations `paper` and `consistent` and their switches.
@@ -34,4 +34,4 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 
-pub use beam::{AxialLoad, Coupling};
+pub use flexprr_beam::{AxialLoad, Coupling};

@@ -2,8 +2,8 @@
 
 use std::sync::Arc;
 
-use beam::{Basis, ModalIntegrals, Section};
-use kinematics::Geometry;
+use flexprr_beam::{Basis, ModalIntegrals, Section};
+use flexprr_kinematics::Geometry;
 
 use crate::DynamicsError;
 

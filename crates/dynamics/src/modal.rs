@@ -1,5 +1,5 @@
 //! The modal system of the three links: the time-varying ODE of eq. (16) (paper) or of
-//! model.md section 6 (consistent), as an [`integrators::OdeSystem`].
+//! model.md section 6 (consistent), as an [`flexprr_integrators::OdeSystem`].
 //!
 //! State: `y = (eta_1, eta_2, eta_3, eta_1', eta_2', eta_3')` with `eta_i` the `r_i` modal
 //! coordinates of link `i` (the paper's ordering, eq. 3). For link `i`:
@@ -16,11 +16,11 @@
 
 use std::sync::Arc;
 
-use beam::{AxialLoad, Coupling};
 use faer::linalg::solvers::DenseSolveCore;
 use faer::{Mat, MatMut, Side};
-use integrators::OdeSystem;
-use kinematics::{MachineState, Trajectory};
+use flexprr_beam::{AxialLoad, Coupling};
+use flexprr_integrators::OdeSystem;
+use flexprr_kinematics::{MachineState, Trajectory};
 
 use crate::axial::{AxialForceModel, AxialInput};
 use crate::inverse::{ElasticInertia, JointReactions, inverse_dynamics};

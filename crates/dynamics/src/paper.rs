@@ -8,8 +8,8 @@
 
 use std::sync::Arc;
 
-use beam::{SineBasis, UniformSection};
-use kinematics::{Circle, Geometry};
+use flexprr_beam::{SineBasis, UniformSection};
+use flexprr_kinematics::{Circle, Geometry};
 
 use crate::{DynamicsError, LinkModel, Machine};
 
@@ -43,7 +43,7 @@ pub fn machine(r: usize, youngs_modulus: f64) -> Result<Machine, DynamicsError> 
     let geometry = Geometry::radial(alpha, LINK_LENGTH, PLATFORM_SIDE, HALF_TRAVEL)
         .map_err(|source| DynamicsError::Kinematics { t: 0.0, source })?;
     let section = UniformSection::rectangle(youngs_modulus, DENSITY, THICKNESS, HEIGHT)?;
-    let basis: Arc<dyn beam::Basis> = Arc::new(SineBasis::new(r)?);
+    let basis: Arc<dyn flexprr_beam::Basis> = Arc::new(SineBasis::new(r)?);
     let link = LinkModel::new(basis, &section, LINK_LENGTH)?;
     Machine::new(
         geometry,

@@ -14,13 +14,13 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::Arc;
 
-use dynamics::{
+use faer::Mat;
+use flexprr_dynamics::{
     CoupledOptions, CoupledSystem, CouplingModel, DynamicsError, Formulation, ModalDamping,
     ModalSystem, end_forces, inverse_dynamics, paper,
 };
-use faer::Mat;
-use integrators::{Abm, Bdf, Integrator, OdeSystem, Options, Rk45};
-use kinematics::{Line, Pose, Trajectory};
+use flexprr_integrators::{Abm, Bdf, Integrator, OdeSystem, Options, Rk45};
+use flexprr_kinematics::{Line, Pose, Trajectory};
 use proptest::prelude::*;
 
 // --- allocation counting on the current thread only (tests run in parallel threads) ---
@@ -53,7 +53,7 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-fn machine() -> Arc<dynamics::Machine> {
+fn machine() -> Arc<flexprr_dynamics::Machine> {
     Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap())
 }
 
@@ -306,7 +306,7 @@ fn foreshortening_couples_the_links_at_first_order() {
 
 /// At `eta = 0` the chord tensions and driving forces are the inverse-dynamics ones with the
 /// links' elastic inertia for the coupled model's own `eta''` (model.md section 4 plus
-/// [`dynamics::ElasticInertia`], computed by the separate 3x3 reduction of `inverse_dynamics`).
+/// [`flexprr_dynamics::ElasticInertia`], computed by the separate 3x3 reduction of `inverse_dynamics`).
 #[test]
 fn rigid_limit_forces_are_the_inverse_dynamics_forces() {
     let m = machine();
@@ -330,7 +330,7 @@ fn rigid_limit_forces_are_the_inverse_dynamics_forces() {
         let reactions = inverse_dynamics(&m, &state, Some(&elastic), t).unwrap();
         let model = Formulation::consistent().axial.model();
         for i in 0..3 {
-            let load = model.load(&dynamics::AxialInput {
+            let load = model.load(&flexprr_dynamics::AxialInput {
                 leg: &state.legs[i],
                 guide_direction: m.geometry.legs[i].guide.direction.into_inner(),
                 link: &m.links[i],
@@ -386,7 +386,7 @@ fn platform_motion_is_consistent_along_a_solution() {
             assert!((chord - (leg.link_length - delta[i])).abs() < 1e-14);
             assert!((chord - mid.chord_length[i]).abs() < 1e-14);
         }
-        let q = |o: &dynamics::CoupledOutput| o.platform.pose.to_vector();
+        let q = |o: &flexprr_dynamics::CoupledOutput| o.platform.pose.to_vector();
         let dq = (q(&outs[2]) - q(&outs[0])) / (2.0 * h);
         let dv = (outs[2].platform.velocity - outs[0].platform.velocity) / (2.0 * h);
         let v = mid.platform.velocity;

@@ -1,11 +1,11 @@
 //! Rigid inverse dynamics against independent checks: the full 12-equation system, the power
 //! balance `sum F_ai rho_i' = dT/dt`, the link's own equilibrium, and the type-II error.
 
-use dynamics::{
+use flexprr_dynamics::{
     DynamicsError, Formulation, Machine, ModalDamping, ModalSystem, end_forces, inverse_dynamics,
     inverse_dynamics_full, paper, rigid_kinetic_energy,
 };
-use kinematics::{PlatformMotion, Pose, Trajectory};
+use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::Vector3;
 use proptest::prelude::*;
 use std::sync::Arc;

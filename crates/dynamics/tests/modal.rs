@@ -11,14 +11,14 @@ use std::cell::Cell;
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-use beam::{Basis, GaussLegendre, HermiteBasis, UniformSection};
-use dynamics::{
+use faer::Mat;
+use flexprr_beam::{Basis, GaussLegendre, HermiteBasis, UniformSection};
+use flexprr_dynamics::{
     AxialModel, Coupling, DynamicsError, Formulation, LinkModel, Machine, ModalDamping,
     ModalSystem, inverse_dynamics_full, paper,
 };
-use faer::Mat;
-use integrators::{Integrator, OdeSystem, Options, Rk45};
-use kinematics::{PlatformMotion, Pose, Trajectory};
+use flexprr_integrators::{Integrator, OdeSystem, Options, Rk45};
+use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 
 // ---------------------------------------------------------------------------------------
 // Allocation counter (per thread, so that tests running in parallel do not disturb each other).

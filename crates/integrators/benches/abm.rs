@@ -12,8 +12,8 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use integrators::test_problems::{HarmonicOscillator, TestProblem, VanDerPol};
-use integrators::{Abm, Integrator, OdeSystem, Options};
+use flexprr_integrators::test_problems::{HarmonicOscillator, TestProblem, VanDerPol};
+use flexprr_integrators::{Abm, Integrator, OdeSystem, Options};
 
 /// `q_j'' = -omega_j^2 q_j`, `omega_j = j^2`, as a first-order system of `2 m` states.
 struct ModalLadder {

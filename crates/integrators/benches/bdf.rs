@@ -6,8 +6,8 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use faer::MatMut;
-use integrators::test_problems::{HarmonicOscillator, Robertson, VanDerPol};
-use integrators::{Bdf, Integrator, OdeSystem, Options};
+use flexprr_integrators::test_problems::{HarmonicOscillator, Robertson, VanDerPol};
+use flexprr_integrators::{Bdf, Integrator, OdeSystem, Options};
 
 /// `modes` lightly damped oscillators `q'' + 2 zeta w q' + w^2 q + c sum(q) = cos(t)` with
 /// natural frequencies from 1 to 1000 rad/s and a weak all-to-all stiffness coupling `c`, so

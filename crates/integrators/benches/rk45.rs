@@ -7,8 +7,8 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use integrators::test_problems::{HarmonicOscillator, VanDerPol};
-use integrators::{Integrator, Options, Rk45};
+use flexprr_integrators::test_problems::{HarmonicOscillator, VanDerPol};
+use flexprr_integrators::{Integrator, Options, Rk45};
 
 fn benches(c: &mut Criterion) {
     let mut group = c.benchmark_group("rk45");

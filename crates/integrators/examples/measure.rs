@@ -1,10 +1,10 @@
 //! Prints the "Measured, all methods" table of `docs/integrators.md`:
 //! `cargo run --release -p flexprr-integrators --example measure`.
 
-use integrators::test_problems::{
+use flexprr_integrators::test_problems::{
     ForcedOscillator, HarmonicOscillator, Robertson, TestProblem, VanDerPol,
 };
-use integrators::{Abm, Bdf, Integrator, Options, Rk45};
+use flexprr_integrators::{Abm, Bdf, Integrator, Options, Rk45};
 
 fn row<I: Integrator, P: TestProblem>(method: &I, mut problem: P, label: &str) {
     let y0 = problem.y0();

@@ -111,8 +111,8 @@ impl BdfVariant {
 /// Variable-step, variable-order BDF/NDF for stiff systems (see the module documentation).
 ///
 /// ```
-/// use integrators::{Bdf, Integrator, Options};
-/// use integrators::test_problems::{Robertson, TestProblem};
+/// use flexprr_integrators::{Bdf, Integrator, Options};
+/// use flexprr_integrators::test_problems::{Robertson, TestProblem};
 ///
 /// let mut p = Robertson::default();
 /// let opts = Options::default().rtol(1e-4).atol_per_component(vec![1e-8, 1e-14, 1e-6]);

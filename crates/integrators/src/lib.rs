@@ -17,7 +17,7 @@
 //! its configuration; [`Integrator::solve`] (dense output at requested times) comes free.
 //!
 //! ```
-//! use integrators::{Integrator, OdeSystem, Options, Rk45};
+//! use flexprr_integrators::{Integrator, OdeSystem, Options, Rk45};
 //!
 //! /// y'' = -y as a first-order system.
 //! struct Oscillator;

@@ -105,8 +105,8 @@ pub enum StiffnessDetection {
 /// (`rtol` about 1e-3 to 1e-9).
 ///
 /// ```
-/// use integrators::{Integrator, Rk45, StiffnessDetection, Options};
-/// use integrators::test_problems::{HarmonicOscillator, TestProblem};
+/// use flexprr_integrators::{Integrator, Rk45, StiffnessDetection, Options};
+/// use flexprr_integrators::test_problems::{HarmonicOscillator, TestProblem};
 ///
 /// let mut p = HarmonicOscillator::default();
 /// let rk = Rk45::new(Options::default().rtol(1e-8).atol(1e-10))

@@ -5,11 +5,13 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use integrators::abm::AbmStepper;
-use integrators::test_problems::{
+use flexprr_integrators::abm::AbmStepper;
+use flexprr_integrators::test_problems::{
     ForcedOscillator, HarmonicOscillator, Mathieu, StiffLinear, TestProblem, VanDerPol,
 };
-use integrators::{Abm, Integrator, IntegratorError, OdeSystem, Options, Rk45, Stats, Stepper};
+use flexprr_integrators::{
+    Abm, Integrator, IntegratorError, OdeSystem, Options, Rk45, Stats, Stepper,
+};
 use proptest::prelude::*;
 
 // ---------------------------------------------------------------------------------------
@@ -57,7 +59,11 @@ fn grid(t0: f64, t_end: f64, n: usize) -> Vec<f64> {
 }
 
 /// Largest absolute error against the exact solution over the output times.
-fn max_error_vs_exact<P: TestProblem>(p: &P, t: &[f64], sol: &integrators::Solution) -> f64 {
+fn max_error_vs_exact<P: TestProblem>(
+    p: &P,
+    t: &[f64],
+    sol: &flexprr_integrators::Solution,
+) -> f64 {
     let mut e: f64 = 0.0;
     for (k, &tk) in t.iter().enumerate() {
         let exact = p.exact(tk).expect("problem has a closed form");
@@ -557,7 +563,7 @@ fn start_phase_step_count_matches_hand_count() {
 fn modal_ladder_of_thirty_modes() {
     let p = ModalLadder::new(30, 1.0);
     let t = grid(0.0, 2.0, 40);
-    let error = |sol: &integrators::Solution| {
+    let error = |sol: &flexprr_integrators::Solution| {
         let mut e: f64 = 0.0;
         for (k, &tk) in t.iter().enumerate() {
             let exact = p.exact(tk);

@@ -7,11 +7,11 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use faer::MatMut;
-use integrators::bdf::BdfVariant;
-use integrators::test_problems::{
+use flexprr_integrators::bdf::BdfVariant;
+use flexprr_integrators::test_problems::{
     ForcedOscillator, HarmonicOscillator, Mathieu, Robertson, StiffLinear, TestProblem, VanDerPol,
 };
-use integrators::{Bdf, Integrator, IntegratorError, OdeSystem, Options, Rk45, Stepper};
+use flexprr_integrators::{Bdf, Integrator, IntegratorError, OdeSystem, Options, Rk45, Stepper};
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counter (per thread, so parallel tests do not disturb each other).

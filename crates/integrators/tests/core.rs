@@ -5,10 +5,10 @@
 //! fixed grid, so any error it shows comes from the plumbing, not from a method.
 
 use faer::Mat;
-use integrators::test_problems::{
+use flexprr_integrators::test_problems::{
     ForcedOscillator, HarmonicOscillator, Mathieu, Robertson, StiffLinear, TestProblem, VanDerPol,
 };
-use integrators::{
+use flexprr_integrators::{
     Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper, error_norm,
     finite_difference_jacobian, initial_step,
 };

@@ -1,10 +1,10 @@
 //! Tests of the Dormand-Prince 5(4) integrator against closed-form solutions, an independent
 //! fixed-step classical Runge-Kutta reference, published step counts and error laws.
 
-use integrators::test_problems::{
+use flexprr_integrators::test_problems::{
     ForcedOscillator, HarmonicOscillator, Mathieu, StiffLinear, TestProblem, VanDerPol,
 };
-use integrators::{
+use flexprr_integrators::{
     Integrator, IntegratorError, OdeSystem, Options, Rk45, Stepper, StiffnessDetection,
 };
 use proptest::prelude::*;

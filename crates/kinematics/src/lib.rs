@@ -18,7 +18,7 @@
 //! Conventions, equations and thresholds are in the workspace's `docs/kinematics.md`.
 //!
 //! ```
-//! use kinematics::{validate_trajectory, Circle, Geometry, Pose};
+//! use flexprr_kinematics::{validate_trajectory, Circle, Geometry, Pose};
 //!
 //! let geometry = Geometry::paper();
 //! let circle = Circle::paper(20.0).unwrap();

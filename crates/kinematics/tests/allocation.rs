@@ -4,7 +4,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use kinematics::{Circle, Geometry, Trajectory};
+use flexprr_kinematics::{Circle, Geometry, Trajectory};
 
 struct Counting;
 

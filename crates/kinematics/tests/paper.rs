@@ -5,7 +5,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use kinematics::{
+use flexprr_kinematics::{
     Circle, Geometry, KinematicsError, PlatformMotion, Pose, SingularityKind, Trajectory,
     validate_trajectory,
 };
@@ -249,7 +249,7 @@ fn invalid_geometry_is_rejected() {
     ));
     assert!(Geometry::radial([0.0, 1.0, 2.0], 0.2, -0.1, 0.2).is_err());
     assert!(
-        g.with_thresholds(kinematics::Thresholds {
+        g.with_thresholds(flexprr_kinematics::Thresholds {
             type_i: f64::NAN,
             type_ii: 0.1
         })

@@ -7,7 +7,7 @@
 mod common;
 
 use common::{Case, angle_diff, arb_case, leg_through, min_measure, rotate, unit};
-use kinematics::{
+use flexprr_kinematics::{
     Branch, Geometry, KinematicsError, LegDrive, PlatformMotion, Pose, SingularityKind, Thresholds,
 };
 use nalgebra::{Vector2, Vector3};
@@ -380,7 +380,7 @@ proptest! {
         let sc = case.scale;
         let pose = case.pose;
         let concurrency = Vector2::new(pose.x, pose.y) + sc * Vector2::new(point[0], point[1]);
-        let legs: [kinematics::Leg; 3] = std::array::from_fn(|i| {
+        let legs: [flexprr_kinematics::Leg; 3] = std::array::from_fn(|i| {
             let attachment = case.geometry.legs[i].attachment;
             let c = Vector2::new(pose.x, pose.y) + rotate(&attachment, pose.phi);
             let to_point = concurrency - c;
@@ -410,7 +410,7 @@ proptest! {
         let m = g.singularity(&case.pose).unwrap();
         let shift = Vector2::new(shift[0], shift[1]);
         let map = |v: Vector2<f64>| k * rotate(&v, turn) + shift;
-        let legs: [kinematics::Leg; 3] = std::array::from_fn(|i| {
+        let legs: [flexprr_kinematics::Leg; 3] = std::array::from_fn(|i| {
             let mut leg = g.legs[i];
             leg.guide.anchor = nalgebra::Point2::from(map(leg.guide.anchor.coords));
             leg.guide.direction = nalgebra::Unit::new_normalize(rotate(&leg.guide.direction, turn));

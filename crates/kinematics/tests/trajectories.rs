@@ -6,7 +6,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use kinematics::{
+use flexprr_kinematics::{
     Circle, Line, PlatformMotion, PointToPoint, Pose, Profile, Trajectory, WaypointSpline,
 };
 use nalgebra::{Point2, Vector3};
@@ -219,15 +219,15 @@ fn trajectories_are_object_safe() {
     assert_eq!(durations[1], None);
     assert!((durations[2].unwrap() - 0.5).abs() < 1e-15);
     assert!((durations[3].unwrap() - 1.0).abs() < 1e-15);
-    let geometry = kinematics::Geometry::paper();
+    let geometry = flexprr_kinematics::Geometry::paper();
     // The small moves around the type-II singular home pose are rejected by validation.
-    let err =
-        kinematics::validate_trajectory(&geometry, list[3].as_ref(), 0.0, 1.0, 11).unwrap_err();
+    let err = flexprr_kinematics::validate_trajectory(&geometry, list[3].as_ref(), 0.0, 1.0, 11)
+        .unwrap_err();
     assert!(matches!(
         err.innermost(),
-        kinematics::KinematicsError::Singular { .. }
+        flexprr_kinematics::KinematicsError::Singular { .. }
     ));
-    assert!(kinematics::validate_trajectory(&geometry, &list[0], 0.0, 0.05, 101).is_ok());
+    assert!(flexprr_kinematics::validate_trajectory(&geometry, &list[0], 0.0, 0.05, 101).is_ok());
 }
 
 /// Invalid trajectory parameters are errors, not panics.

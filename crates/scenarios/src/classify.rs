@@ -17,8 +17,8 @@
 use std::fmt;
 use std::time::Instant as Clock;
 
-use dynamics::{DynamicsError, ModalSystem};
-use integrators::{
+use flexprr_dynamics::{DynamicsError, ModalSystem};
+use flexprr_integrators::{
     Abm, Bdf, Integrator, IntegratorError, OdeSystem, Rk45, Solution, Stats, Stepper,
 };
 

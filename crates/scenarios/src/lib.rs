@@ -2,7 +2,7 @@
 //! requested outputs, and writing CSV tables, `summary.json` and SVG plots.
 //!
 //! ```no_run
-//! use scenarios::{Scene, run, write_outputs};
+//! use flexprr_scenarios::{Scene, run, write_outputs};
 //! let scene = Scene::load(std::path::Path::new("configs/paper_f20.toml")).unwrap();
 //! let result = run(&scene, &mut |_| {}).unwrap();
 //! write_outputs(&scene, &result, std::path::Path::new("out/paper_f20")).unwrap();

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use beam::{
+use flexprr_beam::{
     Basis, ClassicalBasis, EndCondition, EndConditions, HermiteBasis, Section, SineBasis,
     SteppedSection, TaperedSection, UniformSection,
 };
@@ -121,7 +121,7 @@ pub fn build_section(
     section: &SectionConfig,
 ) -> Result<Box<dyn Section>, (String, String)> {
     let (e, rho) = (material.youngs_modulus, material.density);
-    fn wrap(key: &'static str) -> impl Fn(beam::BeamError) -> (String, String) {
+    fn wrap(key: &'static str) -> impl Fn(flexprr_beam::BeamError) -> (String, String) {
         move |err| (key.to_string(), err.to_string())
     }
     Ok(match section {
@@ -154,7 +154,7 @@ pub fn build_section(
 /// Builds the basis with `modes` functions (for Hermite, the element count decides the size
 /// and `modes` must not exceed it); errors name the offending key.
 pub fn build_basis(basis: &BasisConfig, modes: usize) -> Result<Arc<dyn Basis>, (String, String)> {
-    fn wrap(key: &'static str) -> impl Fn(beam::BeamError) -> (String, String) {
+    fn wrap(key: &'static str) -> impl Fn(flexprr_beam::BeamError) -> (String, String) {
         move |err| (key.to_string(), err.to_string())
     }
     Ok(match basis {

@@ -4,11 +4,11 @@
 
 use std::time::Instant as Clock;
 
-use dynamics::{
+use flexprr_dynamics::{
     AxialInput, AxialModel, CoupledOptions, CoupledSystem, CouplingModel, FrequencyHistory,
     ModalSystem, end_forces, inverse_dynamics, rigid_kinetic_energy,
 };
-use integrators::{OdeSystem, Solution, Stats};
+use flexprr_integrators::{OdeSystem, Solution, Stats};
 
 use crate::error::ScenarioError;
 use crate::scene::{OutputKind, Scene};
@@ -145,7 +145,7 @@ fn solve_with<S: OdeSystem>(
     system: &mut S,
     y0: &[f64],
     report: &mut dyn FnMut(f64),
-) -> Result<Solution, integrators::IntegratorError> {
+) -> Result<Solution, flexprr_integrators::IntegratorError> {
     let t = &scene.output_times;
     let (t0, span) = (t[0], t[t.len() - 1] - t[0]);
     let mut wrapped = Progress {
@@ -220,7 +220,7 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
     let mut system = new_system(scene, false)?;
     let machine = scene.machine.clone();
     let modes: [usize; 3] = std::array::from_fn(|i| machine.links[i].modes());
-    let run_err = |e: dynamics::DynamicsError| ScenarioError::Run(e.to_string());
+    let run_err = |e: flexprr_dynamics::DynamicsError| ScenarioError::Run(e.to_string());
 
     // The coupled model replaces the KED integration (and gives the actual axial and
     // driving forces and the platform's deviation).
@@ -265,7 +265,9 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
             let state = machine
                 .geometry
                 .inverse_kinematics_unchecked(&motion)
-                .map_err(|source| run_err(dynamics::DynamicsError::Kinematics { t: tk, source }))?;
+                .map_err(|source| {
+                    run_err(flexprr_dynamics::DynamicsError::Kinematics { t: tk, source })
+                })?;
             cols[0].push(motion.pose.x);
             cols[1].push(motion.pose.y);
             cols[2].push(motion.pose.phi);
@@ -324,7 +326,9 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
             let state = machine
                 .geometry
                 .inverse_kinematics_unchecked(&motion)
-                .map_err(|source| run_err(dynamics::DynamicsError::Kinematics { t: tk, source }))?;
+                .map_err(|source| {
+                    run_err(flexprr_dynamics::DynamicsError::Kinematics { t: tk, source })
+                })?;
             stats.inverse_dynamics_solves += 1;
             let rigid = inverse_dynamics(&machine, &state, None, tk).map_err(run_err)?;
             for i in 0..3 {
@@ -528,7 +532,7 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
                     .geometry
                     .inverse_kinematics_unchecked(&scene.trajectory.motion(tk))
                     .map_err(|source| {
-                        run_err(dynamics::DynamicsError::Kinematics { t: tk, source })
+                        run_err(flexprr_dynamics::DynamicsError::Kinematics { t: tk, source })
                     })?;
                 let mut c = 0;
                 for (i, &r) in modes.iter().enumerate() {
@@ -563,7 +567,7 @@ pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, Scen
                     .geometry
                     .inverse_kinematics_unchecked(&scene.trajectory.motion(tk))
                     .map_err(|source| {
-                        run_err(dynamics::DynamicsError::Kinematics { t: tk, source })
+                        run_err(flexprr_dynamics::DynamicsError::Kinematics { t: tk, source })
                     })?;
                 rigid.push(rigid_kinetic_energy(&machine, &state));
             }

@@ -10,11 +10,11 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
-use dynamics::{
+use flexprr_dynamics::{
     AxialModel, Coupling, CouplingModel, Formulation, LinkModel, Machine, ModalDamping,
 };
-use integrators::Options;
-use kinematics::{
+use flexprr_integrators::Options;
+use flexprr_kinematics::{
     Branch, Circle, Geometry, Guide, Leg, Line, PointToPoint, Pose, Profile, Trajectory,
     WaypointSpline, validate_trajectory,
 };
@@ -501,14 +501,14 @@ impl Method {
     ///
     /// # Errors
     /// The integrator's error.
-    pub fn solve<S: integrators::OdeSystem>(
+    pub fn solve<S: flexprr_integrators::OdeSystem>(
         self,
-        options: integrators::Options,
+        options: flexprr_integrators::Options,
         system: &mut S,
         y0: &[f64],
         t_out: &[f64],
-    ) -> Result<integrators::Solution, integrators::IntegratorError> {
-        use integrators::{Abm, Bdf, Integrator, Rk45};
+    ) -> Result<flexprr_integrators::Solution, flexprr_integrators::IntegratorError> {
+        use flexprr_integrators::{Abm, Bdf, Integrator, Rk45};
         let t0 = t_out[0];
         match self {
             Method::Abm => Abm::new(options).solve(system, t0, y0, t_out),
@@ -1118,7 +1118,7 @@ impl Scene {
         validate_trajectory(&machine.geometry, trajectory.as_ref(), t0, t1, checks).map_err(
             |e| {
                 let pose = match &e {
-                    kinematics::KinematicsError::AtTime { t, .. } => {
+                    flexprr_kinematics::KinematicsError::AtTime { t, .. } => {
                         let p = trajectory.motion(*t).pose;
                         format!(
                             " (pose x = {:.4} m, y = {:.4} m, phi = {:.2} deg)",

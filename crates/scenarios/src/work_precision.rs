@@ -24,8 +24,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant as Clock;
 
-use dynamics::{CoupledOptions, CoupledSystem, CouplingModel, ModalSystem};
-use integrators::{IntegratorError, OdeSystem, Options};
+use flexprr_dynamics::{CoupledOptions, CoupledSystem, CouplingModel, ModalSystem};
+use flexprr_integrators::{IntegratorError, OdeSystem, Options};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -180,7 +180,7 @@ impl SceneSystem {
         }
     }
     /// The first failure met inside the right-hand side.
-    pub fn take_failure(&mut self) -> Option<dynamics::DynamicsError> {
+    pub fn take_failure(&mut self) -> Option<flexprr_dynamics::DynamicsError> {
         match self {
             SceneSystem::Ked(s) => s.take_failure(),
             SceneSystem::Coupled(s) => s.take_failure(),
@@ -223,7 +223,7 @@ impl OdeSystem for SceneSystem {
 /// # Errors
 /// [`ScenarioError::Run`] when the operators cannot be formed.
 pub fn modal_system(scene: &Scene) -> Result<SceneSystem, ScenarioError> {
-    let run = |e: dynamics::DynamicsError| ScenarioError::Run(e.to_string());
+    let run = |e: flexprr_dynamics::DynamicsError| ScenarioError::Run(e.to_string());
     Ok(match scene.coupling {
         CouplingModel::Ked => SceneSystem::Ked(Box::new(
             ModalSystem::new(

@@ -1,7 +1,7 @@
 //! A scene with `coupling = "coupled"` runs the coupled model and agrees with the external
 //! Exudyn model of `validation/` (independent data), while the KED twin does not.
 
-use scenarios::{Scene, run};
+use flexprr_scenarios::{Scene, run};
 
 fn scene(coupling: &str) -> Scene {
     let text = format!(

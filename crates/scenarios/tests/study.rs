@@ -4,11 +4,11 @@
 
 use std::path::{Path, PathBuf};
 
-use scenarios::study::{
+use flexprr_scenarios::study::{
     CaseStatus, RangeConfig, Shard, Spacing, Study, StudyOptions, merge_studies, read_case_records,
     run_study,
 };
-use scenarios::{Scene, run};
+use flexprr_scenarios::{Scene, run};
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs")

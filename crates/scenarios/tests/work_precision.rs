@@ -3,10 +3,10 @@
 //! check and with a third method, the error measure and the equal-error interpolation match
 //! closed forms, and the CSV carries every column.
 
-use integrators::{Bdf, Integrator, Options};
-use scenarios::Method;
-use scenarios::Scene;
-use scenarios::work_precision::{
+use flexprr_integrators::{Bdf, Integrator, Options};
+use flexprr_scenarios::Method;
+use flexprr_scenarios::Scene;
+use flexprr_scenarios::work_precision::{
     PACKAGE, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, markdown_at_error,
     modal_system, read_csv, time_at_error, work_precision,
 };

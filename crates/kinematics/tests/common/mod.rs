@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use kinematics::{Branch, Geometry, Guide, Leg, Pose};
+use flexprr_kinematics::{Branch, Geometry, Guide, Leg, Pose};
 use nalgebra::{Point2, Unit, Vector2};
 use proptest::prelude::*;
 
