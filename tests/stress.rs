@@ -10,10 +10,10 @@
 //! The full-length runs are `flexprr run configs/stress/<scene>.toml`; the table of all
 //! cases is printed by `cargo test --release --test stress -- --ignored --nocapture`.
 
-use flexprr_scenarios::classify::{
-    Attempt, Failure, Limits, Outcome, RUNAWAY_DEFLECTION_FRACTION, attempt,
-};
-use flexprr_scenarios::{Method, ScenarioError, Scene, SceneFile, integrate, parse_scene, run};
+use flexprr_bench::classify::{Attempt, Failure, Limits, Outcome, attempt};
+use flexprr_run::guard::RUNAWAY_DEFLECTION_FRACTION;
+use flexprr_run::{integrate, run};
+use flexprr_scene::{Method, ScenarioError, Scene, SceneFile, parse_scene};
 
 const METHODS: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
 
@@ -355,8 +355,8 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
     }
 }
 
-/// The after-the-run check `deflection_excess` (proposed for `flexprr_scenarios::run`) on a plain
-/// `flexprr_scenarios::integrate`: at 40 Hz the buckling link 3 passes half its length at the output
+/// The after-the-run check `deflection_excess` (proposed for `flexprr_run::run`) on a plain
+/// `flexprr_run::integrate`: at 40 Hz the buckling link 3 passes half its length at the output
 /// sample after the stepwise check of `attempt` found it; the bounded 30 Hz run passes.
 #[test]
 fn runaway_check_after_a_plain_run() {

@@ -3,16 +3,14 @@
 //!
 //! The link file (see `configs/link_paper.toml` and `docs/beam.md`) gives the material, the
 //! section, the length, the assumed-mode basis, the number of modes, the coupling and the load.
-//! The material, section and basis tables are the scenarios layer's ([`flexprr_scenarios::link`]),
+//! The material, section and basis tables are the scenarios layer's ([`flexprr_scene::link`]),
 //! shared with scene files.
 
 use std::sync::Arc;
 
 use super::Failure;
 use flexprr_beam::{AxialLoad, Basis, Coupling, LinkFrequencies, ModalIntegrals, frequencies};
-use flexprr_scenarios::link::{
-    BasisConfig, MaterialConfig, SectionConfig, build_basis, build_section,
-};
+use flexprr_scene::link::{BasisConfig, MaterialConfig, SectionConfig, build_basis, build_section};
 use serde::Deserialize;
 
 /// Arguments of `flexprr beam`.
@@ -77,7 +75,7 @@ pub struct LoadConfig {
 /// Parses a link file; errors say where (`file:line:column`), which key and what was expected
 /// (the same reporting as scene files).
 pub fn parse_link_file(file: &str, text: &str) -> Result<LinkFile, String> {
-    flexprr_scenarios::parse_toml(file, text).map_err(|e| e.to_string())
+    flexprr_scene::parse_toml(file, text).map_err(|e| e.to_string())
 }
 
 /// A link built from a file: basis, section and its integrals.

@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use flexprr_scenarios::Scene;
+use flexprr_scene::Scene;
 
 use super::Failure;
 use super::run::failure;

@@ -4,9 +4,8 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use flexprr_scenarios::{
-    ScenarioError, Scene, run as run_scene, table_one_markdown, write_outputs,
-};
+use flexprr_run::{run as run_scene, table_one_markdown, write_outputs};
+use flexprr_scene::{ScenarioError, Scene};
 
 use super::Failure;
 

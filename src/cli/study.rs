@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use flexprr_scenarios::study::{CaseStatus, Shard, Study, StudyError, StudyOptions};
-use flexprr_scenarios::{merge_studies, run_study};
+use flexprr_studies::study::{CaseStatus, Shard, Study, StudyError, StudyOptions};
+use flexprr_studies::{merge_studies, run_study};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::Failure;

@@ -3,11 +3,11 @@
 
 use std::path::PathBuf;
 
-use flexprr_scenarios::work_precision::{
+use flexprr_bench::work_precision::{
     Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, markdown_at_error, markdown_rows,
     measure, read_csv, write_svg,
 };
-use flexprr_scenarios::{Method, Scene};
+use flexprr_scene::{Method, Scene};
 
 use super::Failure;
 use super::run::failure;

@@ -3,7 +3,7 @@
 //! The same `ModalSystem` (the same right-hand side, the same scene, the same output times)
 //! is solved by `ode_solvers`' `Dopri5` (Dormand & Prince 5(4), Hairer's DOPRI5) and `Dop853`
 //! (Dormand & Prince 8(5,3), Hairer's DOP853) over the tolerance ladder, timed and compared
-//! with the reference exactly as `flexprr work-precision` does (`flexprr_scenarios::work_precision`),
+//! with the reference exactly as `flexprr work-precision` does (`flexprr_bench::work_precision`),
 //! and the rows are written in the `work_precision.csv` format for `--peers`.
 //!
 //! ```text
@@ -20,8 +20,8 @@ use flexprr_integrators::OdeSystem;
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, Dim, Dyn, OVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
-use flexprr_scenarios::Scene;
-use flexprr_scenarios::work_precision::{
+use flexprr_scene::Scene;
+use flexprr_bench::work_precision::{
     DEFAULT_TOLERANCES, Reference, SceneSystem, WorkPrecisionConfig, WorkPrecisionRow, csv_text,
     modal_system,
     time_runs,

@@ -18,6 +18,7 @@ mod frequencies;
 mod inverse;
 mod machine;
 mod modal;
+mod model;
 pub mod paper;
 
 pub use axial::{
@@ -33,5 +34,6 @@ pub use inverse::{
 };
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
+pub use model::{ModelCounters, SceneModel};
 
 pub use flexprr_beam::{AxialLoad, Coupling};

@@ -246,7 +246,7 @@ pub struct ModalSystem {
     trajectory: Arc<dyn Trajectory + Send + Sync>,
     formulation: Formulation,
     damping: ModalDamping,
-    axial: Box<dyn AxialForceModel>,
+    axial: Arc<dyn AxialForceModel>,
     ops: [LinkOperators; 3],
     offsets: [usize; 3],
     modes: usize,
@@ -275,6 +275,22 @@ impl ModalSystem {
         formulation: Formulation,
         damping: ModalDamping,
     ) -> Result<Self, DynamicsError> {
+        let axial = Arc::from(formulation.axial.model());
+        Self::with_axial_model(machine, trajectory, formulation, damping, axial)
+    }
+
+    /// As [`ModalSystem::new`], with any axial force model in place of the one
+    /// `formulation.axial` names (the other switches of `formulation` still apply).
+    ///
+    /// # Errors
+    /// As [`ModalSystem::new`].
+    pub fn with_axial_model(
+        machine: Arc<Machine>,
+        trajectory: Arc<dyn Trajectory + Send + Sync>,
+        formulation: Formulation,
+        damping: ModalDamping,
+        axial: Arc<dyn AxialForceModel>,
+    ) -> Result<Self, DynamicsError> {
         let ops = [0, 1, 2].map(|i| {
             LinkOperators::new(
                 &machine.links[i],
@@ -288,7 +304,7 @@ impl ModalSystem {
         let offsets = [0, ops[0].r, ops[0].r + ops[1].r];
         let modes = offsets[2] + ops[2].r;
         Ok(Self {
-            axial: formulation.axial.model(),
+            axial,
             machine,
             trajectory,
             formulation,
@@ -308,6 +324,10 @@ impl ModalSystem {
     /// The formulation.
     pub fn formulation(&self) -> &Formulation {
         &self.formulation
+    }
+    /// The axial force model.
+    pub fn axial_model(&self) -> &Arc<dyn AxialForceModel> {
+        &self.axial
     }
     /// The damping.
     pub fn damping(&self) -> &ModalDamping {

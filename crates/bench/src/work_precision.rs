@@ -29,8 +29,8 @@ use flexprr_integrators::{IntegratorError, OdeSystem, Options};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::error::ScenarioError;
-use crate::scene::{Method, Scene};
+use flexprr_scene::ScenarioError;
+use flexprr_scene::{Method, Scene};
 
 /// The default tolerance ladder, `1e-3` down to `1e-12` (one per decade).
 pub const DEFAULT_TOLERANCES: [f64; 10] = [

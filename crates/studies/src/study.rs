@@ -29,11 +29,11 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::error::ScenarioError;
-use crate::output::write_outputs;
-use crate::plot::{Panel, Series, write_svg};
-use crate::run::{RunResult, run};
-use crate::scene::Scene;
+use flexprr_run::plot::{Panel, Series, write_svg};
+use flexprr_run::write_outputs;
+use flexprr_run::{RunResult, run};
+use flexprr_scene::ScenarioError;
+use flexprr_scene::Scene;
 
 /// Why a study could not be loaded, run or merged. Failures of single cases are not errors:
 /// they are recorded in the case's row.
@@ -599,7 +599,7 @@ impl Study {
         let raw: StudyFile = toml::from_str(text).map_err(|e| {
             let (mut key, mut at) = (String::new(), String::new());
             if let Some(span) = e.span() {
-                let (line, column) = crate::locate::line_column(text, span.start);
+                let (line, column) = flexprr_scene::line_column(text, span.start);
                 at = format!("line {line}, column {column}: ");
                 // The key assigned on that line, if any, names the problem.
                 if let Some((name, _)) = text.lines().nth(line - 1).and_then(|l| l.split_once('='))

@@ -7,10 +7,10 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
-use crate::error::ScenarioError;
 use crate::plot::{Panel, Series, write_svg};
 use crate::run::{RunResult, Table};
-use crate::scene::Scene;
+use flexprr_scene::ScenarioError;
+use flexprr_scene::Scene;
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> ScenarioError + '_ {
     move |source| ScenarioError::Io {

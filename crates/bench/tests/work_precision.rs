@@ -3,13 +3,13 @@
 //! check and with a third method, the error measure and the equal-error interpolation match
 //! closed forms, and the CSV carries every column.
 
-use flexprr_integrators::{Bdf, Integrator, Options};
-use flexprr_scenarios::Method;
-use flexprr_scenarios::Scene;
-use flexprr_scenarios::work_precision::{
+use flexprr_bench::work_precision::{
     PACKAGE, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, markdown_at_error,
     modal_system, read_csv, time_at_error, work_precision,
 };
+use flexprr_integrators::{Bdf, Integrator, Options};
+use flexprr_scene::Method;
+use flexprr_scene::Scene;
 
 fn short_scene() -> Scene {
     let text = r#"

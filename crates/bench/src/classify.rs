@@ -22,13 +22,11 @@ use flexprr_integrators::{
     Abm, Bdf, Integrator, IntegratorError, OdeSystem, Rk45, Solution, Stats, Stepper,
 };
 
-use crate::scene::{Method, Scene};
+use flexprr_run::guard::{DeflectionModel, GUARD_POINTS};
+use flexprr_scene::{Method, Scene};
 
 /// Points `xi` along each link where deflections are checked and compared.
 pub const CHECK_POINTS: [f64; 3] = [0.25, 0.5, 0.75];
-
-/// Points `xi` used for the divergence check (denser than [`CHECK_POINTS`]).
-const GUARD_POINTS: [f64; 9] = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
 
 /// Limits applied while integrating.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -212,54 +210,6 @@ impl Attempt {
     }
 }
 
-/// What is needed to turn modal states into deflections (kept with the attempt so that
-/// [`Attempt::classify`] needs no scene).
-#[derive(Debug, Clone)]
-pub struct DeflectionModel {
-    /// For each link: the coordinate range in the state and `psi_j(xi_p)` at
-    /// [`CHECK_POINTS`], row `p`, column `j`.
-    links: Vec<(std::ops::Range<usize>, Vec<Vec<f64>>)>,
-}
-
-impl DeflectionModel {
-    fn new(scene: &Scene, system: &ModalSystem, points: &[f64]) -> Self {
-        let links = (0..3)
-            .map(|i| {
-                let link = &scene.machine.links[i];
-                let r = link.modes();
-                let table = points
-                    .iter()
-                    .map(|&xi| {
-                        (0..r)
-                            .map(|j| {
-                                let mut unit = vec![0.0; r];
-                                unit[j] = 1.0;
-                                link.deflection(&unit, xi)
-                            })
-                            .collect()
-                    })
-                    .collect();
-                (system.link_range(i), table)
-            })
-            .collect();
-        Self { links }
-    }
-
-    /// Deflection of link `i` at point `p` for the state `y` (m).
-    fn deflection(&self, i: usize, p: usize, y: &[f64]) -> f64 {
-        let (range, table) = &self.links[i];
-        table[p]
-            .iter()
-            .zip(&y[range.clone()])
-            .map(|(psi, eta)| psi * eta)
-            .sum()
-    }
-
-    fn points(&self) -> usize {
-        self.links[0].1.len()
-    }
-}
-
 /// Relative deflection error of `solution` against `reference`: the largest difference of
 /// the deflections at [`CHECK_POINTS`] of all links over all output times, divided by the
 /// largest reference deflection there. `None` when the output times differ or the
@@ -284,43 +234,6 @@ pub fn deflection_error(
         }
     }
     (scale > 0.0).then(|| worst / scale)
-}
-
-/// A deflection limit for catching runaway growth after a run, as a fraction of the link
-/// length: half the length. Far beyond the small-deflection range (the paper's own 30 Hz
-/// scene peaks near a quarter of it), so it only catches a link whose linear model grows
-/// exponentially, e.g. while it buckles. Use with [`deflection_excess`].
-pub const RUNAWAY_DEFLECTION_FRACTION: f64 = 0.5;
-
-/// The first output sample of `solution` (a run of `system`, built from `scene`) at which a
-/// link's deflection at `xi = 0.1, ..., 0.9` exceeds `fraction` of its length, as a
-/// [`Failure::Diverged`]; `None` if there is none.
-pub fn deflection_excess(
-    scene: &Scene,
-    system: &ModalSystem,
-    solution: &Solution,
-    fraction: f64,
-) -> Option<Failure> {
-    let model = DeflectionModel::new(scene, system, &GUARD_POINTS);
-    for k in 0..solution.len() {
-        let y = solution.y(k);
-        for i in 0..3 {
-            let limit = fraction * scene.machine.links[i].length();
-            for (p, xi) in GUARD_POINTS.iter().enumerate() {
-                let w = model.deflection(i, p, y);
-                if w.is_nan() || w.abs() > limit {
-                    return Some(Failure::Diverged {
-                        link: i,
-                        t: solution.t[k],
-                        xi: *xi,
-                        deflection_m: w,
-                        limit_m: limit,
-                    });
-                }
-            }
-        }
-    }
-    None
 }
 
 /// Integrates the scene's modal ODE with `method` and the scene's options, checking the

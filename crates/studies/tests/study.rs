@@ -4,11 +4,12 @@
 
 use std::path::{Path, PathBuf};
 
-use flexprr_scenarios::study::{
+use flexprr_run::run;
+use flexprr_scene::Scene;
+use flexprr_studies::study::{
     CaseStatus, RangeConfig, Shard, Spacing, Study, StudyOptions, merge_studies, read_case_records,
     run_study,
 };
-use flexprr_scenarios::{Scene, run};
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs")

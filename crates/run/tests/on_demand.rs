@@ -9,7 +9,8 @@
 
 use std::f64::consts::{PI, TAU};
 
-use flexprr_scenarios::{RunStats, Scene, run};
+use flexprr_run::{RunStats, run};
+use flexprr_scene::Scene;
 
 /// The paper's machine and links on the 20 Hz circle, with `model`, `time` and `output`
 /// tables supplied by the test.
@@ -48,7 +49,7 @@ plots = false
     Scene::from_text("on_demand.toml", "on_demand", &text).expect("valid scene")
 }
 
-fn stats_of(scene: &Scene) -> (flexprr_scenarios::RunResult, RunStats) {
+fn stats_of(scene: &Scene) -> (flexprr_run::RunResult, RunStats) {
     let result = run(scene, &mut |_| {}).expect("the run succeeds");
     let stats = result.stats.clone();
     (result, stats)

@@ -1,7 +1,8 @@
 //! A scene with `coupling = "coupled"` runs the coupled model and agrees with the external
 //! Exudyn model of `validation/` (independent data), while the KED twin does not.
 
-use flexprr_scenarios::{Scene, run};
+use flexprr_run::run;
+use flexprr_scene::Scene;
 
 fn scene(coupling: &str) -> Scene {
     let text = format!(

@@ -11,7 +11,8 @@ use std::path::Path;
 use std::sync::Arc;
 
 use flexprr_dynamics::{
-    AxialModel, Coupling, CouplingModel, Formulation, LinkModel, Machine, ModalDamping,
+    AxialForceModel, AxialModel, Coupling, CouplingModel, Formulation, LinkModel, Machine,
+    ModalDamping,
 };
 use flexprr_integrators::Options;
 use flexprr_kinematics::{
@@ -531,6 +532,8 @@ pub struct Scene {
     pub trajectory: Arc<dyn Trajectory + Send + Sync>,
     /// Formulation.
     pub formulation: Formulation,
+    /// The axial force model (the one `formulation.axial` names, or a registered one).
+    pub axial_model: Arc<dyn AxialForceModel>,
     /// Modal damping.
     pub damping: ModalDamping,
     /// Integrator.
@@ -1275,6 +1278,7 @@ impl Scene {
             file: raw,
             machine: Arc::new(machine),
             trajectory,
+            axial_model: Arc::from(formulation.axial.model()),
             formulation,
             damping,
             method,

@@ -10,8 +10,8 @@ use flexprr_dynamics::{
 };
 use flexprr_integrators::{OdeSystem, Solution, Stats};
 
-use crate::error::ScenarioError;
-use crate::scene::{OutputKind, Scene};
+use flexprr_scene::ScenarioError;
+use flexprr_scene::{OutputKind, Scene};
 
 /// A time-series table: first column `t_s`, then named columns with units in their names.
 #[derive(Debug, Clone, PartialEq)]
@@ -130,8 +130,8 @@ pub fn integrate(
     // The linear (small-deflection) model grows without bound while a link buckles: a run
     // whose deflection passes half the link length reports that instead of returning
     // deflections of kilometres.
-    let fraction = crate::classify::RUNAWAY_DEFLECTION_FRACTION;
-    match crate::classify::deflection_excess(scene, system, &solution, fraction) {
+    let fraction = crate::guard::RUNAWAY_DEFLECTION_FRACTION;
+    match crate::guard::deflection_excess(scene, system, &solution, fraction) {
         Some(excess) => Err(ScenarioError::Run(format!(
             "diverged: {excess}; the small-deflection model has left its range (a link buckles, or the tolerance is too loose); request \"frequencies\" to see the buckling intervals"
         ))),

@@ -6,7 +6,7 @@
 //! locator); the expected key path and the words describing the expectation are written by
 //! hand from the scene reference (`docs/scenes.md`).
 
-use flexprr_scenarios::{ScenarioError, Scene};
+use flexprr_scene::{ScenarioError, Scene};
 
 const FILE: &str = "scene.toml";
 

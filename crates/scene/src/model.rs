@@ -1,0 +1,72 @@
+//! The one builder of a scene's dynamical system: runs, studies, work-precision and the stress
+//! classification all get their model from here, so a coupled scene is integrated with the
+//! coupled model everywhere.
+
+use flexprr_dynamics::{
+    AxialModel, CoupledOptions, CoupledSystem, CouplingModel, DynamicsError, ModalSystem,
+    SceneModel,
+};
+
+use crate::Scene;
+
+impl Scene {
+    /// Builds the dynamical system the scene integrates: the KED [`ModalSystem`] with the
+    /// scene's formulation and axial force model, or the [`CoupledSystem`] when
+    /// `model.coupling = "coupled"`.
+    ///
+    /// # Errors
+    /// A modal mass matrix that is not positive definite, or inconsistent damping.
+    pub fn build_model(&self) -> Result<Box<dyn SceneModel>, DynamicsError> {
+        match self.coupling {
+            CouplingModel::Ked => Ok(Box::new(self.build_ked(false)?)),
+            CouplingModel::Coupled => Ok(Box::new(self.build_coupled()?)),
+        }
+    }
+
+    /// The KED modal system of the scene with the axial force switched off (the paper's
+    /// comparison "without axial force", figures 6-8).
+    ///
+    /// # Errors
+    /// As [`Scene::build_model`].
+    pub fn build_model_without_axial_force(&self) -> Result<Box<dyn SceneModel>, DynamicsError> {
+        Ok(Box::new(self.build_ked(true)?))
+    }
+
+    /// The KED modal system of the scene (also for a coupled scene: its frequencies and
+    /// rigid-body outputs are the KED ones).
+    ///
+    /// # Errors
+    /// As [`Scene::build_model`].
+    pub fn build_ked(&self, axial_off: bool) -> Result<ModalSystem, DynamicsError> {
+        let mut formulation = self.formulation;
+        if axial_off {
+            formulation.axial = AxialModel::None;
+            return ModalSystem::new(
+                self.machine.clone(),
+                self.trajectory.clone(),
+                formulation,
+                self.damping.clone(),
+            );
+        }
+        ModalSystem::with_axial_model(
+            self.machine.clone(),
+            self.trajectory.clone(),
+            formulation,
+            self.damping.clone(),
+            self.axial_model.clone(),
+        )
+    }
+
+    fn build_coupled(&self) -> Result<CoupledSystem, DynamicsError> {
+        let options = CoupledOptions {
+            axial_stiffness: Some([self.axial_stiffness; 3]),
+            ..CoupledOptions::full()
+        };
+        CoupledSystem::new(
+            self.machine.clone(),
+            self.trajectory.clone(),
+            self.damping.clone(),
+            options,
+        )
+    }
+}
