@@ -40,15 +40,19 @@ mod options;
 mod solution;
 mod system;
 
+mod observe;
+
 pub mod abm;
 pub mod bdf;
 pub mod rk45;
+#[cfg(feature = "test-problems")]
 pub mod test_problems;
 
 pub use abm::Abm;
 pub use bdf::Bdf;
-pub use common::{error_norm, initial_step};
+pub use common::{error_norm, initial_step, validate_start};
 pub use error::IntegratorError;
+pub use observe::{DynIntegrator, Flow, Interrupted, Interruption, Observer, OnStep};
 pub use options::{Options, Tolerance};
 pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};
 pub use solution::{Solution, Stats};
@@ -107,7 +111,8 @@ pub trait Integrator {
     /// `t_out` by dense output (the requested times never shorten the steps).
     ///
     /// `t_out` must be monotone in the direction of integration and lie between `t0` and
-    /// its last entry; times equal to `t0` return `y0`.
+    /// its last entry; times equal to `t0` return `y0`. The same as
+    /// [`Integrator::solve_observed`] without stop times or observer.
     ///
     /// # Errors
     /// As [`Integrator::start`] and [`Stepper::step`]; an empty or unsorted `t_out` is an
@@ -119,48 +124,46 @@ pub trait Integrator {
         y0: &[f64],
         t_out: &[f64],
     ) -> Result<Solution, IntegratorError> {
-        let n = y0.len();
-        let Some(&t_end) = t_out.last() else {
-            return Err(IntegratorError::InvalidInput(
-                "no output times requested".to_string(),
-            ));
-        };
-        let dir = (t_end - t0).signum();
-        let mut prev = t0;
-        for (k, &t) in t_out.iter().enumerate() {
-            if !t.is_finite() || (t - prev) * dir < 0.0 {
-                return Err(IntegratorError::InvalidInput(format!(
-                    "output time t_out[{k}] = {t} is not monotone from t0 = {t0} towards {t_end}"
-                )));
-            }
-            prev = t;
-        }
-        let mut solution = Solution::with_capacity(n, t_out.len());
-        // Leading outputs at t0 need no step (and t_end == t0 is not an integration).
-        let mut k = 0;
-        while k < t_out.len() && (t_out[k] - t0) * dir <= 0.0 {
-            solution.push(t_out[k], y0);
-            k += 1;
-        }
-        if k == t_out.len() {
-            return Ok(solution);
-        }
-        let mut stepper = self.start(system, t0, y0, t_end)?;
-        let mut buf = vec![0.0; n];
-        while k < t_out.len() {
-            stepper.step(system)?;
-            let t_now = stepper.t();
-            while k < t_out.len() && (t_out[k] - t_now) * dir <= 0.0 {
-                if (t_out[k] - t_now).abs() <= f64::EPSILON * t_now.abs().max(1.0) {
-                    buf.copy_from_slice(stepper.y());
-                } else {
-                    stepper.interpolate(t_out[k], &mut buf);
-                }
-                solution.push(t_out[k], &buf);
-                k += 1;
-            }
-        }
-        solution.stats = stepper.stats().clone();
-        Ok(solution)
+        self.solve_observed(system, t0, y0, t_out, &[], &mut ())
+            .map_err(|interrupted| match interrupted.reason {
+                Interruption::Failed(e) => e,
+                // The `()` observer never stops; say so rather than panic if it ever did.
+                Interruption::Stopped { t } => IntegratorError::InvalidInput(format!(
+                    "the run was stopped at t = {t} s although nothing observed it"
+                )),
+            })
+    }
+
+    /// Integrates from `t0` to the last of `t_out` (as [`Integrator::solve`]), restarting
+    /// the method at every stop time and reporting to `observer`.
+    ///
+    /// `stops` are times at which the right-hand side or its derivatives may jump (a forcing
+    /// that switches on, a trajectory segment that ends). They may come in any order, repeat,
+    /// or lie outside `(t0, t_end)` (those are ignored). The span is integrated segment by
+    /// segment: each segment starts a fresh stepper ([`Integrator::start`]) towards the next
+    /// stop, so every method lands exactly on it, restarts its history there (ABM and BDF
+    /// at order 1, RK45 with a new initial step), and can never step past it. This is the
+    /// standard treatment of known discontinuities (Hairer, Norsett & Wanner I, II.6); without
+    /// it a forcing that is exactly zero at first and starts later can be stepped over
+    /// entirely (the error estimate is zero while it is off).
+    ///
+    /// `max_steps` bounds the steps of all segments together; the returned [`Stats`] sum the
+    /// segments ([`Stats::segments`] counts them).
+    ///
+    /// # Errors
+    /// [`Interrupted`] with every output up to the last accepted time (dense output, never
+    /// extrapolated) and the statistics so far: [`Interruption::Failed`] for the errors of
+    /// [`Integrator::solve`] (and a non-finite stop time), [`Interruption::Stopped`] when the
+    /// observer returned [`Flow::Stop`].
+    fn solve_observed<S: OdeSystem + ?Sized>(
+        &self,
+        system: &mut S,
+        t0: f64,
+        y0: &[f64],
+        t_out: &[f64],
+        stops: &[f64],
+        observer: &mut dyn Observer,
+    ) -> Result<Solution, Interrupted> {
+        observe::drive(self, system, t0, y0, t_out, stops, observer)
     }
 }
