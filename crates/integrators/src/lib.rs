@@ -84,6 +84,94 @@ pub trait Stepper {
 }
 
 /// A configured integration method.
+///
+/// Implementing [`Integrator::start`] (and [`Stepper`] for the state it returns) is all a
+/// method needs; [`Integrator::solve`] and [`Integrator::solve_observed`] come with it. For
+/// example the explicit Euler method `y_{n+1} = y_n + h f(t_n, y_n)` (Hairer, Norsett &
+/// Wanner I, I.7) with a fixed step and linear dense output:
+///
+/// ```
+/// use flexprr_integrators::{
+///     validate_start, Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper,
+/// };
+///
+/// struct Euler { options: Options, h: f64 }
+/// struct EulerState { t: f64, t_prev: f64, t_end: f64, h: f64, y: Vec<f64>, y_prev: Vec<f64>, f: Vec<f64>, stats: Stats }
+///
+/// impl Stepper for EulerState {
+///     fn t(&self) -> f64 { self.t }
+///     fn y(&self) -> &[f64] { &self.y }
+///     fn t_previous(&self) -> f64 { self.t_prev }
+///     fn step<S: OdeSystem + ?Sized>(&mut self, system: &mut S) -> Result<(), IntegratorError> {
+///         let remaining = self.t_end - self.t;
+///         if remaining * self.h <= 0.0 {
+///             return Err(IntegratorError::InvalidInput(format!("already at t_end = {}", self.t_end)));
+///         }
+///         // Land exactly on t_end.
+///         let last = remaining.abs() <= self.h.abs();
+///         let h = if last { remaining } else { self.h };
+///         system.rhs(self.t, &self.y, &mut self.f);
+///         self.stats.rhs_evaluations += 1;
+///         self.y_prev.copy_from_slice(&self.y);
+///         for (y, f) in self.y.iter_mut().zip(&self.f) {
+///             *y += h * f;
+///         }
+///         if let Some(component) = self.y.iter().position(|v| !v.is_finite()) {
+///             return Err(IntegratorError::NonFinite { t: self.t + h, component });
+///         }
+///         self.t_prev = self.t;
+///         self.t = if last { self.t_end } else { self.t + h };
+///         self.stats.accepted_steps += 1;
+///         self.stats.record_order(1);
+///         Ok(())
+///     }
+///     fn interpolate(&self, t: f64, out: &mut [f64]) {
+///         let theta = (t - self.t_prev) / (self.t - self.t_prev);
+///         for i in 0..out.len() {
+///             out[i] = self.y_prev[i] + theta * (self.y[i] - self.y_prev[i]);
+///         }
+///     }
+///     fn stats(&self) -> &Stats { &self.stats }
+/// }
+///
+/// impl Integrator for Euler {
+///     type Stepper = EulerState;
+///     fn name(&self) -> &'static str { "euler" }
+///     fn options(&self) -> &Options { &self.options }
+///     fn start<S: OdeSystem + ?Sized>(
+///         &self, system: &mut S, t0: f64, y0: &[f64], t_end: f64,
+///     ) -> Result<EulerState, IntegratorError> {
+///         validate_start(&self.options, system.dim(), y0, t0, t_end)?;
+///         let h = self.h.min(self.options.max_step) * (t_end - t0).signum();
+///         Ok(EulerState {
+///             t: t0, t_prev: t0, t_end, h,
+///             y: y0.to_vec(), y_prev: y0.to_vec(), f: vec![0.0; y0.len()],
+///             stats: Stats::default(),
+///         })
+///     }
+/// }
+///
+/// /// y' = -y.
+/// struct Decay;
+/// impl OdeSystem for Decay {
+///     fn dim(&self) -> usize { 1 }
+///     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) { dy[0] = -y[0]; }
+/// }
+///
+/// // First order: halving the step halves the error at t = 1 (closed form e^-1).
+/// let error = |h: f64| {
+///     let euler = Euler { options: Options::default(), h };
+///     let sol = euler.solve(&mut Decay, 0.0, &[1.0], &[1.0]).unwrap();
+///     (sol.y(0)[0] - (-1.0_f64).exp()).abs()
+/// };
+/// let ratio = error(1e-3) / error(5e-4);
+/// assert!((ratio - 2.0).abs() < 0.01, "ratio {ratio}");
+/// // Stop times split the run into segments that land on them.
+/// let euler = Euler { options: Options::default(), h: 0.3 };
+/// let sol = euler.solve_observed(&mut Decay, 0.0, &[1.0], &[1.0], &[0.5], &mut ()).unwrap();
+/// assert_eq!(sol.stats.segments, 2);
+/// assert_eq!(sol.stats.accepted_steps, 4); // 0.3, 0.5 | 0.8, 1.0
+/// ```
 pub trait Integrator {
     /// The state of one integration with this method.
     type Stepper: Stepper;
