@@ -71,6 +71,9 @@ pub fn initial_step<S: OdeSystem + ?Sized>(
 /// Checks what every method's `start` needs: valid options, a non-empty system whose
 /// dimension matches `y0`, finite `t0`, `t_end` and `y0`, and `t_end` distinguishable from `t0`.
 ///
+/// Every built-in [`crate::Integrator::start`] calls it first; a new method should too, so
+/// that bad input fails with the same messages whatever the method.
+///
 /// # Errors
 /// [`IntegratorError::InvalidOptions`] or [`IntegratorError::InvalidInput`] saying which.
 pub fn validate_start(

@@ -8,7 +8,7 @@ use thiserror::Error;
 pub enum IntegratorError {
     /// The step size fell below the floor `16 eps |t|` (or a method's own floor).
     #[error(
-        "step size collapsed to {h:e} s at t = {t} s (the problem may be singular, discontinuous or too stiff for this method)"
+        "step size collapsed to {h:e} s at t = {t} s: the right-hand side is probably not smooth there (a jump in it or a low derivative, e.g. a forcing switching on: pass that time as a stop) or the solution is singular"
     )]
     StepSizeTooSmall {
         /// Time reached.
@@ -18,7 +18,7 @@ pub enum IntegratorError {
     },
     /// More than `max_steps` steps were needed.
     #[error(
-        "gave up after {max_steps} steps at t = {t} s (raise max_steps, loosen the tolerance or try an implicit method)"
+        "gave up after {max_steps} steps at t = {t} s (raise max_steps or loosen the tolerance; if an explicit method takes tiny steps while the solution is smooth, the problem is stiff)"
     )]
     TooManySteps {
         /// Time reached.
@@ -67,4 +67,20 @@ pub enum IntegratorError {
     /// The initial value or the requested output times are not usable.
     #[error("invalid integration input: {0}")]
     InvalidInput(String),
+}
+
+impl IntegratorError {
+    /// The time at which the error happened, if it arose during the integration (input and
+    /// option errors have none).
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            Self::StepSizeTooSmall { t, .. }
+            | Self::TooManySteps { t, .. }
+            | Self::NonFinite { t, .. }
+            | Self::NewtonFailure { t, .. }
+            | Self::SingularMatrix { t }
+            | Self::Stiff { t, .. } => Some(*t),
+            Self::InvalidOptions(_) | Self::InvalidInput(_) => None,
+        }
+    }
 }

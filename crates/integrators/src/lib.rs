@@ -40,15 +40,19 @@ mod options;
 mod solution;
 mod system;
 
+mod observe;
+
 pub mod abm;
 pub mod bdf;
 pub mod rk45;
+#[cfg(feature = "test-problems")]
 pub mod test_problems;
 
 pub use abm::Abm;
 pub use bdf::Bdf;
-pub use common::{error_norm, initial_step};
+pub use common::{error_norm, initial_step, validate_start};
 pub use error::IntegratorError;
+pub use observe::{DynIntegrator, Flow, Interrupted, Interruption, Observer, OnStep};
 pub use options::{Options, Tolerance};
 pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};
 pub use solution::{Solution, Stats};
@@ -80,6 +84,94 @@ pub trait Stepper {
 }
 
 /// A configured integration method.
+///
+/// Implementing [`Integrator::start`] (and [`Stepper`] for the state it returns) is all a
+/// method needs; [`Integrator::solve`] and [`Integrator::solve_observed`] come with it. For
+/// example the explicit Euler method `y_{n+1} = y_n + h f(t_n, y_n)` (Hairer, Norsett &
+/// Wanner I, I.7) with a fixed step and linear dense output:
+///
+/// ```
+/// use flexprr_integrators::{
+///     validate_start, Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper,
+/// };
+///
+/// struct Euler { options: Options, h: f64 }
+/// struct EulerState { t: f64, t_prev: f64, t_end: f64, h: f64, y: Vec<f64>, y_prev: Vec<f64>, f: Vec<f64>, stats: Stats }
+///
+/// impl Stepper for EulerState {
+///     fn t(&self) -> f64 { self.t }
+///     fn y(&self) -> &[f64] { &self.y }
+///     fn t_previous(&self) -> f64 { self.t_prev }
+///     fn step<S: OdeSystem + ?Sized>(&mut self, system: &mut S) -> Result<(), IntegratorError> {
+///         let remaining = self.t_end - self.t;
+///         if remaining * self.h <= 0.0 {
+///             return Err(IntegratorError::InvalidInput(format!("already at t_end = {}", self.t_end)));
+///         }
+///         // Land exactly on t_end.
+///         let last = remaining.abs() <= self.h.abs();
+///         let h = if last { remaining } else { self.h };
+///         system.rhs(self.t, &self.y, &mut self.f);
+///         self.stats.rhs_evaluations += 1;
+///         self.y_prev.copy_from_slice(&self.y);
+///         for (y, f) in self.y.iter_mut().zip(&self.f) {
+///             *y += h * f;
+///         }
+///         if let Some(component) = self.y.iter().position(|v| !v.is_finite()) {
+///             return Err(IntegratorError::NonFinite { t: self.t + h, component });
+///         }
+///         self.t_prev = self.t;
+///         self.t = if last { self.t_end } else { self.t + h };
+///         self.stats.accepted_steps += 1;
+///         self.stats.record_order(1);
+///         Ok(())
+///     }
+///     fn interpolate(&self, t: f64, out: &mut [f64]) {
+///         let theta = (t - self.t_prev) / (self.t - self.t_prev);
+///         for i in 0..out.len() {
+///             out[i] = self.y_prev[i] + theta * (self.y[i] - self.y_prev[i]);
+///         }
+///     }
+///     fn stats(&self) -> &Stats { &self.stats }
+/// }
+///
+/// impl Integrator for Euler {
+///     type Stepper = EulerState;
+///     fn name(&self) -> &'static str { "euler" }
+///     fn options(&self) -> &Options { &self.options }
+///     fn start<S: OdeSystem + ?Sized>(
+///         &self, system: &mut S, t0: f64, y0: &[f64], t_end: f64,
+///     ) -> Result<EulerState, IntegratorError> {
+///         validate_start(&self.options, system.dim(), y0, t0, t_end)?;
+///         let h = self.h.min(self.options.max_step) * (t_end - t0).signum();
+///         Ok(EulerState {
+///             t: t0, t_prev: t0, t_end, h,
+///             y: y0.to_vec(), y_prev: y0.to_vec(), f: vec![0.0; y0.len()],
+///             stats: Stats::default(),
+///         })
+///     }
+/// }
+///
+/// /// y' = -y.
+/// struct Decay;
+/// impl OdeSystem for Decay {
+///     fn dim(&self) -> usize { 1 }
+///     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) { dy[0] = -y[0]; }
+/// }
+///
+/// // First order: halving the step halves the error at t = 1 (closed form e^-1).
+/// let error = |h: f64| {
+///     let euler = Euler { options: Options::default(), h };
+///     let sol = euler.solve(&mut Decay, 0.0, &[1.0], &[1.0]).unwrap();
+///     (sol.y(0)[0] - (-1.0_f64).exp()).abs()
+/// };
+/// let ratio = error(1e-3) / error(5e-4);
+/// assert!((ratio - 2.0).abs() < 0.01, "ratio {ratio}");
+/// // Stop times split the run into segments that land on them.
+/// let euler = Euler { options: Options::default(), h: 0.3 };
+/// let sol = euler.solve_observed(&mut Decay, 0.0, &[1.0], &[1.0], &[0.5], &mut ()).unwrap();
+/// assert_eq!(sol.stats.segments, 2);
+/// assert_eq!(sol.stats.accepted_steps, 4); // 0.3, 0.5 | 0.8, 1.0
+/// ```
 pub trait Integrator {
     /// The state of one integration with this method.
     type Stepper: Stepper;
@@ -107,7 +199,8 @@ pub trait Integrator {
     /// `t_out` by dense output (the requested times never shorten the steps).
     ///
     /// `t_out` must be monotone in the direction of integration and lie between `t0` and
-    /// its last entry; times equal to `t0` return `y0`.
+    /// its last entry; times equal to `t0` return `y0`. The same as
+    /// [`Integrator::solve_observed`] without stop times or observer.
     ///
     /// # Errors
     /// As [`Integrator::start`] and [`Stepper::step`]; an empty or unsorted `t_out` is an
@@ -119,48 +212,46 @@ pub trait Integrator {
         y0: &[f64],
         t_out: &[f64],
     ) -> Result<Solution, IntegratorError> {
-        let n = y0.len();
-        let Some(&t_end) = t_out.last() else {
-            return Err(IntegratorError::InvalidInput(
-                "no output times requested".to_string(),
-            ));
-        };
-        let dir = (t_end - t0).signum();
-        let mut prev = t0;
-        for (k, &t) in t_out.iter().enumerate() {
-            if !t.is_finite() || (t - prev) * dir < 0.0 {
-                return Err(IntegratorError::InvalidInput(format!(
-                    "output time t_out[{k}] = {t} is not monotone from t0 = {t0} towards {t_end}"
-                )));
-            }
-            prev = t;
-        }
-        let mut solution = Solution::with_capacity(n, t_out.len());
-        // Leading outputs at t0 need no step (and t_end == t0 is not an integration).
-        let mut k = 0;
-        while k < t_out.len() && (t_out[k] - t0) * dir <= 0.0 {
-            solution.push(t_out[k], y0);
-            k += 1;
-        }
-        if k == t_out.len() {
-            return Ok(solution);
-        }
-        let mut stepper = self.start(system, t0, y0, t_end)?;
-        let mut buf = vec![0.0; n];
-        while k < t_out.len() {
-            stepper.step(system)?;
-            let t_now = stepper.t();
-            while k < t_out.len() && (t_out[k] - t_now) * dir <= 0.0 {
-                if (t_out[k] - t_now).abs() <= f64::EPSILON * t_now.abs().max(1.0) {
-                    buf.copy_from_slice(stepper.y());
-                } else {
-                    stepper.interpolate(t_out[k], &mut buf);
-                }
-                solution.push(t_out[k], &buf);
-                k += 1;
-            }
-        }
-        solution.stats = stepper.stats().clone();
-        Ok(solution)
+        self.solve_observed(system, t0, y0, t_out, &[], &mut ())
+            .map_err(|interrupted| match interrupted.reason {
+                Interruption::Failed(e) => e,
+                // The `()` observer never stops; say so rather than panic if it ever did.
+                Interruption::Stopped { t } => IntegratorError::InvalidInput(format!(
+                    "the run was stopped at t = {t} s although nothing observed it"
+                )),
+            })
+    }
+
+    /// Integrates from `t0` to the last of `t_out` (as [`Integrator::solve`]), restarting
+    /// the method at every stop time and reporting to `observer`.
+    ///
+    /// `stops` are times at which the right-hand side or its derivatives may jump (a forcing
+    /// that switches on, a trajectory segment that ends). They may come in any order, repeat,
+    /// or lie outside `(t0, t_end)` (those are ignored). The span is integrated segment by
+    /// segment: each segment starts a fresh stepper ([`Integrator::start`]) towards the next
+    /// stop, so every method lands exactly on it, restarts its history there (ABM and BDF
+    /// at order 1, RK45 with a new initial step), and can never step past it. This is the
+    /// standard treatment of known discontinuities (Hairer, Norsett & Wanner I, II.6); without
+    /// it a forcing that is exactly zero at first and starts later can be stepped over
+    /// entirely (the error estimate is zero while it is off).
+    ///
+    /// `max_steps` bounds the steps of all segments together; the returned [`Stats`] sum the
+    /// segments ([`Stats::segments`] counts them).
+    ///
+    /// # Errors
+    /// [`Interrupted`] with every output up to the last accepted time (dense output, never
+    /// extrapolated) and the statistics so far: [`Interruption::Failed`] for the errors of
+    /// [`Integrator::solve`] (and a non-finite stop time), [`Interruption::Stopped`] when the
+    /// observer returned [`Flow::Stop`].
+    fn solve_observed<S: OdeSystem + ?Sized>(
+        &self,
+        system: &mut S,
+        t0: f64,
+        y0: &[f64],
+        t_out: &[f64],
+        stops: &[f64],
+        observer: &mut dyn Observer,
+    ) -> Result<Solution, Interrupted> {
+        observe::drive(self, system, t0, y0, t_out, stops, observer)
     }
 }

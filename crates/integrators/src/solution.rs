@@ -19,6 +19,9 @@ pub struct Stats {
     pub orders: Vec<usize>,
     /// Time at which the method found the problem stiff, if it checks and did.
     pub stiffness_detected_at: Option<f64>,
+    /// Segments integrated: stepper starts, one more per stop time crossed (see
+    /// [`crate::Integrator::solve_observed`]); 0 when the statistics are one stepper's.
+    pub segments: usize,
 }
 
 impl Stats {
@@ -28,6 +31,25 @@ impl Stats {
             self.orders.resize(order + 1, 0);
         }
         self.orders[order] += 1;
+    }
+
+    /// Adds the work of `other` (a later segment of the same integration): counters and
+    /// order counts are summed; the first stiffness detection is kept.
+    pub fn accumulate(&mut self, other: &Stats) {
+        self.accepted_steps += other.accepted_steps;
+        self.rejected_steps += other.rejected_steps;
+        self.rhs_evaluations += other.rhs_evaluations;
+        self.jacobian_evaluations += other.jacobian_evaluations;
+        self.lu_decompositions += other.lu_decompositions;
+        self.newton_iterations += other.newton_iterations;
+        if self.orders.len() < other.orders.len() {
+            self.orders.resize(other.orders.len(), 0);
+        }
+        for (mine, theirs) in self.orders.iter_mut().zip(&other.orders) {
+            *mine += theirs;
+        }
+        self.stiffness_detected_at = self.stiffness_detected_at.or(other.stiffness_detected_at);
+        self.segments += other.segments;
     }
 
     /// The highest order used in an accepted step (0 if none).

@@ -7,6 +7,36 @@ use faer::MatMut;
 /// Only [`OdeSystem::dim`] and [`OdeSystem::rhs`] are required. The Jacobian defaults to
 /// forward differences; systems that know it in closed form override
 /// [`OdeSystem::jacobian`] and return `true` from [`OdeSystem::has_analytic_jacobian`].
+///
+/// ```
+/// use faer::Mat;
+/// use flexprr_integrators::OdeSystem;
+///
+/// /// Linear decay `y' = -k y` with its exact Jacobian `-k`.
+/// struct Decay { k: f64 }
+/// impl OdeSystem for Decay {
+///     fn dim(&self) -> usize { 1 }
+///     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) { dy[0] = -self.k * y[0]; }
+///     fn jacobian(&mut self, _t: f64, _y: &[f64], mut jac: faer::MatMut<'_, f64>) {
+///         jac[(0, 0)] = -self.k;
+///     }
+///     fn has_analytic_jacobian(&self) -> bool { true }
+/// }
+///
+/// /// The same without a Jacobian: forward differences are provided.
+/// struct Differenced { k: f64 }
+/// impl OdeSystem for Differenced {
+///     fn dim(&self) -> usize { 1 }
+///     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) { dy[0] = -self.k * y[0]; }
+/// }
+///
+/// let (mut exact, mut approx) = (Mat::<f64>::zeros(1, 1), Mat::<f64>::zeros(1, 1));
+/// Decay { k: 3.0 }.jacobian(0.0, &[2.0], exact.as_mut());
+/// let mut d = Differenced { k: 3.0 };
+/// d.jacobian(0.0, &[2.0], approx.as_mut());
+/// assert!((exact[(0, 0)] - approx[(0, 0)]).abs() < 1e-6);
+/// assert_eq!((Decay { k: 3.0 }.jacobian_rhs_evaluations(), d.jacobian_rhs_evaluations()), (0, 2));
+/// ```
 pub trait OdeSystem {
     /// Number of state components.
     fn dim(&self) -> usize;
