@@ -498,6 +498,19 @@ impl Method {
         }
     }
 
+    /// The integrator this method names, with `options`, behind the object-safe adapter.
+    pub fn integrator(
+        self,
+        options: flexprr_integrators::Options,
+    ) -> Box<dyn flexprr_integrators::DynIntegrator> {
+        use flexprr_integrators::{Abm, Bdf, Rk45};
+        match self {
+            Method::Abm => Box::new(Abm::new(options)),
+            Method::Rk45 => Box::new(Rk45::new(options)),
+            Method::Bdf => Box::new(Bdf::new(options)),
+        }
+    }
+
     /// Integrates `system` from `y0` at `t_out[0]` with this method, output at `t_out`.
     ///
     /// # Errors
