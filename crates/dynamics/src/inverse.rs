@@ -216,8 +216,7 @@ pub fn inverse_dynamics_full<L: AsRef<LegKinematics>>(
     let mut a = Mat::<f64>::zeros(12, 12);
     let mut b = Mat::<f64>::zeros(12, 1);
     let p = state.motion.pose.position().coords;
-    for i in 0..3 {
-        let leg = legs[i];
+    for (i, leg) in legs.into_iter().enumerate() {
         let link = &machine.links[i];
         let (m, l) = (link.mass(), link.length());
         let u = machine.geometry.legs[i].guide.direction.into_inner();
@@ -267,11 +266,13 @@ pub fn inverse_dynamics_full<L: AsRef<LegKinematics>>(
 
 /// Rigid kinetic energy `T` of sliders, links and platform (J), for the power-balance check
 /// `sum F_ai rho_i' = dT/dt`.
-pub fn rigid_kinetic_energy<L: AsRef<LegKinematics>>(machine: &Machine, state: &MachineState<L>) -> f64 {
+pub fn rigid_kinetic_energy<L: AsRef<LegKinematics>>(
+    machine: &Machine,
+    state: &MachineState<L>,
+) -> f64 {
     let legs = legs_of(state);
     let mut energy = 0.0;
-    for i in 0..3 {
-        let leg = legs[i];
+    for (i, leg) in legs.into_iter().enumerate() {
         let link = &machine.links[i];
         let u = machine.geometry.legs[i].guide.direction.into_inner();
         let v_g = leg.rho_dot * u + 0.5 * link.length() * leg.beta_dot * leg.n;

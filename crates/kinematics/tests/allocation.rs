@@ -46,7 +46,9 @@ fn inverse_kinematics_does_not_allocate() {
         let unchecked = geometry.inverse_kinematics_unchecked(&motion).unwrap();
         let positions = geometry.inverse_position(&motion.pose).unwrap();
         let measures = geometry.singularity(&motion.pose).unwrap();
-        geometry.inverse_kinematics_into(&motion, &mut in_place).unwrap();
+        geometry
+            .inverse_kinematics_into(&motion, &mut in_place)
+            .unwrap();
         checksum += in_place.legs[2].rho_ddot;
         geometry
             .inverse_kinematics_unchecked_into(&motion, &mut in_place)

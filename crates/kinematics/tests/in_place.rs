@@ -86,7 +86,12 @@ fn numbers(leg: &LegKinematics) -> [f64; 19] {
 }
 
 /// Independent rates of one leg from the link angle: returns `(beta, rho', b', rho'', b'')`.
-fn angle_reference(geometry: &Geometry, case: &Case, motion: &PlatformMotion, i: usize) -> [f64; 5] {
+fn angle_reference(
+    geometry: &Geometry,
+    case: &Case,
+    motion: &PlatformMotion,
+    i: usize,
+) -> [f64; 5] {
     let leg = &geometry.legs[i];
     let (l, u) = (leg.link_length, leg.guide.direction.into_inner());
     let phi = motion.pose.phi;
@@ -104,7 +109,10 @@ fn angle_reference(geometry: &Geometry, case: &Case, motion: &PlatformMotion, i:
     let (v, w) = (motion.velocity, motion.velocity.z);
     let (acc, w_dot) = (motion.acceleration, motion.acceleration.z);
     let c_dot = Vector2::new(v.x - w * r.y, v.y + w * r.x);
-    let c_ddot = Vector2::new(acc.x - w_dot * r.y - w * w * r.x, acc.y + w_dot * r.x - w * w * r.y);
+    let c_ddot = Vector2::new(
+        acc.x - w_dot * r.y - w * w * r.x,
+        acc.y + w_dot * r.x - w * w * r.y,
+    );
     // Cramer on [u, l n] x = rhs.
     let det = u.x * ln_y - u.y * ln_x;
     let solve = |rhs: Vector2<f64>| {
@@ -114,8 +122,7 @@ fn angle_reference(geometry: &Geometry, case: &Case, motion: &PlatformMotion, i:
         )
     };
     let (rho_dot, beta_dot) = solve(c_dot);
-    let (rho_ddot, beta_ddot) =
-        solve(c_ddot + l * beta_dot * beta_dot * Vector2::new(cb, sb));
+    let (rho_ddot, beta_ddot) = solve(c_ddot + l * beta_dot * beta_dot * Vector2::new(cb, sb));
     [beta, rho_dot, beta_dot, rho_ddot, beta_ddot]
 }
 
