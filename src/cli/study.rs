@@ -62,11 +62,11 @@ fn failure(e: StudyError) -> Failure {
 /// Failure lines printed before the rest are only counted (all are in `results.csv`).
 const MAX_FAILURE_LINES: usize = 20;
 /// Longest failure message printed (characters); the full one is in `results.csv`.
-const MAX_FAILURE_MESSAGE: usize = 120;
+const MAX_FAILURE_MESSAGE: usize = 90;
 
-/// A short line for a failed case: its parameters by key, the kind, the time and the start
-/// of the message, e.g. `case 17 (trajectory.frequency = 32.5): failed (diverged at
-/// t = 0.056 s): ...`.
+/// A short line for a failed case: its parameters by key, the status and kind, and the start
+/// of the message, e.g. `case 19 (links.section.thickness = 0.002, machine.platform_mass =
+/// 2): failed (diverged): link 2 diverged at t = 0.0084 s: deflection 1.027e-1 m at ...`.
 fn failure_line(study: &Study, record: &CaseRecord) -> String {
     let parameters: Vec<String> = study
         .axes
@@ -74,22 +74,33 @@ fn failure_line(study: &Study, record: &CaseRecord) -> String {
         .zip(&record.parameters)
         .map(|(axis, value)| format!("{} = {value}", axis.key))
         .collect();
-    let (kind, time) = record
-        .failure
-        .as_ref()
-        .map(|f| (f.kind.name(), f.time))
-        .unwrap_or(("unknown", None));
-    let at = time.map(|t| format!(" at t = {t} s")).unwrap_or_default();
-    let mut message: String = record.error.chars().take(MAX_FAILURE_MESSAGE).collect();
-    if message.len() < record.error.len() {
-        message.push_str("...");
+    let kind = record.failure.as_ref().map(|f| f.kind);
+    // The status and kind are printed: drop the words that repeat them.
+    let mut message = record.error.as_str();
+    message = message.strip_prefix("run failed: ").unwrap_or(message);
+    if let Some(kind) = kind {
+        message = message
+            .strip_prefix(&format!("{}: ", kind.name()))
+            .unwrap_or(message);
     }
     format!(
-        "case {} ({}): {} ({kind}{at}): {message}",
+        "case {} ({}): {} ({}): {}",
         record.id,
         parameters.join(", "),
-        record.status.name()
+        record.status.name(),
+        kind.map_or("unknown", |k| k.name()),
+        shorten(message, MAX_FAILURE_MESSAGE)
     )
+}
+
+/// `text` cut after at most `max` characters, at a space when there is one, with `...`.
+fn shorten(text: &str, max: usize) -> String {
+    if text.chars().count() <= max {
+        return text.to_string();
+    }
+    let cut: String = text.chars().take(max).collect();
+    let cut = cut.rsplit_once(' ').map_or(cut.as_str(), |(head, _)| head);
+    format!("{cut} ...")
 }
 
 /// Progress of a study: a bar on a terminal; off a terminal (a log file, a batch job) one

@@ -25,6 +25,34 @@ const COLORS: [RGBColor; 7] = [
     RGBColor(140, 86, 75),
 ];
 
+/// Point markers, one per line in turn, so that lines drawn on top of each other stay
+/// distinguishable.
+#[derive(Debug, Clone, Copy)]
+enum Marker {
+    Disc,
+    Ring,
+    Triangle,
+}
+
+impl Marker {
+    fn of(line: usize) -> Self {
+        [Marker::Disc, Marker::Ring, Marker::Triangle][line % 3]
+    }
+
+    /// The marker at `p`, as one element type for every shape.
+    fn at<C: Copy + 'static, DB: DrawingBackend>(
+        self,
+        p: C,
+        color: RGBColor,
+    ) -> DynElement<'static, DB, C> {
+        match self {
+            Marker::Disc => Circle::new(p, 3, color.filled()).into_dyn(),
+            Marker::Ring => Circle::new(p, 5, color.stroke_width(2)).into_dyn(),
+            Marker::Triangle => TriangleMarker::new(p, 5, color.filled()).into_dyn(),
+        }
+    }
+}
+
 const WIDTH: u32 = 1100;
 const LEGEND_WIDTH: u32 = 290;
 const PANEL_HEIGHT: u32 = 320;
@@ -157,12 +185,13 @@ fn bounds(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// A tick label with at most four significant digits (`0.0015`, `120`, `1e-5`).
-fn tick(v: &f64) -> String {
-    if v.abs() < 1e-300 {
+/// A tick label with at most four significant digits (`0.0015`, `120`, `1e-5`); a value
+/// within rounding of zero on an axis spanning `span` is written `0`.
+fn tick(v: f64, span: f64) -> String {
+    if v.abs() <= 1e-9 * span.abs() || v.abs() < 1e-300 {
         return "0".into();
     }
-    let rounded: f64 = format!("{v:.3e}").parse().unwrap_or(*v);
+    let rounded: f64 = format!("{v:.3e}").parse().unwrap_or(v);
     let plain = format!("{rounded}");
     if plain.len() > 9 {
         format!("{rounded:e}")
@@ -202,36 +231,40 @@ fn draw(path: &Path, title: &str, x_label: &str, panels: &[PanelData<'_>]) -> Re
             .configure_mesh()
             .x_desc(x_label)
             .y_desc(panel.column.axis_label())
-            .x_label_formatter(&tick)
-            .y_label_formatter(&tick)
+            .x_label_formatter(&|v| tick(*v, x1 - x0))
+            .y_label_formatter(&|v| tick(*v, y1 - y0))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(|e| err(&e))?;
-        let failed_y = y0 + 0.025 * (y1 - y0);
+        // Failed cases: crosses on the lower edge, stacked where several lines fail at the
+        // same parameter value.
+        let mut crosses: Vec<(f64, f64, RGBColor)> = Vec::new();
         for (k, line) in panel.lines.iter().enumerate() {
             let color = COLORS[k % COLORS.len()];
+            for &x in &line.failed {
+                let below = crosses.iter().filter(|c| c.0.total_cmp(&x).is_eq()).count();
+                let y = y0 + (0.025 + 0.04 * below as f64) * (y1 - y0);
+                crosses.push((x, y, color));
+            }
             chart
                 .draw_series(LineSeries::new(
                     line.points.iter().copied(),
                     color.stroke_width(2),
                 ))
                 .map_err(|e| err(&e))?;
+            let marker = Marker::of(k);
             chart
-                .draw_series(
-                    line.points
-                        .iter()
-                        .map(|&p| Circle::new(p, 3, color.filled())),
-                )
-                .map_err(|e| err(&e))?;
-            chart
-                .draw_series(
-                    line.failed
-                        .iter()
-                        .map(|&x| Cross::new((x, failed_y), 5, color.stroke_width(2))),
-                )
+                .draw_series(line.points.iter().map(|&p| marker.at(p, color)))
                 .map_err(|e| err(&e))?;
         }
+        chart
+            .draw_series(
+                crosses
+                    .iter()
+                    .map(|&(x, y, color)| Cross::new((x, y), 5, color.stroke_width(2))),
+            )
+            .map_err(|e| err(&e))?;
         draw_legend(&legend_area, &panel.lines).map_err(|e| err(&e))?;
     }
     root.present().map_err(|e| err(&e))?;
@@ -257,7 +290,7 @@ fn draw_legend<DB: DrawingBackend>(
             vec![(8, y), (36, y)],
             color.stroke_width(2),
         ))?;
-        area.draw(&Circle::new((22, y), 3, color.filled()))?;
+        area.draw(&Marker::of(k).at((22, y), color))?;
         area.draw(&Text::new(label.to_string(), (44, y - 8), font.clone()))?;
         y += 22;
     }
