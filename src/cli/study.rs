@@ -1,10 +1,14 @@
 //! `flexprr study` and `flexprr merge`: parameter sweeps in parallel, sharded and resumable
 //! (`docs/studies.md`).
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
-use std::time::Duration;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
 
-use flexprr_studies::study::{CaseStatus, Shard, Study, StudyError, StudyOptions};
+use flexprr_studies::study::{
+    CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress,
+};
 use flexprr_studies::{merge_studies, run_study};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -30,7 +34,8 @@ pub struct StudyArgs {
     /// Also write every case's full outputs (tables, summary, plots) into `cases/<id>/`.
     #[arg(long)]
     pub case_outputs: bool,
-    /// No progress bar.
+    /// No progress: neither the bar (on a terminal) nor the lines at every tenth of the
+    /// cases (off a terminal). Failed cases are still printed, one short line each.
     #[arg(long)]
     pub quiet: bool,
 }
@@ -47,9 +52,143 @@ pub struct MergeArgs {
 }
 
 fn failure(e: StudyError) -> Failure {
-    match e {
-        StudyError::Input { .. } | StudyError::Scene(_) => Failure::bad_input(e),
-        other => Failure::run(other),
+    if e.is_input() {
+        Failure::bad_input(e)
+    } else {
+        Failure::run(e)
+    }
+}
+
+/// Failure lines printed before the rest are only counted (all are in `results.csv`).
+const MAX_FAILURE_LINES: usize = 20;
+/// Longest failure message printed (characters); the full one is in `results.csv`.
+const MAX_FAILURE_MESSAGE: usize = 90;
+
+/// A short line for a failed case: its parameters by key, the status and kind, and the start
+/// of the message, e.g. `case 19 (links.section.thickness = 0.002, machine.platform_mass =
+/// 2): failed (diverged): link 2 diverged at t = 0.0084 s: deflection 1.027e-1 m at ...`.
+fn failure_line(study: &Study, record: &CaseRecord) -> String {
+    let parameters: Vec<String> = study
+        .axes
+        .iter()
+        .zip(&record.parameters)
+        .map(|(axis, value)| format!("{} = {value}", axis.key))
+        .collect();
+    let kind = record.failure.as_ref().map(|f| f.kind);
+    // The status and kind are printed: drop the words that repeat them.
+    let mut message = record.error.as_str();
+    message = message.strip_prefix("run failed: ").unwrap_or(message);
+    if let Some(kind) = kind {
+        message = message
+            .strip_prefix(&format!("{}: ", kind.name()))
+            .unwrap_or(message);
+    }
+    format!(
+        "case {} ({}): {} ({}): {}",
+        record.id,
+        parameters.join(", "),
+        record.status.name(),
+        kind.map_or("unknown", |k| k.name()),
+        shorten(message, MAX_FAILURE_MESSAGE)
+    )
+}
+
+/// `text` cut after at most `max` characters, at a space when there is one, with `...`.
+fn shorten(text: &str, max: usize) -> String {
+    if text.chars().count() <= max {
+        return text.to_string();
+    }
+    let cut: String = text.chars().take(max).collect();
+    let cut = cut.rsplit_once(' ').map_or(cut.as_str(), |(head, _)| head);
+    format!("{cut} ...")
+}
+
+/// Progress of a study: a bar on a terminal; off a terminal (a log file, a batch job) one
+/// line each time another tenth of the cases is done; nothing with `--quiet`.
+struct StudyProgressView {
+    bar: Option<ProgressBar>,
+    lines: bool,
+    name: String,
+    start: Instant,
+    last_tenth: AtomicUsize,
+    failure_lines: AtomicUsize,
+}
+
+impl StudyProgressView {
+    fn new(study: &Study, total: u64, quiet: bool) -> Self {
+        let terminal = std::io::stderr().is_terminal();
+        let bar = (!quiet && terminal).then(|| {
+            let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases, {msg}, {per_sec}, ~{eta} left",
+                )
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            bar.set_message("0 failed");
+            bar.enable_steady_tick(Duration::from_millis(250));
+            bar
+        });
+        Self {
+            bar,
+            lines: !quiet && !terminal,
+            name: study.name.clone(),
+            start: Instant::now(),
+            last_tenth: AtomicUsize::new(0),
+            failure_lines: AtomicUsize::new(0),
+        }
+    }
+
+    fn update(&self, study: &Study, progress: &StudyProgress, record: &CaseRecord) {
+        if let Some(bar) = &self.bar {
+            if progress.done == progress.resumed + 1 && progress.resumed > 0 {
+                bar.set_position(progress.resumed as u64);
+                bar.reset_eta();
+            }
+            bar.set_position(progress.done as u64);
+            bar.set_message(format!("{} failed", progress.failed));
+        }
+        if record.status != CaseStatus::Ok {
+            let shown = self.failure_lines.fetch_add(1, Ordering::SeqCst);
+            let line = match shown.cmp(&MAX_FAILURE_LINES) {
+                std::cmp::Ordering::Less => Some(failure_line(study, record)),
+                std::cmp::Ordering::Equal => Some(
+                    "(more failed cases: see the status and error columns of results.csv)"
+                        .to_string(),
+                ),
+                std::cmp::Ordering::Greater => None,
+            };
+            if let Some(line) = line {
+                self.print(&line);
+            }
+        }
+        if self.lines && progress.total > 0 {
+            let tenth = 10 * progress.done / progress.total;
+            if self.last_tenth.fetch_max(tenth, Ordering::SeqCst) < tenth {
+                eprintln!(
+                    "{}: {}/{} cases ({} %), {} failed, {:.1} s",
+                    self.name,
+                    progress.done,
+                    progress.total,
+                    10 * tenth,
+                    progress.failed,
+                    self.start.elapsed().as_secs_f64()
+                );
+            }
+        }
+    }
+
+    fn print(&self, line: &str) {
+        match &self.bar {
+            Some(bar) => bar.suspend(|| eprintln!("{line}")),
+            None => eprintln!("{line}"),
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
     }
 }
 
@@ -60,22 +199,7 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
     }
     let study = Study::load(&args.study).map_err(failure)?;
     let total = study.shard_cases(args.shard).len() as u64;
-    let bar = ProgressBar::with_draw_target(
-        Some(total),
-        if args.quiet {
-            ProgressDrawTarget::hidden()
-        } else {
-            ProgressDrawTarget::stderr()
-        },
-    );
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} cases, {msg}, {per_sec}, ~{eta} left",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_message("0 failed");
-    bar.enable_steady_tick(Duration::from_millis(250));
+    let view = StudyProgressView::new(&study, total, args.quiet);
     let options = StudyOptions {
         threads: args.threads,
         shard: args.shard,
@@ -83,25 +207,9 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
         case_outputs: args.case_outputs,
     };
     let summary = run_study(&study, &args.out, &options, &|progress, record| {
-        if progress.done == progress.resumed + 1 && progress.resumed > 0 {
-            bar.set_position(progress.resumed as u64);
-            bar.reset_eta();
-        }
-        bar.set_position(progress.done as u64);
-        bar.set_message(format!("{} failed", progress.failed));
-        if record.status != CaseStatus::Ok {
-            bar.suspend(|| {
-                eprintln!(
-                    "case {} ({}): {}: {}",
-                    record.id,
-                    record.parameters.join(", "),
-                    record.status.name(),
-                    record.error
-                );
-            });
-        }
+        view.update(&study, progress, record);
     });
-    bar.finish_and_clear();
+    view.finish();
     let summary = summary.map_err(failure)?;
     let p = summary.progress;
     println!(

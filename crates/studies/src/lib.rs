@@ -1,7 +1,17 @@
 //! Studies: parameter sweeps over a base scene (any dotted key, lists or ranges, product or
 //! zip), run in parallel, resumable and shardable, with derived quantities per case
 //! (`docs/studies.md`).
+//!
+//! Study files are parsed with the scene parser, so a bad value names its file, line, column
+//! and key; case records are checked against their case before a resume trusts them.
 
+mod error;
+mod file;
+pub mod keys;
+mod plot;
+mod quantity;
+mod record;
+mod runner;
 pub mod study;
 
 pub use study::{Study, StudyError, StudyOptions, merge_studies, run_study};

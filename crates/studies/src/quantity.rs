@@ -1,0 +1,293 @@
+//! Derived quantities of one case and the typed columns they fill in `results.csv`
+//! (`docs/studies.md`, "Derived quantities").
+
+use flexprr_run::RunResult;
+use serde::{Deserialize, Serialize};
+
+use crate::record::format_value;
+
+/// A derived quantity of one case (links and modes are 1-based, as in the output tables).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Quantity {
+    /// Lowest and highest frequency of a mode over the motion (output `frequencies`):
+    /// columns `f_min_<link>_<mode>_Hz`, `f_max_<link>_<mode>_Hz`.
+    FrequencyRange {
+        /// Link (1-3).
+        link: usize,
+        /// Mode (1-based).
+        mode: usize,
+    },
+    /// Lowest `omega^2 / omega_0^2` of a mode (1 unloaded, <= 0 buckled; output
+    /// `frequencies`): column `stiffness_ratio_min_<link>_<mode>`.
+    StiffnessRatio {
+        /// Link (1-3).
+        link: usize,
+        /// Mode (1-based).
+        mode: usize,
+    },
+    /// Largest tensile and compressive axial force at either end of a link over the motion
+    /// (output `axial_forces`, else `frequencies`): columns `P_max_<link>_N`, `P_min_<link>_N`.
+    PeakAxialForce {
+        /// Link (1-3).
+        link: usize,
+    },
+    /// Largest |w| at the first `deflection_xi` (output `deflections`): column
+    /// `w_peak_<link>_m`.
+    PeakDeflection {
+        /// Link (1-3).
+        link: usize,
+    },
+    /// Whether the link buckles (stiffness not positive definite) and when it first does
+    /// (output `frequencies`): columns `buckles_<link>` (`yes`/`no`), `buckling_start_<link>_s`.
+    Buckling {
+        /// Link (1-3).
+        link: usize,
+    },
+}
+
+/// What a quantity column holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColumnValues {
+    /// A finite number, written by [`format_value`].
+    Number,
+    /// `yes` or `no`.
+    Flag,
+    /// A finite number, or empty when the event did not happen (e.g. no buckling).
+    OptionalNumber,
+    /// Not known (a merge knows only the header): any of the above.
+    Unknown,
+}
+
+/// One quantity column of `results.csv`: its header, a label and unit for plots, and what
+/// its values are (checked when a case record is read back).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Column {
+    /// Header in `results.csv`, e.g. `P_max_1_N`.
+    pub name: String,
+    /// Words for an axis label, e.g. `largest tension in link 1`.
+    pub label: String,
+    /// SI unit (empty for ratios and flags).
+    pub unit: &'static str,
+    /// What the column holds.
+    pub values: ColumnValues,
+}
+
+impl Column {
+    /// A column known only by its header (its values may be anything a column holds).
+    pub fn untyped(name: &str) -> Self {
+        Self::new(name.to_string(), name.to_string(), "", ColumnValues::Unknown)
+    }
+
+    fn new(name: String, label: String, unit: &'static str, values: ColumnValues) -> Self {
+        Self {
+            name,
+            label,
+            unit,
+            values,
+        }
+    }
+
+    /// Axis label: the words and the unit in parentheses, e.g. `largest tension in link 1 (N)`.
+    pub fn axis_label(&self) -> String {
+        with_unit(&self.label, self.unit)
+    }
+
+    /// Whether `value` is a well-formed entry of this column: a finite number in
+    /// [`format_value`]'s canonical form, `yes`/`no`, or empty where allowed.
+    pub fn accepts(&self, value: &str) -> bool {
+        let number = || {
+            value
+                .parse::<f64>()
+                .is_ok_and(|v| v.is_finite() && format_value(v) == value)
+        };
+        match self.values {
+            ColumnValues::Number => number(),
+            ColumnValues::Flag => value == "yes" || value == "no",
+            ColumnValues::OptionalNumber => value.is_empty() || number(),
+            ColumnValues::Unknown => {
+                value.is_empty() || value == "yes" || value == "no" || number()
+            }
+        }
+    }
+}
+
+/// `label (unit)`, or the label alone without a unit.
+pub(crate) fn with_unit(label: &str, unit: &str) -> String {
+    if unit.is_empty() {
+        label.to_string()
+    } else {
+        format!("{label} ({unit})")
+    }
+}
+
+impl Quantity {
+    /// Column names.
+    pub fn columns(&self) -> Vec<String> {
+        self.column_specs().into_iter().map(|c| c.name).collect()
+    }
+
+    /// The typed columns, in table order.
+    pub fn column_specs(&self) -> Vec<Column> {
+        use ColumnValues::{Flag, Number, OptionalNumber};
+        match *self {
+            Quantity::FrequencyRange { link, mode } => vec![
+                Column::new(
+                    format!("f_min_{link}_{mode}_Hz"),
+                    format!("lowest frequency of link {link}, mode {mode}"),
+                    "Hz",
+                    Number,
+                ),
+                Column::new(
+                    format!("f_max_{link}_{mode}_Hz"),
+                    format!("highest frequency of link {link}, mode {mode}"),
+                    "Hz",
+                    Number,
+                ),
+            ],
+            Quantity::StiffnessRatio { link, mode } => vec![Column::new(
+                format!("stiffness_ratio_min_{link}_{mode}"),
+                format!("lowest ω²/ω₀² of link {link}, mode {mode}"),
+                "",
+                Number,
+            )],
+            Quantity::PeakAxialForce { link } => vec![
+                Column::new(
+                    format!("P_max_{link}_N"),
+                    format!("largest tension in link {link}"),
+                    "N",
+                    Number,
+                ),
+                Column::new(
+                    format!("P_min_{link}_N"),
+                    format!("largest compression in link {link}"),
+                    "N",
+                    Number,
+                ),
+            ],
+            Quantity::PeakDeflection { link } => vec![Column::new(
+                format!("w_peak_{link}_m"),
+                format!("peak deflection of link {link}"),
+                "m",
+                Number,
+            )],
+            Quantity::Buckling { link } => vec![
+                Column::new(
+                    format!("buckles_{link}"),
+                    format!("link {link} buckles"),
+                    "",
+                    Flag,
+                ),
+                Column::new(
+                    format!("buckling_start_{link}_s"),
+                    format!("time link {link} starts to buckle"),
+                    "s",
+                    OptionalNumber,
+                ),
+            ],
+        }
+    }
+
+    /// Link (1-based).
+    pub fn link(&self) -> usize {
+        match *self {
+            Quantity::FrequencyRange { link, .. }
+            | Quantity::StiffnessRatio { link, .. }
+            | Quantity::PeakAxialForce { link }
+            | Quantity::PeakDeflection { link }
+            | Quantity::Buckling { link } => link,
+        }
+    }
+
+    /// Mode (1-based), for the quantities of one mode.
+    pub fn mode(&self) -> Option<usize> {
+        match *self {
+            Quantity::FrequencyRange { mode, .. } | Quantity::StiffnessRatio { mode, .. } => {
+                Some(mode)
+            }
+            _ => None,
+        }
+    }
+
+    /// The quantity's values for one run, formatted with [`format_value`].
+    ///
+    /// # Errors
+    /// A message when the run lacks the output the quantity needs or the mode does not exist.
+    pub fn derive(&self, result: &RunResult) -> Result<Vec<String>, String> {
+        let i = self.link() - 1;
+        let needs = |output: &str| {
+            format!(
+                "quantity {} needs the output \"{output}\"",
+                self.columns()[0]
+            )
+        };
+        match *self {
+            Quantity::FrequencyRange { mode, .. } | Quantity::StiffnessRatio { mode, .. } => {
+                let history = result
+                    .frequencies
+                    .as_ref()
+                    .ok_or_else(|| needs("frequencies"))?;
+                let range = history
+                    .ranges
+                    .iter()
+                    .find(|r| r.link == i && r.mode + 1 == mode)
+                    .ok_or_else(|| format!("link {} has no mode {mode}", i + 1))?;
+                Ok(match self {
+                    Quantity::FrequencyRange { .. } => {
+                        vec![format_value(range.min_hz), format_value(range.max_hz)]
+                    }
+                    _ => vec![format_value(range.min_stiffness_ratio)],
+                })
+            }
+            Quantity::PeakAxialForce { .. } => {
+                let forces: Vec<f64> = if let Some(table) = result.table("axial_forces") {
+                    let b = table.column(&format!("P_B_{}_N", i + 1)).unwrap_or(&[]);
+                    let c = table.column(&format!("P_C_{}_N", i + 1)).unwrap_or(&[]);
+                    b.iter().chain(c).copied().collect()
+                } else if let Some(history) = &result.frequencies {
+                    history.end_forces[i]
+                        .iter()
+                        .flat_map(|&(b, c)| [b, c])
+                        .collect()
+                } else {
+                    return Err(needs("axial_forces\" or \"frequencies"));
+                };
+                let max = forces.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let min = forces.iter().copied().fold(f64::INFINITY, f64::min);
+                Ok(vec![format_value(max), format_value(min)])
+            }
+            Quantity::PeakDeflection { .. } => {
+                let table = result
+                    .table("deflections")
+                    .ok_or_else(|| needs("deflections"))?;
+                let prefix = format!("w_{}_xi", i + 1);
+                let column = table
+                    .columns
+                    .iter()
+                    .position(|c| c.starts_with(&prefix) && !c.contains("no_axial"))
+                    .ok_or_else(|| needs("deflections"))?;
+                let peak = table.data[column]
+                    .iter()
+                    .fold(0.0_f64, |m, w| m.max(w.abs()));
+                Ok(vec![format_value(peak)])
+            }
+            Quantity::Buckling { .. } => {
+                let history = result
+                    .frequencies
+                    .as_ref()
+                    .ok_or_else(|| needs("frequencies"))?;
+                let start = history
+                    .buckling
+                    .iter()
+                    .filter(|b| b.link == i)
+                    .map(|b| b.t_start)
+                    .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
+                Ok(match start {
+                    Some(t) => vec!["yes".into(), format_value(t)],
+                    None => vec!["no".into(), String::new()],
+                })
+            }
+        }
+    }
+}
+

@@ -1,0 +1,449 @@
+//! Running a study into an output directory (in parallel, sharded, resumable) and merging
+//! shard directories (`docs/studies.md`, "Output directory").
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use flexprr_run::write_outputs;
+
+use crate::error::{StudyError, io_err};
+use crate::plot::write_plots;
+use crate::quantity::Column;
+use crate::record::{CaseRecord, CaseStatus, case_file, read_case_record_files, results_csv};
+use crate::study::{Case, Study};
+
+/// Slice `index` (1-based) of `count`: the cases with `id % count == index - 1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based index.
+    pub index: usize,
+    /// Number of shards.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Whether case `id` belongs to this shard.
+    pub fn contains(&self, id: usize) -> bool {
+        id % self.count == self.index - 1
+    }
+}
+
+impl FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("shard \"{s}\": expected k/n with 1 <= k <= n, e.g. 2/8");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let index: usize = k.trim().parse().map_err(|_| bad())?;
+        let count: usize = n.trim().parse().map_err(|_| bad())?;
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// How to run a study.
+#[derive(Debug, Clone, Default)]
+pub struct StudyOptions {
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Run only this slice of the cases.
+    pub shard: Option<Shard>,
+    /// Skip cases already recorded in the output directory.
+    pub resume: bool,
+    /// Write each case's full outputs into `cases/<id>/`.
+    pub case_outputs: bool,
+}
+
+/// Progress after a case finished (for a progress bar).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StudyProgress {
+    /// Cases of this run (shard), including those recorded before a resume.
+    pub total: usize,
+    /// Cases recorded so far (including those recorded before a resume).
+    pub done: usize,
+    /// Of those, not ok.
+    pub failed: usize,
+    /// Cases found already recorded when the run started.
+    pub resumed: usize,
+}
+
+/// What a study run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudySummary {
+    /// Final progress.
+    pub progress: StudyProgress,
+    /// Cases run now (not resumed).
+    pub ran: usize,
+    /// `results.csv`.
+    pub results: PathBuf,
+}
+
+/// Contents of `study.json`: identifies the study an output directory belongs to.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+struct StudyManifest {
+    name: String,
+    fingerprint: String,
+    cases: usize,
+    columns: Vec<String>,
+    shard: Option<String>,
+}
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(io_err(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(io_err(path))
+}
+
+fn read_manifest(dir: &Path) -> Result<Option<StudyManifest>, StudyError> {
+    let path = dir.join("study.json");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+    serde_json::from_str(&text)
+        .map(Some)
+        .map_err(|e| StudyError::Directory {
+            dir: path.display().to_string(),
+            message: format!("not a study manifest: {e}"),
+        })
+}
+
+fn write_manifest(dir: &Path, manifest: &StudyManifest) -> Result<(), StudyError> {
+    let text = serde_json::to_string_pretty(manifest).unwrap_or_default();
+    write_atomic(&dir.join("study.json"), text.as_bytes())
+}
+
+/// The records already in `out`, each checked against its case with [`Study::check_record`];
+/// refuses a directory of another study, or one with records but no `resume`.
+fn existing_records(
+    study: &Study,
+    out: &Path,
+    resume: bool,
+) -> Result<BTreeMap<usize, CaseRecord>, StudyError> {
+    let dir_err = |message: String| StudyError::Directory {
+        dir: out.display().to_string(),
+        message,
+    };
+    let files = read_case_record_files(out)?;
+    if let Some(manifest) = read_manifest(out)? {
+        if manifest.fingerprint != study.fingerprint {
+            return Err(dir_err(format!(
+                "holds results of another study or another version of it (\"{}\", fingerprint {}, this one {}); use a new directory",
+                manifest.name, manifest.fingerprint, study.fingerprint
+            )));
+        }
+    }
+    if !files.is_empty() && !resume {
+        return Err(dir_err(format!(
+            "already holds {} case results; pass --resume to complete it or use a new directory",
+            files.len()
+        )));
+    }
+    let mut records = BTreeMap::new();
+    for (id, (path, record)) in files {
+        if record.fingerprint != study.fingerprint {
+            return Err(dir_err(format!(
+                "case {id} was recorded by another study (fingerprint {})",
+                record.fingerprint
+            )));
+        }
+        study
+            .check_record(&record)
+            .map_err(|message| StudyError::Record {
+                path: path.display().to_string(),
+                message,
+            })?;
+        records.insert(id, record);
+    }
+    Ok(records)
+}
+
+/// Runs a study (or one shard of it) into `out`: `study.json`, `cases/<id>.json` written
+/// atomically as each case finishes, `results.csv` at the end, plots if the study asks,
+/// `cases/<id>/` full outputs with [`StudyOptions::case_outputs`]. `on_case` is called after
+/// every finished case (from worker threads).
+///
+/// With `resume`, every record already in `out` is checked against its case first (same
+/// parameters, the right number of finite values or a failure matching its status); a record
+/// that does not fit is refused with [`StudyError::Record`] naming its file, never copied
+/// into the table.
+///
+/// # Errors
+/// [`StudyError::Directory`] when `out` holds another study's results, or results without
+/// `resume`; [`StudyError::Record`] for a bad record; [`StudyError::Io`] when files cannot
+/// be written. Failing cases are not errors.
+pub fn run_study(
+    study: &Study,
+    out: &Path,
+    options: &StudyOptions,
+    on_case: &(dyn Fn(&StudyProgress, &CaseRecord) + Sync),
+) -> Result<StudySummary, StudyError> {
+    let cases_dir = out.join("cases");
+    std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
+    let existing = existing_records(study, out, options.resume)?;
+    write_manifest(
+        out,
+        &StudyManifest {
+            name: study.name.clone(),
+            fingerprint: study.fingerprint.clone(),
+            cases: study.cases.len(),
+            columns: study.columns(),
+            shard: options.shard.map(|s| s.to_string()),
+        },
+    )?;
+
+    let mine = study.shard_cases(options.shard);
+    let pending: Vec<&Case> = mine
+        .iter()
+        .copied()
+        .filter(|c| !existing.contains_key(&c.id))
+        .collect();
+    let resumed = mine.len() - pending.len();
+    let failed_before = mine
+        .iter()
+        .filter(|c| {
+            existing
+                .get(&c.id)
+                .is_some_and(|r| r.status != CaseStatus::Ok)
+        })
+        .count();
+    let progress = StudyProgress {
+        total: mine.len(),
+        done: resumed,
+        failed: failed_before,
+        resumed,
+    };
+    let progress = run_pending(study, out, options, &pending, progress, on_case)?;
+
+    let records: BTreeMap<usize, CaseRecord> = read_case_record_files(out)?
+        .into_iter()
+        .map(|(id, (_, r))| (id, r))
+        .collect();
+    let mine_records: Vec<&CaseRecord> = mine.iter().filter_map(|c| records.get(&c.id)).collect();
+    let results = out.join("results.csv");
+    write_atomic(
+        &results,
+        &results_csv(&study.columns(), mine_records.iter().copied())?,
+    )?;
+    if options.shard.is_none() {
+        write_plots(study, out, &records)?;
+    }
+    Ok(StudySummary {
+        progress,
+        ran: pending.len(),
+        results,
+    })
+}
+
+/// Runs `pending` cases on the worker pool, writing each record (and its full outputs when
+/// asked) as it finishes; stops at the first file-system error. Returns the final progress.
+fn run_pending(
+    study: &Study,
+    out: &Path,
+    options: &StudyOptions,
+    pending: &[&Case],
+    start: StudyProgress,
+    on_case: &(dyn Fn(&StudyProgress, &CaseRecord) + Sync),
+) -> Result<StudyProgress, StudyError> {
+    let done = AtomicUsize::new(start.done);
+    let failed = AtomicUsize::new(start.failed);
+    let first_error: Mutex<Option<StudyError>> = Mutex::new(None);
+    let dir_err = |message: String| StudyError::Directory {
+        dir: out.display().to_string(),
+        message,
+    };
+    let work = || {
+        pending.par_iter().for_each(|case| {
+            if first_error.lock().map(|e| e.is_some()).unwrap_or(true) {
+                return;
+            }
+            let (record, ran) = study.run_case(case);
+            let mut outcome = Ok(());
+            if options.case_outputs {
+                if let Some((scene, result)) = &ran {
+                    let dir = out.join("cases").join(format!("{:06}", case.id));
+                    outcome = write_outputs(scene, result, &dir)
+                        .map(|_| ())
+                        .map_err(|e| dir_err(e.to_string()));
+                }
+            }
+            if outcome.is_ok() {
+                let bytes = serde_json::to_vec_pretty(&record).unwrap_or_default();
+                outcome = write_atomic(&case_file(out, case.id), &bytes);
+            }
+            if let Err(e) = outcome {
+                if let Ok(mut slot) = first_error.lock() {
+                    slot.get_or_insert(e);
+                }
+                return;
+            }
+            if record.status != CaseStatus::Ok {
+                failed.fetch_add(1, Ordering::SeqCst);
+            }
+            let progress = StudyProgress {
+                done: done.fetch_add(1, Ordering::SeqCst) + 1,
+                failed: failed.load(Ordering::SeqCst),
+                ..start
+            };
+            on_case(&progress, &record);
+        });
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| dir_err(format!("cannot start worker threads: {e}")))?;
+    pool.install(work);
+    if let Some(e) = first_error.into_inner().ok().flatten() {
+        return Err(e);
+    }
+    Ok(StudyProgress {
+        done: done.load(Ordering::SeqCst),
+        failed: failed.load(Ordering::SeqCst),
+        ..start
+    })
+}
+
+/// What a merge did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MergeSummary {
+    /// Cases in the merged table.
+    pub cases: usize,
+    /// Of those, not ok.
+    pub failed: usize,
+    /// `results.csv`.
+    pub results: PathBuf,
+}
+
+/// Reads one shard directory into `records`: its manifest must match `first` (when there is
+/// one), and each record must be consistent, inside the study and equal to the same case
+/// from other directories.
+fn merge_one(
+    dir: &Path,
+    first: Option<&StudyManifest>,
+    records: &mut BTreeMap<usize, CaseRecord>,
+) -> Result<StudyManifest, StudyError> {
+    let dir_err = |message: String| StudyError::Directory {
+        dir: dir.display().to_string(),
+        message,
+    };
+    let m = read_manifest(dir)?
+        .ok_or_else(|| dir_err("no study.json: not a study output directory".into()))?;
+    if let Some(first) = first {
+        if first.fingerprint != m.fingerprint || first.columns != m.columns {
+            return Err(dir_err(format!(
+                "belongs to study \"{}\" (fingerprint {}), the first directory to \"{}\" ({})",
+                m.name, m.fingerprint, first.name, first.fingerprint
+            )));
+        }
+    }
+    for (id, (path, r)) in read_case_record_files(dir)? {
+        if r.fingerprint != m.fingerprint {
+            return Err(dir_err(format!("case {id} was recorded by another study")));
+        }
+        if id >= m.cases {
+            return Err(dir_err(format!(
+                "case {id} is outside the study's {} cases",
+                m.cases
+            )));
+        }
+        // The header is all a merge knows of the columns: case, axes, quantities, status,
+        // error; the parameters fill the axis cells.
+        let quantity_cells = m.columns.len().saturating_sub(3 + r.parameters.len());
+        let start = 1 + r.parameters.len();
+        let columns: Vec<Column> = m
+            .columns
+            .iter()
+            .skip(start)
+            .take(quantity_cells)
+            .map(|name| Column::untyped(name))
+            .collect();
+        r.check(&columns, None)
+            .map_err(|message| StudyError::Record {
+                path: path.display().to_string(),
+                message,
+            })?;
+        match records.get(&id) {
+            Some(other) if *other != r => {
+                return Err(dir_err(format!(
+                    "case {id} differs from the same case in another directory"
+                )));
+            }
+            _ => {
+                records.insert(id, r);
+            }
+        }
+    }
+    Ok(m)
+}
+
+/// Combines shard directories of one study into `out`: checks that they belong to the same
+/// study, that each record is consistent, that duplicated cases agree and that every case
+/// is present, then writes the case records, `study.json` and the same `results.csv` a
+/// single run gives.
+///
+/// # Errors
+/// [`StudyError::Directory`] for mixed studies, conflicting or missing cases;
+/// [`StudyError::Record`] for an inconsistent record; [`StudyError::Io`] for unreadable or
+/// unwritable files.
+pub fn merge_studies(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary, StudyError> {
+    let mut manifest: Option<StudyManifest> = None;
+    let mut records: BTreeMap<usize, CaseRecord> = BTreeMap::new();
+    for dir in dirs {
+        let m = merge_one(dir, manifest.as_ref(), &mut records)?;
+        manifest.get_or_insert(m);
+    }
+    let out_err = |message: String| StudyError::Directory {
+        dir: out.display().to_string(),
+        message,
+    };
+    let mut manifest = manifest.ok_or_else(|| out_err("no directories to merge".into()))?;
+    let missing: Vec<usize> = (0..manifest.cases)
+        .filter(|id| !records.contains_key(id))
+        .collect();
+    if !missing.is_empty() {
+        let shown: Vec<String> = missing.iter().take(10).map(usize::to_string).collect();
+        return Err(out_err(format!(
+            "{} of {} cases missing (e.g. {}); run the missing shards or --resume them first",
+            missing.len(),
+            manifest.cases,
+            shown.join(", ")
+        )));
+    }
+    let cases_dir = out.join("cases");
+    std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
+    if let Some(existing) = read_manifest(out)? {
+        if existing.fingerprint != manifest.fingerprint {
+            return Err(out_err("holds results of another study".into()));
+        }
+    }
+    manifest.shard = None;
+    write_manifest(out, &manifest)?;
+    for r in records.values() {
+        let bytes = serde_json::to_vec_pretty(r).unwrap_or_default();
+        write_atomic(&case_file(out, r.id), &bytes)?;
+    }
+    let results = out.join("results.csv");
+    write_atomic(&results, &results_csv(&manifest.columns, records.values())?)?;
+    Ok(MergeSummary {
+        cases: records.len(),
+        failed: records
+            .values()
+            .filter(|r| r.status != CaseStatus::Ok)
+            .count(),
+        results,
+    })
+}
