@@ -10,7 +10,8 @@ use std::sync::Arc;
 
 use super::Failure;
 use flexprr_beam::{AxialLoad, Basis, Coupling, LinkFrequencies, ModalIntegrals, frequencies};
-use flexprr_scene::link::{BasisConfig, MaterialConfig, SectionConfig, build_basis, build_section};
+use flexprr_scene::link::{MaterialConfig, SectionConfig, build_section, check_link};
+use flexprr_scene::{BasisParams, BasisTable, ModeCount, Registry, ScenarioError};
 use serde::Deserialize;
 
 /// Arguments of `flexprr beam`.
@@ -39,8 +40,8 @@ pub struct LinkFile {
     pub material: MaterialConfig,
     /// Cross-section along the link.
     pub section: SectionConfig,
-    /// Assumed-mode basis.
-    pub basis: BasisConfig,
+    /// Assumed-mode basis (`kind` and its keys, as in scene files).
+    pub basis: BasisTable,
     /// Axial force, tension positive (default: none).
     #[serde(default)]
     pub load: LoadConfig,
@@ -87,20 +88,61 @@ struct Link {
     reported: usize,
 }
 
-fn build_link(file: &LinkFile) -> Result<Link, String> {
-    let section = build_section(&file.material, &file.section)
-        .map_err(|(key, message)| format!("{key}: {message}"))?;
-    let basis = build_basis(&file.basis, file.modes)
-        .map_err(|(key, message)| format!("{key}: {message}"))?;
-    if let BasisConfig::Hermite { elements, .. } = file.basis {
-        if file.modes == 0 || file.modes > basis.len() {
-            return Err(format!(
-                "modes = {} must be between 1 and the {} nodal unknowns of {} elements",
-                file.modes,
-                basis.len(),
-                elements
+/// A bad-input error at `key` of the link file, located in `text`.
+fn input_error(path: &str, text: &str, key: &str, message: impl Into<String>) -> String {
+    ScenarioError::Input {
+        location: flexprr_scene::locate(path, text, key),
+        key: key.to_string(),
+        message: message.into(),
+    }
+    .to_string()
+}
+
+fn build_link(path: &str, text: &str, file: &LinkFile) -> Result<Link, String> {
+    check_link(&file.material, &file.section, file.length)
+        .map_err(|(key, message)| input_error(path, text, &key, message))?;
+    for (key, value) in [
+        ("load.p0", file.load.p0),
+        ("load.p1", file.load.p1),
+        ("load.p2", file.load.p2),
+    ] {
+        if !value.is_finite() {
+            return Err(input_error(
+                path,
+                text,
+                key,
+                format!("expected a finite number, got {value:?}"),
             ));
         }
+    }
+    let section = build_section(&file.material, &file.section)
+        .map_err(|(key, message)| input_error(path, text, &key, message))?;
+    let registry = Registry::default();
+    let params = BasisParams::new(path, text, "basis", &file.basis.params);
+    // For a basis sized by its own keys, `modes` is only how many modes are reported.
+    let sized_by_modes = registry
+        .basis(&file.basis.kind)
+        .is_none_or(|f| f.mode_count() == ModeCount::FromModes);
+    let basis = registry
+        .build_basis(
+            &params,
+            &file.basis.kind,
+            "modes",
+            sized_by_modes.then_some(file.modes),
+        )
+        .map_err(|e| e.to_string())?;
+    if file.modes == 0 || file.modes > basis.len() {
+        return Err(input_error(
+            path,
+            text,
+            "modes",
+            format!(
+                "modes = {} must be between 1 and the {} functions of the {} basis",
+                file.modes,
+                basis.len(),
+                basis.name()
+            ),
+        ));
     }
     let integrals = ModalIntegrals::compute(basis.as_ref(), section.as_ref(), file.length)
         .map_err(|e| format!("modal integrals: {e}"))?;
@@ -116,10 +158,9 @@ fn build_link(file: &LinkFile) -> Result<Link, String> {
 /// Runs the command.
 pub fn run(args: BeamArgs) -> Result<(), Failure> {
     let path = args.file.display().to_string();
-    let text = std::fs::read_to_string(&args.file)
-        .map_err(|e| Failure::bad_input(format!("{path}: cannot read: {e}")))?;
+    let text = flexprr_scene::read_input_file(&args.file).map_err(Failure::bad_input)?;
     let file = parse_link_file(&path, &text).map_err(Failure::bad_input)?;
-    let link = build_link(&file).map_err(|e| Failure::bad_input(format!("{path}: {e}")))?;
+    let link = build_link(&path, &text, &file).map_err(Failure::bad_input)?;
     let load = AxialLoad {
         p0: file.load.p0,
         p1: file.load.p1,

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use flexprr_run::{
     RunResult, WriteOptions, run as run_scene, table_one_markdown, write_outputs_with,
 };
-use flexprr_scene::{ScenarioError, Scene};
+use flexprr_scene::{InputKind, ScenarioError, Scene};
 
 use super::Failure;
 
@@ -167,9 +167,27 @@ fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path
     }
 }
 
-/// Validates a scene without running it.
+/// Validates a scene without running it. A study or link file is named as such, with the
+/// command that reads it, instead of being reported key by key.
 pub fn check(args: CheckArgs) -> Result<(), Failure> {
-    let scene = Scene::load(&args.scene).map_err(failure)?;
+    let text = flexprr_scene::read_input_file(&args.scene).map_err(failure)?;
+    let shown = args.scene.display().to_string();
+    let other = match InputKind::of(&text) {
+        InputKind::Study => Some(("a study file", "flexprr study")),
+        InputKind::Link => Some(("a single-link file", "flexprr beam")),
+        InputKind::Scene | InputKind::Unknown => None,
+    };
+    if let Some((what, command)) = other {
+        return Err(Failure::bad_input(format!(
+            "{shown}: this is {what}, not a scene; check it with `{command} {shown}`"
+        )));
+    }
+    let name = args
+        .scene
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene");
+    let scene = Scene::from_text(&shown, name, &text).map_err(failure)?;
     let requests: Vec<&str> = scene.outputs.iter().map(|k| k.name()).collect();
     println!(
         "{}: ok ({} formulation, {} modes per link ({}), {} integrator, {} output times, outputs: {})",

@@ -27,7 +27,7 @@ impl fmt::Display for Location {
 pub enum ScenarioError {
     /// The scene file has a problem: syntax, unknown key, wrong type, value out of range,
     /// trajectory outside the workspace. Exit code 2 in the CLI.
-    #[error("{}{key}: {message}", location.as_ref().map(|l| format!("{l}: ")).unwrap_or_default())]
+    #[error("{}{}{message}", location.as_ref().map(|l| format!("{l}: ")).unwrap_or_default(), if key.is_empty() { String::new() } else { format!("{key}: ") })]
     Input {
         /// Where (if it could be located).
         location: Option<Location>,

@@ -1,6 +1,7 @@
 //! Scene files of flexprr: the TOML schema (`docs/scenes.md`), validation with errors that
-//! give the file, line, column and key, and the built [`Scene`] that runs, studies and
-//! benchmarks all start from.
+//! give the file, line, column and key, the [`Registry`] of named parts (integrators, bases,
+//! axial force models) and the built [`Scene`] that runs, studies and benchmarks all start
+//! from.
 //!
 //! ```no_run
 //! use flexprr_scene::Scene;
@@ -9,14 +10,30 @@
 //! ```
 
 mod error;
+mod input;
 pub mod link;
 mod locate;
 mod model;
+mod parse;
+mod registry;
 mod scene;
+mod schema;
+
+pub use flexprr_integrators::DynIntegrator;
 
 pub use error::{Location, ScenarioError};
+pub use input::{
+    InputKind, MAX_INPUT_BYTES, MAX_NAME_LEN, read_input_file, sanitize_name, unsafe_name_reason,
+};
 pub use locate::{line_column, locate};
-pub use scene::{
-    IntegratorConfig, LegConfig, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig,
-    OutputKind, Scene, SceneFile, TimeConfig, TrajectoryConfig, parse_scene, parse_toml,
+pub use parse::{parse_scene, parse_toml};
+pub use registry::{
+    BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, ModeCount,
+    Registry,
+};
+pub use scene::Scene;
+pub use schema::{
+    BasisTable, BranchChoice, CouplingChoice, FormulationChoice, IntegratorConfig, LegConfig,
+    Layout, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig, OutputKind,
+    ProfileChoice, SceneFile, StiffnessChoice, TimeConfig, TrajectoryConfig,
 };

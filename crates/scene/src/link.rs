@@ -115,6 +115,98 @@ pub enum BasisConfig {
     },
 }
 
+/// Smallest length-to-thickness ratio accepted for an Euler-Bernoulli link: below about 10
+/// shear deformation and rotary inertia (Timoshenko) change the first frequency by several
+/// per cent, and the model ignores both.
+pub const MIN_SLENDERNESS: f64 = 10.0;
+
+/// Checks the material and section values of a link of length `length` before anything is
+/// built: positive, finite Young's modulus, density and dimensions, and slender enough for
+/// Euler-Bernoulli bending (`length / thickness >= MIN_SLENDERNESS` for the thickest part,
+/// and `height <= length`: a link taller than it is long is a plate). Errors name the key
+/// relative to the link table (`material.youngs_modulus`, `section.steps.1.thickness`).
+///
+/// # Errors
+/// `(key, message)` of the first bad value.
+pub fn check_link(
+    material: &MaterialConfig,
+    section: &SectionConfig,
+    length: f64,
+) -> Result<(), (String, String)> {
+    let positive = |key: &str, value: f64, unit: &str| {
+        if value.is_finite() && value > 0.0 {
+            Ok(())
+        } else {
+            Err((
+                key.to_string(),
+                format!("expected a positive number ({unit}), got {value:?}"),
+            ))
+        }
+    };
+    positive("material.youngs_modulus", material.youngs_modulus, "Pa")?;
+    positive("material.density", material.density, "kg/m^3")?;
+    // (key, thickness, height) of every rectangle.
+    let mut parts: Vec<(String, f64, f64)> = Vec::new();
+    match section {
+        SectionConfig::Uniform { thickness, height } => {
+            positive("section.thickness", *thickness, "m")?;
+            positive("section.height", *height, "m")?;
+            parts.push(("section".into(), *thickness, *height));
+        }
+        SectionConfig::Tapered {
+            thickness_start,
+            thickness_end,
+            height,
+        } => {
+            positive("section.thickness_start", *thickness_start, "m")?;
+            positive("section.thickness_end", *thickness_end, "m")?;
+            positive("section.height", *height, "m")?;
+            parts.push(("section".into(), thickness_start.max(*thickness_end), *height));
+        }
+        SectionConfig::Stepped { steps } => {
+            for (k, s) in steps.iter().enumerate() {
+                positive(&format!("section.steps.{k}.thickness"), s.thickness, "m")?;
+                positive(&format!("section.steps.{k}.height"), s.height, "m")?;
+                parts.push((format!("section.steps.{k}"), s.thickness, s.height));
+            }
+        }
+    }
+    if !(length.is_finite() && length > 0.0) {
+        return Err((
+            "length".into(),
+            format!("expected a positive number (m), got {length:?}"),
+        ));
+    }
+    for (key, thickness, height) in parts {
+        let ratio = length / thickness;
+        if ratio < MIN_SLENDERNESS {
+            let thickness_key = if key == "section" && !matches!(section, SectionConfig::Uniform { .. }) {
+                "section".to_string()
+            } else {
+                format!("{key}.thickness")
+            };
+            return Err((
+                thickness_key,
+                format!(
+                    "length / thickness = {length} m / {thickness} m = {ratio:.3} is below {MIN_SLENDERNESS}: \
+                     the Euler-Bernoulli link model needs a slender link (thickness at most length / {MIN_SLENDERNESS} = {} m)",
+                    length / MIN_SLENDERNESS
+                ),
+            ));
+        }
+        if height > length {
+            return Err((
+                format!("{key}.height"),
+                format!(
+                    "height {height} m is more than the length {length} m: such a link is a plate, \
+                     not the Euler-Bernoulli beam the model assumes"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Builds the section; errors name the offending key (relative to the section table).
 pub fn build_section(
     material: &MaterialConfig,

@@ -1,0 +1,493 @@
+//! The registry of named parts: the TOML names of integrators (`integrator.method`), bases
+//! (`links.basis.kind`) and axial force models (`model.axial_force`) and how to build each.
+//!
+//! [`Registry::default`] holds the built-ins; a program adds its own parts with
+//! [`Registry::register_integrator`], [`Registry::register_basis`] and
+//! [`Registry::register_axial_force`] and loads scenes through it with
+//! [`crate::Scene::load_with`] or [`crate::Scene::from_text_with`]. Nothing in the scene code
+//! matches on a name: a new part is one registration.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
+
+use flexprr_beam::{Basis, ClassicalBasis, HermiteBasis, SineBasis};
+use flexprr_dynamics::{
+    AxialForceModel, AxialModel, JointReactionAxialForce, NoAxialForce, PaperAxialForce,
+};
+use flexprr_integrators::{
+    Abm, Bdf, DynIntegrator, Interruption, IntegratorError, OdeSystem, Options, Rk45, Solution,
+};
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+
+use crate::error::ScenarioError;
+use crate::link::EndsConfig;
+use crate::locate::locate;
+
+/// Builds an integrator from the scene's options.
+pub type IntegratorConstructor = Arc<dyn Fn(Options) -> Box<dyn DynIntegrator> + Send + Sync>;
+
+/// The integrator a scene names: its registered name and constructor.
+#[derive(Clone)]
+pub struct MethodHandle {
+    name: String,
+    constructor: IntegratorConstructor,
+}
+
+impl MethodHandle {
+    /// A handle from a name and a constructor.
+    pub fn new(name: impl Into<String>, constructor: IntegratorConstructor) -> Self {
+        Self {
+            name: name.into(),
+            constructor,
+        }
+    }
+
+    /// The name the scene file gives (`integrator.method`).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The integrator configured with `options` (built by the registered constructor).
+    pub fn integrator(&self, options: Options) -> Box<dyn DynIntegrator> {
+        (self.constructor)(options)
+    }
+
+    /// Integrates `system` from `y0` at `t_out[0]` with this method and `options`, output at
+    /// `t_out` (the convenience the run layer uses).
+    ///
+    /// # Errors
+    /// The integrator's error; an empty `t_out` is [`IntegratorError::InvalidInput`].
+    pub fn solve<S: OdeSystem>(
+        &self,
+        options: Options,
+        system: &mut S,
+        y0: &[f64],
+        t_out: &[f64],
+    ) -> Result<Solution, IntegratorError> {
+        let Some(&t0) = t_out.first() else {
+            return Err(IntegratorError::InvalidInput(
+                "no output times requested".to_string(),
+            ));
+        };
+        self.integrator(options)
+            .solve_dyn(system, t0, y0, t_out, &[], &mut ())
+            .map_err(|interrupted| match interrupted.reason {
+                Interruption::Failed(e) => e,
+                Interruption::Stopped { t } => IntegratorError::InvalidInput(format!(
+                    "stopped at t = {t} s without an observer"
+                )),
+            })
+    }
+}
+
+impl fmt::Debug for MethodHandle {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_tuple("MethodHandle").field(&self.name).finish()
+    }
+}
+
+impl PartialEq for MethodHandle {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+/// How a basis gets its number of functions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModeCount {
+    /// `links.modes` (default 3, 1 to 60) is the number of functions; in a link file,
+    /// `modes` is too.
+    FromModes,
+    /// The basis's own keys fix its size (e.g. Hermite elements); `links.modes` is refused
+    /// in a scene, and in a link file `modes` is only the number of modes reported.
+    FromBasisKeys,
+}
+
+/// The keys of one basis table (everything but `kind`), with what is needed to put an error
+/// at the right key, line and column.
+pub struct BasisParams<'a> {
+    file: &'a str,
+    text: &'a str,
+    prefix: &'a str,
+    table: &'a toml::Table,
+}
+
+impl<'a> BasisParams<'a> {
+    /// The keys `table` of the basis table at dotted key `prefix` (e.g. `links.basis`) of
+    /// the source `text` of `file`.
+    pub fn new(file: &'a str, text: &'a str, prefix: &'a str, table: &'a toml::Table) -> Self {
+        Self {
+            file,
+            text,
+            prefix,
+            table,
+        }
+    }
+
+    /// The raw keys.
+    pub fn table(&self) -> &toml::Table {
+        self.table
+    }
+
+    /// Reads the keys into `T` (declare it `deny_unknown_fields` so a key of another basis
+    /// is an error); errors name the key under the basis table and its location.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] for an unknown or missing key or a wrong type.
+    pub fn parse<T: DeserializeOwned>(&self) -> Result<T, ScenarioError> {
+        let text = toml::to_string(self.table).map_err(|e| self.error("", e.to_string()))?;
+        crate::parse::parse_toml::<T>("", &text).map_err(|e| match e {
+            ScenarioError::Input { key, message, .. } => self.error(&key, message),
+            other => other,
+        })
+    }
+
+    /// A bad-input error at `key` (relative to the basis table; empty for the table).
+    pub fn error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
+        let key = if key.is_empty() {
+            self.prefix.to_string()
+        } else {
+            format!("{}.{key}", self.prefix)
+        };
+        ScenarioError::Input {
+            location: locate(self.file, self.text, &key),
+            key,
+            message: message.into(),
+        }
+    }
+}
+
+/// A kind of assumed-mode basis that scene and link files can name in `basis.kind`.
+///
+/// ```
+/// use std::sync::Arc;
+/// use flexprr_beam::{Basis, SineBasis};
+/// use flexprr_scene::{BasisFactory, BasisParams, ModeCount, Registry, ScenarioError};
+///
+/// /// The sine basis under another name, with a scale-free check of one key.
+/// struct Pinned;
+/// #[derive(serde::Deserialize)]
+/// #[serde(deny_unknown_fields)]
+/// struct Keys {
+///     #[serde(default)]
+///     note: String,
+/// }
+/// impl BasisFactory for Pinned {
+///     fn mode_count(&self) -> ModeCount {
+///         ModeCount::FromModes
+///     }
+///     fn build(
+///         &self,
+///         params: &BasisParams<'_>,
+///         modes: Option<usize>,
+///     ) -> Result<Arc<dyn Basis>, ScenarioError> {
+///         let _keys: Keys = params.parse()?;
+///         let r = modes.unwrap_or(3);
+///         Ok(Arc::new(SineBasis::new(r).map_err(|e| params.error("", e.to_string()))?))
+///     }
+/// }
+/// let mut registry = Registry::default();
+/// registry.register_basis("pinned", Arc::new(Pinned));
+/// assert!(registry.basis_names().contains(&"pinned"));
+/// ```
+pub trait BasisFactory: Send + Sync {
+    /// How the number of functions is set.
+    fn mode_count(&self) -> ModeCount;
+    /// Builds the basis from its keys; `modes` is `Some(r)` exactly when
+    /// [`BasisFactory::mode_count`] is [`ModeCount::FromModes`].
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] naming the offending key (use [`BasisParams::error`]).
+    fn build(
+        &self,
+        params: &BasisParams<'_>,
+        modes: Option<usize>,
+    ) -> Result<Arc<dyn Basis>, ScenarioError>;
+}
+
+/// The built-in `sine` basis: `sin(j pi xi)`, pinned-pinned (the paper's eq. 5).
+struct SineFactory;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoKeys {}
+
+impl BasisFactory for SineFactory {
+    fn mode_count(&self) -> ModeCount {
+        ModeCount::FromModes
+    }
+    fn build(
+        &self,
+        params: &BasisParams<'_>,
+        modes: Option<usize>,
+    ) -> Result<Arc<dyn Basis>, ScenarioError> {
+        let NoKeys {} = params.parse()?;
+        let basis = SineBasis::new(modes.unwrap_or(3)).map_err(|e| params.error("", e.to_string()))?;
+        Ok(Arc::new(basis))
+    }
+}
+
+/// The built-in `classical` basis: uniform-beam eigenfunctions with the given `ends`.
+struct ClassicalFactory;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClassicalKeys {
+    ends: EndsConfig,
+}
+
+impl BasisFactory for ClassicalFactory {
+    fn mode_count(&self) -> ModeCount {
+        ModeCount::FromModes
+    }
+    fn build(
+        &self,
+        params: &BasisParams<'_>,
+        modes: Option<usize>,
+    ) -> Result<Arc<dyn Basis>, ScenarioError> {
+        let keys: ClassicalKeys = params.parse()?;
+        let basis = ClassicalBasis::new(keys.ends.to_ends(), modes.unwrap_or(3))
+            .map_err(|e| params.error("ends", e.to_string()))?;
+        Ok(Arc::new(basis))
+    }
+}
+
+/// The built-in `hermite` basis: cubic Hermite finite elements; `elements` fixes the size.
+struct HermiteFactory;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HermiteKeys {
+    elements: usize,
+    #[serde(default)]
+    ends: EndsConfig,
+}
+
+impl BasisFactory for HermiteFactory {
+    fn mode_count(&self) -> ModeCount {
+        ModeCount::FromBasisKeys
+    }
+    fn build(
+        &self,
+        params: &BasisParams<'_>,
+        _modes: Option<usize>,
+    ) -> Result<Arc<dyn Basis>, ScenarioError> {
+        let keys: HermiteKeys = params.parse()?;
+        if keys.elements == 0 {
+            return Err(params.error("elements", "expected at least 1 element, got 0"));
+        }
+        if keys.elements > 200 {
+            return Err(params.error(
+                "elements",
+                format!("{} elements is more than the supported 200", keys.elements),
+            ));
+        }
+        let basis = HermiteBasis::new(keys.elements, keys.ends.to_ends())
+            .map_err(|e| params.error("elements", e.to_string()))?;
+        Ok(Arc::new(basis))
+    }
+}
+
+/// A registered axial force model.
+#[derive(Clone)]
+pub(crate) struct AxialEntry {
+    pub(crate) model: Arc<dyn AxialForceModel>,
+    /// The formulation switch it corresponds to, for the built-ins.
+    pub(crate) preset: Option<AxialModel>,
+}
+
+/// The named parts scenes can use. [`Registry::default`] holds the built-ins: integrators
+/// `abm`, `rk45`, `bdf`; bases `sine`, `classical`, `hermite`; axial force models `none`,
+/// `paper`, `joint-reaction`.
+#[derive(Clone)]
+pub struct Registry {
+    integrators: BTreeMap<String, IntegratorConstructor>,
+    bases: BTreeMap<String, Arc<dyn BasisFactory>>,
+    axial: BTreeMap<String, AxialEntry>,
+}
+
+impl fmt::Debug for Registry {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Registry")
+            .field("integrators", &self.integrator_names())
+            .field("bases", &self.basis_names())
+            .field("axial_forces", &self.axial_force_names())
+            .finish()
+    }
+}
+
+impl Default for Registry {
+    fn default() -> Self {
+        let mut r = Self::empty();
+        r.register_integrator("abm", Arc::new(|o| Box::new(Abm::new(o))));
+        r.register_integrator("rk45", Arc::new(|o| Box::new(Rk45::new(o))));
+        r.register_integrator("bdf", Arc::new(|o| Box::new(Bdf::new(o))));
+        r.register_basis("sine", Arc::new(SineFactory));
+        r.register_basis("classical", Arc::new(ClassicalFactory));
+        r.register_basis("hermite", Arc::new(HermiteFactory));
+        for (name, preset, model) in [
+            (
+                "none",
+                AxialModel::None,
+                Arc::new(NoAxialForce) as Arc<dyn AxialForceModel>,
+            ),
+            ("paper", AxialModel::Paper, Arc::new(PaperAxialForce)),
+            (
+                "joint-reaction",
+                AxialModel::JointReaction,
+                Arc::new(JointReactionAxialForce),
+            ),
+        ] {
+            r.axial.insert(
+                name.to_string(),
+                AxialEntry {
+                    model,
+                    preset: Some(preset),
+                },
+            );
+        }
+        r
+    }
+}
+
+impl Registry {
+    /// A registry with nothing in it.
+    pub fn empty() -> Self {
+        Self {
+            integrators: BTreeMap::new(),
+            bases: BTreeMap::new(),
+            axial: BTreeMap::new(),
+        }
+    }
+
+    /// Registers (or replaces) the integrator `name` for `integrator.method`.
+    pub fn register_integrator(&mut self, name: &str, constructor: IntegratorConstructor) {
+        self.integrators.insert(name.to_string(), constructor);
+    }
+
+    /// Registers (or replaces) the basis `name` for `basis.kind`.
+    pub fn register_basis(&mut self, name: &str, factory: Arc<dyn BasisFactory>) {
+        self.bases.insert(name.to_string(), factory);
+    }
+
+    /// Registers (or replaces) the axial force model `name` for `model.axial_force`.
+    pub fn register_axial_force(&mut self, name: &str, model: Arc<dyn AxialForceModel>) {
+        self.axial.insert(
+            name.to_string(),
+            AxialEntry {
+                model,
+                preset: None,
+            },
+        );
+    }
+
+    /// The integrator `name`, as a handle.
+    pub fn method(&self, name: &str) -> Option<MethodHandle> {
+        self.integrators
+            .get(name)
+            .map(|c| MethodHandle::new(name, c.clone()))
+    }
+
+    /// The basis kind `name`.
+    pub fn basis(&self, name: &str) -> Option<&Arc<dyn BasisFactory>> {
+        self.bases.get(name)
+    }
+
+    /// The axial force model `name`.
+    pub fn axial_force(&self, name: &str) -> Option<Arc<dyn AxialForceModel>> {
+        self.axial.get(name).map(|e| e.model.clone())
+    }
+
+    pub(crate) fn axial_entry(&self, name: &str) -> Option<&AxialEntry> {
+        self.axial.get(name)
+    }
+
+    /// Registered integrator names, sorted.
+    pub fn integrator_names(&self) -> Vec<&str> {
+        self.integrators.keys().map(String::as_str).collect()
+    }
+
+    /// Registered basis kinds, sorted.
+    pub fn basis_names(&self) -> Vec<&str> {
+        self.bases.keys().map(String::as_str).collect()
+    }
+
+    /// Registered axial force model names, sorted.
+    pub fn axial_force_names(&self) -> Vec<&str> {
+        self.axial.keys().map(String::as_str).collect()
+    }
+
+    /// Builds the basis of the table `at` (e.g. `links.basis`): looks up `kind`, applies the
+    /// kind's [`ModeCount`] rule to `modes` (what the file gives at the dotted key
+    /// `modes_key`: default 3, 1 to 60, refused for a kind that sizes itself) and builds it.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] with the key and location of an unknown kind, a `modes` the
+    /// kind does not take or out of range, or the kind's own key errors.
+    pub fn build_basis(
+        &self,
+        at: &BasisParams<'_>,
+        kind: &str,
+        modes_key: &str,
+        modes: Option<usize>,
+    ) -> Result<Arc<dyn Basis>, ScenarioError> {
+        let factory = self.basis(kind).ok_or_else(|| {
+            at.error(
+                "kind",
+                format!(
+                    "unknown basis kind \"{kind}\", expected one of {}",
+                    quoted_list(&self.basis_names())
+                ),
+            )
+        })?;
+        let given = match factory.mode_count() {
+            ModeCount::FromBasisKeys => {
+                if modes.is_some() {
+                    return Err(key_error(
+                        at,
+                        modes_key,
+                        format!(
+                            "the {kind} basis takes its size from its own keys ({}); remove modes",
+                            at.prefix
+                        ),
+                    ));
+                }
+                None
+            }
+            ModeCount::FromModes => {
+                let r = modes.unwrap_or(3);
+                if r == 0 {
+                    return Err(key_error(at, modes_key, "expected at least 1 mode, got 0"));
+                }
+                if r > 60 {
+                    return Err(key_error(
+                        at,
+                        modes_key,
+                        format!("{r} modes is more than the supported 60"),
+                    ));
+                }
+                Some(r)
+            }
+        };
+        factory.build(at, given)
+    }
+}
+
+fn key_error(at: &BasisParams<'_>, key: &str, message: impl Into<String>) -> ScenarioError {
+    ScenarioError::Input {
+        location: locate(at.file, at.text, key),
+        key: key.to_string(),
+        message: message.into(),
+    }
+}
+
+/// `"a", "b", "c"`.
+pub(crate) fn quoted_list(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|n| format!("\"{n}\""))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

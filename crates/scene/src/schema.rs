@@ -1,0 +1,581 @@
+//! The scene file schema: what serde reads (`docs/scenes.md` is the reference).
+//!
+//! Every table denies unknown keys, and every choice among fixed words is a serde enum, so
+//! the parser itself reports a bad word with its line and column. Choices that programs can
+//! extend (the integrator `method`, the basis `kind` and its keys, the `axial_force` model)
+//! are names looked up in the [`crate::Registry`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::link::{MaterialConfig, SectionConfig};
+
+/// The whole scene file as written (echoed into `summary.json`).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Name used in outputs (default: the file stem).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// The machine.
+    #[serde(default)]
+    pub machine: MachineConfig,
+    /// The three (identical) links.
+    #[serde(default)]
+    pub links: LinksConfig,
+    /// The platform motion.
+    pub trajectory: TrajectoryConfig,
+    /// Formulation and damping.
+    #[serde(default)]
+    pub model: ModelConfig,
+    /// Time integration.
+    #[serde(default)]
+    pub integrator: IntegratorConfig,
+    /// Time span and sampling.
+    pub time: TimeConfig,
+    /// What to compute and write.
+    #[serde(default)]
+    pub output: OutputConfig,
+}
+
+/// Machine layout and rigid-body inertia.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MachineConfig {
+    /// `"radial"` (the paper's reconstructed layout, from `alpha_deg` and `platform_side`) or
+    /// `"general"` (explicit `legs`).
+    #[serde(default)]
+    pub layout: Layout,
+    /// Guide angles (deg), radial layout.
+    #[serde(default = "default_alpha")]
+    pub alpha_deg: [f64; 3],
+    /// Platform side (m), radial layout.
+    #[serde(default = "default_side")]
+    pub platform_side: f64,
+    /// Half the slider travel (m), radial layout.
+    #[serde(default = "default_half_travel")]
+    pub half_travel: f64,
+    /// Explicit legs, general layout.
+    #[serde(default)]
+    pub legs: Vec<LegConfig>,
+    /// Platform mass (kg).
+    #[serde(default = "default_platform_mass")]
+    pub platform_mass: f64,
+    /// Platform inertia about its reference point (kg m^2; default `m_p s^2 / 12`).
+    #[serde(default)]
+    pub platform_inertia: Option<f64>,
+    /// Slider mass (kg), one for all.
+    #[serde(default = "default_slider_mass")]
+    pub slider_mass: f64,
+}
+
+fn default_alpha() -> [f64; 3] {
+    [150.0, 270.0, 30.0]
+}
+fn default_side() -> f64 {
+    0.1
+}
+fn default_half_travel() -> f64 {
+    0.2
+}
+fn default_platform_mass() -> f64 {
+    0.2
+}
+fn default_slider_mass() -> f64 {
+    0.5
+}
+
+impl Default for MachineConfig {
+    fn default() -> Self {
+        Self {
+            layout: Layout::Radial,
+            alpha_deg: default_alpha(),
+            platform_side: default_side(),
+            half_travel: default_half_travel(),
+            legs: Vec::new(),
+            platform_mass: default_platform_mass(),
+            platform_inertia: None,
+            slider_mass: default_slider_mass(),
+        }
+    }
+}
+
+/// One leg of a general layout.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LegConfig {
+    /// Guide centre `A_i` (m).
+    pub anchor: [f64; 2],
+    /// Guide direction angle `alpha_i` (deg).
+    pub direction_deg: f64,
+    /// Slider travel `[min, max]` of `rho_i` (m).
+    pub travel: [f64; 2],
+    /// Platform joint in the platform frame (m).
+    pub attachment: [f64; 2],
+    /// `"behind"` (slider behind the platform joint, the paper's) or `"ahead"`.
+    #[serde(default)]
+    pub branch: BranchChoice,
+}
+
+/// Machine layout.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Layout {
+    /// Guides at `alpha_deg`, platform an equilateral triangle (the paper's).
+    #[default]
+    Radial,
+    /// Three explicit `[[machine.legs]]`.
+    General,
+}
+
+/// Assembly branch of a leg.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum BranchChoice {
+    /// Slider behind the platform joint (the paper's).
+    #[default]
+    Behind,
+    /// Slider ahead of the platform joint.
+    Ahead,
+}
+
+/// The links (all three identical).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LinksConfig {
+    /// Length (m).
+    #[serde(default = "default_length")]
+    pub length: f64,
+    /// Material.
+    #[serde(default = "default_material")]
+    pub material: MaterialConfig,
+    /// Cross-section.
+    #[serde(default = "default_section")]
+    pub section: SectionConfig,
+    /// Assumed-mode basis: `kind` (a registered name) and that kind's own keys.
+    #[serde(default)]
+    pub basis: BasisTable,
+    /// Number of modes `r` for bases sized by it (sine, classical; default 3); refused for
+    /// bases that size themselves (Hermite: `basis.elements`).
+    #[serde(default)]
+    pub modes: Option<usize>,
+}
+
+fn default_length() -> f64 {
+    0.2
+}
+fn default_material() -> MaterialConfig {
+    MaterialConfig {
+        youngs_modulus: 7.3e10,
+        density: 2770.0,
+    }
+}
+fn default_section() -> SectionConfig {
+    SectionConfig::Uniform {
+        thickness: 0.002,
+        height: 0.03,
+    }
+}
+
+impl Default for LinksConfig {
+    fn default() -> Self {
+        Self {
+            length: default_length(),
+            material: default_material(),
+            section: default_section(),
+            basis: BasisTable::default(),
+            modes: None,
+        }
+    }
+}
+
+/// Platform trajectory.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum TrajectoryConfig {
+    /// Circle at constant frequency and orientation (the paper's).
+    Circle {
+        /// Centre (m).
+        #[serde(default = "default_centre")]
+        centre: [f64; 2],
+        /// Radius (m).
+        #[serde(default = "default_radius")]
+        radius: f64,
+        /// Revolutions per second (Hz).
+        frequency: f64,
+        /// Constant orientation (deg).
+        #[serde(default = "default_phi")]
+        phi_deg: f64,
+        /// Angle on the circle at t = 0 (deg).
+        #[serde(default)]
+        start_angle_deg: f64,
+    },
+    /// Straight line at constant velocity from `from` (at t = 0).
+    Line {
+        /// Start pose `[x, y, phi_deg]`.
+        from: [f64; 3],
+        /// Velocity `[x', y', phi'_deg]` (m/s, deg/s).
+        velocity: [f64; 3],
+    },
+    /// Rest-to-rest move.
+    PointToPoint {
+        /// Start pose `[x, y, phi_deg]`.
+        from: [f64; 3],
+        /// End pose `[x, y, phi_deg]`.
+        to: [f64; 3],
+        /// Start time (s).
+        #[serde(default)]
+        start: f64,
+        /// Duration (s).
+        duration: f64,
+        /// `"quintic"` or `"cycloidal"`.
+        #[serde(default)]
+        profile: ProfileChoice,
+    },
+    /// Cubic spline through `[t, x, y, phi_deg]` points, at rest at both ends.
+    Waypoints {
+        /// Points `[t, x, y, phi_deg]`, times increasing.
+        points: Vec<[f64; 4]>,
+    },
+}
+
+fn default_centre() -> [f64; 2] {
+    [-0.05, 0.0]
+}
+fn default_radius() -> f64 {
+    0.05
+}
+fn default_phi() -> f64 {
+    45.0
+}
+/// Motion law of a point-to-point move.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProfileChoice {
+    /// Quintic polynomial (zero velocity and acceleration at both ends).
+    #[default]
+    Quintic,
+    /// Cycloidal (sine-on-ramp).
+    Cycloidal,
+}
+
+/// An assumed-mode basis table: the registered `kind` and that kind's keys.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+pub struct BasisTable {
+    /// Registered basis name (`sine`, `classical`, `hermite`, or one a program registered).
+    pub kind: String,
+    /// The kind's own keys (each kind reads and checks them).
+    #[serde(flatten)]
+    pub params: toml::Table,
+}
+
+impl Default for BasisTable {
+    fn default() -> Self {
+        Self {
+            kind: "sine".into(),
+            params: toml::Table::new(),
+        }
+    }
+}
+
+/// Named formulation preset.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum FormulationChoice {
+    /// The paper's equations as printed.
+    Paper,
+    /// The consistent equations (model.md).
+    #[default]
+    Consistent,
+}
+
+/// Geometric stiffness coupling.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum StiffnessChoice {
+    /// Diagonal of `Kp` only (the paper's eq. 21).
+    Diagonal,
+    /// Full `Kp`.
+    Full,
+}
+
+/// KED or coupled model.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum CouplingChoice {
+    /// Prescribed rigid motion (kineto-elastodynamics).
+    #[default]
+    Ked,
+    /// Platform moved by the links' foreshortening.
+    Coupled,
+}
+
+/// Formulation (named preset plus optional overrides) and damping.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModelConfig {
+    /// `"paper"` or `"consistent"` (default).
+    #[serde(default)]
+    pub formulation: FormulationChoice,
+    /// Override: a registered axial force model (`"none"`, `"paper"`, `"joint-reaction"`).
+    #[serde(default)]
+    pub axial_force: Option<String>,
+    /// Override: `"diagonal"` or `"full"` geometric stiffness.
+    #[serde(default)]
+    pub geometric_stiffness: Option<StiffnessChoice>,
+    /// Override: the paper's coupling force `F_fg`.
+    #[serde(default)]
+    pub coriolis_forcing: Option<bool>,
+    /// Override: centrifugal softening `-b'^2 M`.
+    #[serde(default)]
+    pub centrifugal_softening: Option<bool>,
+    /// Modal damping ratios: one for all modes or one per mode.
+    #[serde(default)]
+    pub damping: Vec<f64>,
+    /// `"ked"` (prescribed rigid motion) or `"coupled"`.
+    #[serde(default)]
+    pub coupling: CouplingChoice,
+}
+
+impl Default for ModelConfig {
+    fn default() -> Self {
+        Self {
+            formulation: FormulationChoice::Consistent,
+            axial_force: None,
+            geometric_stiffness: None,
+            coriolis_forcing: None,
+            centrifugal_softening: None,
+            damping: Vec::new(),
+            coupling: CouplingChoice::Ked,
+        }
+    }
+}
+
+/// Integrator choice and tolerances.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct IntegratorConfig {
+    /// A registered integrator: `"abm"` (default, like the paper's ode113), `"rk45"`, `"bdf"`.
+    #[serde(default = "default_method")]
+    pub method: String,
+    /// Relative tolerance.
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    /// Absolute tolerance (m and m/s of modal coordinates).
+    #[serde(default = "default_atol")]
+    pub atol: f64,
+    /// Largest step (s).
+    #[serde(default)]
+    pub max_step: Option<f64>,
+    /// First step (s; default automatic).
+    #[serde(default)]
+    pub initial_step: Option<f64>,
+    /// Largest number of steps.
+    #[serde(default = "default_max_steps")]
+    pub max_steps: usize,
+}
+
+fn default_method() -> String {
+    "abm".into()
+}
+fn default_rtol() -> f64 {
+    1e-8
+}
+fn default_atol() -> f64 {
+    1e-12
+}
+fn default_max_steps() -> usize {
+    10_000_000
+}
+
+impl Default for IntegratorConfig {
+    fn default() -> Self {
+        Self {
+            method: default_method(),
+            rtol: default_rtol(),
+            atol: default_atol(),
+            max_step: None,
+            initial_step: None,
+            max_steps: default_max_steps(),
+        }
+    }
+}
+
+/// Time span and output sampling.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TimeConfig {
+    /// Start (s).
+    #[serde(default)]
+    pub start: f64,
+    /// End (s).
+    pub end: f64,
+    /// Output interval (s); default `(end - start) / 1000`.
+    #[serde(default)]
+    pub output_step: Option<f64>,
+    /// Times (s) the integrator must step onto exactly (e.g. where a load or motion changes
+    /// abruptly); each in `[start, end]`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stops: Vec<f64>,
+}
+
+/// Requested outputs.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputConfig {
+    /// Any of `kinematics`, `driving_forces`, `joint_reactions`, `axial_forces`,
+    /// `frequencies`, `modes`, `modal_forces`, `deflections`, `energies`.
+    #[serde(default = "default_requests")]
+    pub requests: Vec<OutputKind>,
+    /// Positions `xi` along the links for `deflections` (default mid-point).
+    #[serde(default = "default_xi")]
+    pub deflection_xi: Vec<f64>,
+    /// Also integrate without axial force and write both deflections (the paper's figures 6-8).
+    #[serde(default)]
+    pub compare_without_axial_force: bool,
+    /// Write SVG plots.
+    #[serde(default = "default_true")]
+    pub plots: bool,
+}
+
+fn default_requests() -> Vec<OutputKind> {
+    vec![OutputKind::Deflections, OutputKind::Frequencies]
+}
+fn default_xi() -> Vec<f64> {
+    vec![0.5]
+}
+fn default_true() -> bool {
+    true
+}
+
+impl Default for OutputConfig {
+    fn default() -> Self {
+        Self {
+            requests: default_requests(),
+            deflection_xi: default_xi(),
+            compare_without_axial_force: false,
+            plots: true,
+        }
+    }
+}
+
+/// A requested output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputKind {
+    /// Slider and link kinematics.
+    Kinematics,
+    /// Driving forces `F_a` (rigid, and with the links' elastic inertia when integrated).
+    DrivingForces,
+    /// Joint reactions `F_B`, `F_C`.
+    JointReactions,
+    /// Axial force at both ends of each link.
+    AxialForces,
+    /// Frequencies of every link and mode along the motion.
+    Frequencies,
+    /// Modal coordinates.
+    Modes,
+    /// Inertial and coupling modal forces (the paper's figure 9).
+    ModalForces,
+    /// Deflections at the requested `xi`.
+    Deflections,
+    /// Elastic and kinetic energies.
+    Energies,
+}
+
+impl OutputKind {
+    /// All kinds with their file-stem names.
+    pub const ALL: [(OutputKind, &'static str); 9] = [
+        (OutputKind::Kinematics, "kinematics"),
+        (OutputKind::DrivingForces, "driving_forces"),
+        (OutputKind::JointReactions, "joint_reactions"),
+        (OutputKind::AxialForces, "axial_forces"),
+        (OutputKind::Frequencies, "frequencies"),
+        (OutputKind::Modes, "modes"),
+        (OutputKind::ModalForces, "modal_forces"),
+        (OutputKind::Deflections, "deflections"),
+        (OutputKind::Energies, "energies"),
+    ];
+
+    /// The name used in scene files and output file names.
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(k, _)| *k == self)
+            .map(|(_, n)| *n)
+            .unwrap_or("?")
+    }
+
+    /// Whether this output needs the modal ODE integrated.
+    pub fn needs_integration(self) -> bool {
+        matches!(
+            self,
+            OutputKind::Modes
+                | OutputKind::Deflections
+                | OutputKind::Energies
+                | OutputKind::ModalForces
+        )
+    }
+}
+
+/// Which integrator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Adams-Bashforth-Moulton.
+    Abm,
+    /// Dormand-Prince 5(4).
+    Rk45,
+    /// BDF.
+    Bdf,
+}
+
+impl Method {
+    /// Parses a method name.
+    pub fn parse(name: &str) -> Option<Self> {
+        match name {
+            "abm" => Some(Method::Abm),
+            "rk45" => Some(Method::Rk45),
+            "bdf" => Some(Method::Bdf),
+            _ => None,
+        }
+    }
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Abm => "abm",
+            Method::Rk45 => "rk45",
+            Method::Bdf => "bdf",
+        }
+    }
+
+    /// The registered handle of this built-in method.
+    pub fn handle(self) -> crate::MethodHandle {
+        crate::Registry::default()
+            .method(self.name())
+            .unwrap_or_else(|| unreachable!("the default registry holds every built-in method"))
+    }
+
+    /// Integrates `system` from `y0` at `t_out[0]` with this method, output at `t_out`.
+    ///
+    /// # Errors
+    /// The integrator's error.
+    pub fn solve<S: flexprr_integrators::OdeSystem>(
+        self,
+        options: flexprr_integrators::Options,
+        system: &mut S,
+        y0: &[f64],
+        t_out: &[f64],
+    ) -> Result<flexprr_integrators::Solution, flexprr_integrators::IntegratorError> {
+        use flexprr_integrators::{Abm, Bdf, Integrator, Rk45};
+        let t0 = t_out[0];
+        match self {
+            Method::Abm => Abm::new(options).solve(system, t0, y0, t_out),
+            Method::Rk45 => Rk45::new(options).solve(system, t0, y0, t_out),
+            Method::Bdf => Bdf::new(options).solve(system, t0, y0, t_out),
+        }
+    }
+}
+
