@@ -124,10 +124,7 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
 /// Merges shard directories.
 pub fn merge(args: MergeArgs) -> Result<(), Failure> {
     if let Some(gaps) = shard_gaps(&args.dirs) {
-        return Err(Failure::run(format!(
-            "{}: {gaps}",
-            args.out.display()
-        )));
+        return Err(Failure::run(format!("{}: {gaps}", args.out.display())));
     }
     let summary = merge_studies(&args.dirs, &args.out).map_err(failure)?;
     println!(
@@ -225,9 +222,7 @@ fn shard_gaps(dirs: &[PathBuf]) -> Option<String> {
         match by_index.get(&index) {
             None => {
                 missing += expected;
-                problems.push(format!(
-                    "shard {shard} has no directory ({expected} cases)"
-                ));
+                problems.push(format!("shard {shard} has no directory ({expected} cases)"));
             }
             Some(shard_dirs) => {
                 let have = shard_dirs

@@ -5,11 +5,13 @@
 # 2 CPUs, no accounting, no cgroups) whose files all live in one temporary directory, then:
 #   1. runs tests/slurm/study.toml once on this machine without Slurm (the reference table);
 #   2. submits configs/slurm_study.sbatch as a job array of 3 tasks and the merge as a job
-#      that depends on it, and checks that the merged results.csv is byte-identical to the
-#      reference;
-#   3. submits the array again, cancels task 2 once it has recorded its first cases, checks
-#      that a merge submitted with afterany fails (exit 1) and names the incomplete shard,
-#      resubmits index 2 alone (it resumes), merges again and checks the table again;
+#      that depends on it (afterany), and checks that the merged results.csv is
+#      byte-identical to the reference;
+#   3. submits the array again and cancels tasks 2 and 3 once each has recorded a case;
+#      checks that the merge fails (exit 1) naming both incomplete shards, and that a job
+#      depending afterok on the array stays pending for good; requeues task 2 in place
+#      (scontrol requeue) and submits index 3 again alone; both resume; merges again and
+#      checks the table again;
 #   4. prints the measured figures: cases per second per task and the scheduler overhead.
 # Every daemon it started is stopped by PID, and the temporary directory is removed, on
 # success and on failure.
@@ -250,10 +252,10 @@ say "single-machine run: $CASES cases in $(elapsed "$t0" "$t1") s on 2 threads"
 t0=$(now)
 ARRAY=$(submit --array=1-$SHARDS --cpus-per-task=1 --mem-per-cpu=200M --time=10:00 \
     --output='%x-%A_%a.out' "$SBATCH_SCRIPT" "$STUDY" happy)
-MERGE=$(submit --dependency=afterok:"$ARRAY" --cpus-per-task=1 --mem-per-cpu=200M --time=5:00 \
+MERGE=$(submit --dependency=afterany:"$ARRAY" --cpus-per-task=1 --mem-per-cpu=200M --time=5:00 \
     --job-name=flexprr-merge --output='merge-%j.out' \
     --wrap "\"\$FLEXPRR\" merge happy/shard-* --out happy/merged")
-say "submitted array job $ARRAY (tasks 1-$SHARDS) and merge job $MERGE (afterok:$ARRAY)"
+say "submitted array job $ARRAY (tasks 1-$SHARDS) and merge job $MERGE (afterany:$ARRAY)"
 wait_job "$MERGE"
 t1=$(now)
 expect_completed "$ARRAY"
@@ -267,52 +269,99 @@ WALL=$(elapsed "$t0" "$t1")
 task_lines=$(cat flexprr-study-"$ARRAY"_*.out | grep '^flexprr-study: ' || true)
 [ "$(grep -c . <<<"$task_lines")" -eq "$SHARDS" ] || die "expected $SHARDS timing lines, got: $task_lines"
 
-# --- 3. cancel task 2 midway, merge (refused), resubmit task 2, merge ----------------------
+# --- 3. cancel tasks 2 and 3 midway, merge (refused), requeue and resubmit them, merge -------
+# Cases of shard k of $SHARDS.
+shard_size() {
+    awk -v n="$SHARDS" -v c="$CASES" -v k="$1" 'BEGIN { m = 0; for (i = 0; i < c; i++) if (i % n == k - 1) m++; print m }'
+}
+recorded() { find "$1/cases" -name '*.json' 2>/dev/null | wc -l; }
+
+# Cancels task $2 of array job $1 as soon as its shard directory $3 holds a case record,
+# that is while it runs: the shard's cases run in id order on one thread, and the study puts
+# seconds of integrated cases after the frequencies-only ones.
+cancel_midway() {
+    local deadline state
+    deadline=$(($(date +%s) + TIMEOUT))
+    until compgen -G "$3/cases/*.json" >/dev/null; do
+        [ "$(date +%s)" -lt "$deadline" ] || die "task $1_$2 recorded no case within ${TIMEOUT} s"
+        sleep 0.02
+    done
+    scancel "$1_$2"
+    while :; do
+        state=$(job_states "$1_$2" | awk '{ print $2 }')
+        case $state in
+        CANCELLED) break ;;
+        RUNNING | COMPLETING) sleep 0.1 ;;
+        *) die "task $1_$2 ended $state, not CANCELLED: it finished before the cancel reached it" ;;
+        esac
+        [ "$(date +%s)" -lt "$deadline" ] || die "task $1_$2 still $state ${TIMEOUT} s after scancel"
+    done
+    local have
+    have=$(recorded "$3")
+    [ "$have" -ge 1 ] && [ "$have" -lt "$(shard_size "$2")" ] ||
+        die "cancelled task $1_$2 holds $have of its $(shard_size "$2") cases; expected some but not all"
+    [ ! -e "$3/results.csv" ] || die "cancelled task $1_$2 wrote a table"
+}
+
 CUT=$(submit --array=1-$SHARDS --cpus-per-task=1 --mem-per-cpu=200M --time=10:00 \
     --output='%x-%A_%a.out' "$SBATCH_SCRIPT" "$STUDY" cut)
-deadline=$(($(date +%s) + TIMEOUT))
-until compgen -G "cut/shard-2/cases/*.json" >/dev/null; do
-    [ "$(date +%s)" -lt "$deadline" ] || die "task ${CUT}_2 recorded no case within ${TIMEOUT} s"
-    sleep 0.02
-done
-scancel "${CUT}_2"
-wait_job "$CUT"
-state2=$(job_states "${CUT}_2" | awk '{ print $2 }')
-[ "$state2" = CANCELLED ] || die "task ${CUT}_2 ended $state2, not CANCELLED: the shard finished before the cancel reached it"
-shard2_cases=$(awk -v n="$SHARDS" -v c="$CASES" 'BEGIN { k = 0; for (i = 0; i < c; i++) if (i % n == 1) k++; print k }')
-recorded=$(find cut/shard-2/cases -name '*.json' | wc -l)
-[ "$recorded" -ge 1 ] && [ "$recorded" -lt "$shard2_cases" ] ||
-    die "cancelled shard 2 holds $recorded of its $shard2_cases cases; expected some but not all"
-[ ! -e cut/shard-2/results.csv ] || die "the cancelled shard wrote a table"
-say "cancelled task ${CUT}_2 after $recorded of its $shard2_cases cases"
-
-# The merge refuses the incomplete shard and says which one.
+# The merge as the recipe submits it (afterany), and an afterok job that a cancelled task
+# leaves pending for good.
 REFUSED=$(submit --dependency=afterany:"$CUT" --cpus-per-task=1 --time=5:00 \
     --job-name=flexprr-merge --output='refused-%j.out' \
     --wrap "\"\$FLEXPRR\" merge cut/shard-* --out cut/merged")
+STALE=$(submit --dependency=afterok:"$CUT" --time=1:00 --output=/dev/null --wrap true)
+cancel_midway "$CUT" 2 cut/shard-2
+cancel_midway "$CUT" 3 cut/shard-3
+cut2=$(recorded cut/shard-2)
+cut3=$(recorded cut/shard-3)
+say "cancelled tasks ${CUT}_2 and ${CUT}_3 after $cut2 of $(shard_size 2) and $cut3 of $(shard_size 3) cases"
+wait_job "$CUT"
+[ "$(job_states "${CUT}_1" | awk '{ print $2, $3 }')" = "COMPLETED 0:0" ] || die "task ${CUT}_1 did not complete"
+
+# The merge refuses the incomplete shards and says which, with their counts.
 wait_job "$REFUSED"
 refused=$(job_states "$REFUSED")
 [ "$(awk '{ print $2, $3 }' <<<"$refused")" = "FAILED 1:0" ] ||
     die "merge of an incomplete study should fail with exit code 1: $refused"
-grep -q "shard 2/3" "refused-$REFUSED.out" ||
-    die "the refused merge does not name shard 2/3: $(cat "refused-$REFUSED.out")"
+for expect in "shard 2/3 (cut/shard-2) has $cut2 of its $(shard_size 2) cases" \
+    "shard 3/3 (cut/shard-3) has $cut3 of its $(shard_size 3) cases"; do
+    grep -qF "$expect" "refused-$REFUSED.out" ||
+        die "the refused merge does not say \"$expect\": $(cat "refused-$REFUSED.out")"
+done
 [ ! -e cut/merged/results.csv ] || die "the refused merge wrote a table"
-say "merge of the incomplete shards refused: $(grep -m1 'shard 2/3' "refused-$REFUSED.out")"
+say "merge with afterany ran and refused: $(cat "refused-$REFUSED.out")"
 
-# A second sbatch of index 2 alone: the shard count must be given, and --resume completes it.
-AGAIN=$(submit --array=2 --cpus-per-task=1 --mem-per-cpu=200M --time=10:00 \
+deadline=$(($(date +%s) + TIMEOUT))
+until [ "$(squeue -h -j "$STALE" -o %r)" = DependencyNeverSatisfied ]; do
+    [ "$(date +%s)" -lt "$deadline" ] || die "afterok job $STALE: $(squeue -h -j "$STALE" -o '%T %r')"
+    sleep 0.2
+done
+scancel "$STALE"
+say "a job with afterok on the array stays PENDING (DependencyNeverSatisfied)"
+
+# Task 2 requeued in place, task 3 submitted again alone (so with the shard count): both
+# resume their shard. Slurm holds a requeued job for about two minutes (reason BeginTime);
+# setting its start time to now releases it.
+scontrol requeue "${CUT}_2"
+scontrol update JobId="${CUT}_2" StartTime=now
+AGAIN=$(submit --array=3 --cpus-per-task=1 --mem-per-cpu=200M --time=10:00 \
     --output='%x-%A_%a.out' "$SBATCH_SCRIPT" "$STUDY" cut "$SHARDS")
-MERGE2=$(submit --dependency=afterok:"$AGAIN" --cpus-per-task=1 --time=5:00 \
-    --job-name=flexprr-merge --output='merge-%j.out' \
+wait_job "$CUT"
+wait_job "$AGAIN"
+expect_completed "${CUT}_2"
+expect_completed "$AGAIN"
+grep -qF "($(($(shard_size 2) - cut2)) run now, $cut2 resumed)" "flexprr-study-${CUT}_2.out" ||
+    die "the requeued task did not resume its $cut2 cases: $(cat "flexprr-study-${CUT}_2.out")"
+grep -qF "($(($(shard_size 3) - cut3)) run now, $cut3 resumed)" "flexprr-study-${AGAIN}_3.out" ||
+    die "the resubmitted task did not resume its $cut3 cases: $(cat "flexprr-study-${AGAIN}_3.out")"
+MERGE2=$(submit --cpus-per-task=1 --time=5:00 --job-name=flexprr-merge --output='merge-%j.out' \
     --wrap "\"\$FLEXPRR\" merge cut/shard-* --out cut/merged")
 wait_job "$MERGE2"
-expect_completed "$AGAIN"
 expect_completed "$MERGE2"
-grep -q "($((shard2_cases - recorded)) run now, $recorded resumed)" "flexprr-study-${AGAIN}_2.out" ||
-    die "the resubmitted task did not resume the $recorded recorded cases: $(cat "flexprr-study-${AGAIN}_2.out")"
 cmp cut/merged/results.csv single/results.csv ||
     die "after cancel and resume, the merged table differs from the single-machine table"
-say "resubmitted task ${AGAIN}_2 resumed $recorded cases; merged table is byte-identical again"
+say "requeued task ${CUT}_2 and resubmitted task ${AGAIN}_3 resumed; merged table is byte-identical again"
 
 # --- 4. figures ----------------------------------------------------------------------------
 # Seconds since the epoch of a Slurm time stamp (1 s resolution).
