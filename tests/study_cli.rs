@@ -200,6 +200,14 @@ fn shards_merge_into_the_single_run_table_and_errors_have_exit_codes() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("combine"));
     let out = flexprr()
+        .args(["study", "--out"])
+        .arg(tmp.path().join("x"))
+        .arg(tmp.path().join("no_such_study.toml"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no_such_study.toml"));
+    let out = flexprr()
         .args(["study", "--shard", "3/2", "--out"])
         .arg(tmp.path().join("x"))
         .arg(&study)

@@ -59,7 +59,11 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
     if args.threads == Some(0) {
         return Err(Failure::bad_input("--threads must be at least 1"));
     }
-    let study = Study::load(&args.study).map_err(failure)?;
+    // A study file (or its base scene) that cannot be read is bad input, as for `flexprr run`.
+    let study = Study::load(&args.study).map_err(|e| match e {
+        StudyError::Io { .. } => Failure::bad_input(e),
+        other => failure(other),
+    })?;
     check_same_shard(&study, &args.out, args.shard)?;
     let total = study.shard_cases(args.shard).len() as u64;
     let bar = ProgressBar::with_draw_target(
