@@ -200,10 +200,101 @@ fn shards_merge_into_the_single_run_table_and_errors_have_exit_codes() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("combine"));
     let out = flexprr()
+        .args(["study", "--out"])
+        .arg(tmp.path().join("x"))
+        .arg(tmp.path().join("no_such_study.toml"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no_such_study.toml"));
+    let out = flexprr()
         .args(["study", "--shard", "3/2", "--out"])
         .arg(tmp.path().join("x"))
         .arg(&study)
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn merge_names_the_absent_and_incomplete_shards_and_resume_keeps_the_shard() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = write_study(tmp.path(), 10);
+    let run_shard = |k: usize, extra: &[&str]| {
+        let dir = tmp.path().join(format!("shard-{k}"));
+        let out = flexprr()
+            .args(["study", "--quiet", "--shard", &format!("{k}/3"), "--out"])
+            .arg(&dir)
+            .args(extra)
+            .arg(&study)
+            .output()
+            .unwrap();
+        (dir, out)
+    };
+    let (s1, out) = run_shard(1, &[]);
+    assert!(out.status.success());
+    let (s2, out) = run_shard(2, &[]);
+    assert!(out.status.success());
+    // Shard 2/3 holds ids 1, 4, 7; lose two of them as a killed task would.
+    std::fs::remove_file(s2.join("cases/000004.json")).unwrap();
+    std::fs::remove_file(s2.join("cases/000007.json")).unwrap();
+
+    // Shard 3/3 (ids 2, 5, 8) was never run: 3 + 2 of the 10 cases are missing.
+    let merged = tmp.path().join("merged");
+    let refused = flexprr()
+        .args(["merge", "--out"])
+        .arg(&merged)
+        .args([&s1, &s2])
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(1));
+    let message = String::from_utf8_lossy(&refused.stderr);
+    assert!(message.contains("5 of 10 cases missing"), "{message}");
+    assert!(message.contains("has 1 of its 3 cases"), "{message}");
+    assert!(
+        message.contains("shard 3/3 has no directory (3 cases)"),
+        "{message}"
+    );
+    assert!(!message.contains("shard 1/3"), "{message}");
+    assert!(!merged.join("results.csv").exists());
+
+    // Resuming shard 2 as another shard of another split is refused; as itself it completes.
+    let wrong = flexprr()
+        .args(["study", "--quiet", "--resume", "--shard", "2/2", "--out"])
+        .arg(&s2)
+        .arg(&study)
+        .output()
+        .unwrap();
+    assert_eq!(wrong.status.code(), Some(1));
+    let message = String::from_utf8_lossy(&wrong.stderr);
+    assert!(
+        message.contains("holds shard 2/3") && message.contains("this run is shard 2/2"),
+        "{message}"
+    );
+    let (_, again) = run_shard(2, &["--resume"]);
+    assert!(again.status.success());
+    assert!(String::from_utf8_lossy(&again.stdout).contains("(2 run now, 1 resumed)"));
+    let (s3, out) = run_shard(3, &[]);
+    assert!(out.status.success());
+    let ok = flexprr()
+        .args(["merge", "--out"])
+        .arg(&merged)
+        .args([&s1, &s2, &s3])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let single = tmp.path().join("single");
+    assert!(
+        flexprr()
+            .args(["study", "--quiet", "--out"])
+            .arg(&single)
+            .arg(&study)
+            .status()
+            .unwrap()
+            .success()
+    );
+    assert_eq!(
+        std::fs::read_to_string(merged.join("results.csv")).unwrap(),
+        std::fs::read_to_string(single.join("results.csv")).unwrap()
+    );
 }

@@ -1,8 +1,9 @@
 //! `flexprr study` and `flexprr merge`: parameter sweeps in parallel, sharded and resumable
 //! (`docs/studies.md`).
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -197,7 +198,12 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
     if args.threads == Some(0) {
         return Err(Failure::bad_input("--threads must be at least 1"));
     }
-    let study = Study::load(&args.study).map_err(failure)?;
+    // A study file (or its base scene) that cannot be read is bad input, as for `flexprr run`.
+    let study = Study::load(&args.study).map_err(|e| match e {
+        StudyError::Io { .. } => Failure::bad_input(e),
+        other => failure(other),
+    })?;
+    check_same_shard(&study, &args.out, args.shard)?;
     let total = study.shard_cases(args.shard).len() as u64;
     let view = StudyProgressView::new(&study, total, args.quiet);
     let options = StudyOptions {
@@ -229,6 +235,9 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
 
 /// Merges shard directories.
 pub fn merge(args: MergeArgs) -> Result<(), Failure> {
+    if let Some(gaps) = shard_gaps(&args.dirs) {
+        return Err(Failure::run(format!("{}: {gaps}", args.out.display())));
+    }
     let summary = merge_studies(&args.dirs, &args.out).map_err(failure)?;
     println!(
         "merged {} directories: {} cases, {} not ok; table {}",
@@ -238,4 +247,119 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
         summary.results.display()
     );
     Ok(())
+}
+
+/// The fields of an output directory's `study.json` that the command line checks before the
+/// library does the real work.
+#[derive(serde::Deserialize)]
+struct ManifestView {
+    fingerprint: String,
+    cases: usize,
+    shard: Option<String>,
+}
+
+fn manifest_view(dir: &Path) -> Option<ManifestView> {
+    let text = std::fs::read_to_string(dir.join("study.json")).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// Refuses to resume a directory of this study that was run as another shard (for example a
+/// Slurm array task resubmitted with a different array size): the shard's cases would not be
+/// the ones already recorded there.
+fn check_same_shard(study: &Study, out: &Path, shard: Option<Shard>) -> Result<(), Failure> {
+    let Some(m) = manifest_view(out) else {
+        return Ok(());
+    };
+    // Another study's directory is refused by the library, with its own message.
+    if m.fingerprint != study.fingerprint {
+        return Ok(());
+    }
+    let now = shard.map(|s| s.to_string());
+    if m.shard == now {
+        return Ok(());
+    }
+    let describe = |s: &Option<String>| match s {
+        Some(s) => format!("shard {s}"),
+        None => "the whole study (no --shard)".to_string(),
+    };
+    Err(Failure::run(format!(
+        "{}: holds {} of this study, and this run is {}; pass the same --shard or use a new directory",
+        out.display(),
+        describe(&m.shard),
+        describe(&now)
+    )))
+}
+
+/// Ids of the case records in `dir/cases` (file names `<id>.json`; temporary files are not
+/// records).
+fn recorded_ids(dir: &Path) -> BTreeSet<usize> {
+    std::fs::read_dir(dir.join("cases"))
+        .map(|entries| {
+            entries
+                .filter_map(|e| e.ok())
+                .filter_map(|e| {
+                    e.file_name()
+                        .to_str()?
+                        .strip_suffix(".json")?
+                        .parse::<usize>()
+                        .ok()
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// When every directory to merge is a shard `k/n` of the same study and some shard is absent
+/// or incomplete, says which, with how many cases each has: what a user of a job array needs
+/// to know to resubmit the right tasks. `None` when the shards are complete or the directories
+/// are not all shards of one split; `merge_studies` then checks everything itself.
+fn shard_gaps(dirs: &[PathBuf]) -> Option<String> {
+    let mut split: Option<(usize, usize)> = None; // (n, cases)
+    let mut by_index: BTreeMap<usize, Vec<&PathBuf>> = BTreeMap::new();
+    for dir in dirs {
+        let m = manifest_view(dir)?;
+        let shard: Shard = m.shard?.parse().ok()?;
+        if split.is_some_and(|s| s != (shard.count, m.cases)) {
+            return None;
+        }
+        split = Some((shard.count, m.cases));
+        by_index.entry(shard.index).or_default().push(dir);
+    }
+    let (n, cases) = split?;
+    let mut missing = 0;
+    let mut problems = Vec::new();
+    for index in 1..=n {
+        let shard = Shard { index, count: n };
+        let expected = (0..cases).filter(|&id| shard.contains(id)).count();
+        match by_index.get(&index) {
+            None => {
+                missing += expected;
+                problems.push(format!("shard {shard} has no directory ({expected} cases)"));
+            }
+            Some(shard_dirs) => {
+                let have = shard_dirs
+                    .iter()
+                    .flat_map(|d| recorded_ids(d))
+                    .filter(|&id| id < cases && shard.contains(id))
+                    .collect::<BTreeSet<_>>()
+                    .len();
+                if have < expected {
+                    missing += expected - have;
+                    let names: Vec<String> =
+                        shard_dirs.iter().map(|d| d.display().to_string()).collect();
+                    problems.push(format!(
+                        "shard {shard} ({}) has {have} of its {expected} cases",
+                        names.join(", ")
+                    ));
+                }
+            }
+        }
+    }
+    if problems.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "{missing} of {cases} cases missing: {}; run the missing shards or --resume the incomplete ones (the same --shard k/{n}), then merge again",
+        problems.join("; ")
+    ))
 }
