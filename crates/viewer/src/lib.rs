@@ -53,9 +53,11 @@
 mod data;
 mod decimate;
 mod encode;
+mod figures;
 mod html;
 
 pub use data::{GuideView, LinkView, ViewerData, ViewerError};
 pub use decimate::{frame_indices, min_max_indices};
 pub use encode::{base64, pack_f32};
+pub use figures::{WorkspaceSection, machine_svg, snapshots_svg, workspace_section};
 pub use html::{ViewerOptions, viewer_html, viewer_html_with};
