@@ -293,3 +293,54 @@ fn paper_scene_viewer_in_headless_chromium() {
         eprintln!("screenshot saved to {}", PathBuf::from(path).display());
     }
 }
+
+/// With a (SYNTHETIC) coupled-model platform deviation the page shows the deviation plot
+/// and draws the platform at `pose + a * deviation`, `a` being the deviation
+/// amplification it reports; no console errors.
+#[test]
+fn coupled_deviation_is_drawn_amplified() {
+    let Some(browser) = chromium() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut data = common::paper_scene(0.05, 1e-4, false);
+    // 20 um and 1 mrad, at 116 Hz: the order of the coupled model's deviations.
+    let deviation: Vec<[f64; 3]> = data
+        .time
+        .iter()
+        .map(|&t| {
+            let s = (std::f64::consts::TAU * 116.0 * t).sin();
+            [2e-5 * s, -1e-5 * s, 1e-3 * s]
+        })
+        .collect();
+    data.deviation = Some(deviation.clone());
+    let page = dir.path().join("viewer.html");
+    std::fs::write(&page, viewer_html(&data).unwrap()).unwrap();
+    let t = 0.0021;
+    let (dom, stderr) = run_chromium(
+        &browser,
+        &dir.path().join("profile"),
+        &format!("file://{}#t={t}", page.display()),
+        &["--dump-dom".into()],
+    );
+    assert!(console_lines(&stderr).is_empty(), "{stderr}");
+    let report = report(&dom);
+    assert_eq!(report["errors"].as_array().unwrap().len(), 0, "{report}");
+    assert_eq!(report["coupled"], Value::Bool(true));
+    assert!(dom.contains("platform position deviation"));
+    let k = 21; // t = 2.1 ms at 0.1 ms steps
+    assert!((f(&report["time"]) - data.time[k]).abs() < 1e-7);
+    let a = f(&report["deviationAmplification"]);
+    assert!(a > 1.0, "deviation amplification {a}");
+    let drawn = report["platform"].as_array().unwrap();
+    for c in 0..3 {
+        let expected = data.pose[k][c] + a * deviation[k][c];
+        // f32 storage: pose to ~1e-8 m, deviation relative 1e-7 before amplification.
+        let tolerance = 1e-7 + 1e-6 * (a * deviation[k][c]).abs();
+        assert!(
+            (f(&drawn[c]) - expected).abs() < tolerance,
+            "component {c}: drawn {}, expected {expected}",
+            f(&drawn[c])
+        );
+    }
+}
