@@ -344,3 +344,37 @@ fn coupled_deviation_is_drawn_amplified() {
         );
     }
 }
+
+/// `#t=0&speed=0.005&play` starts the animation: after the 5 s virtual-time budget the
+/// page has played about 5 s x 0.005 = 25 ms of simulated time (at least half of it, as
+/// loading uses part of the budget; at most 6 % more, as Chromium may overrun the budget by
+/// a timer tick and the nearest frame is shown), without errors.
+#[test]
+fn play_advances_time() {
+    let Some(browser) = chromium() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let data = common::paper_scene(0.05, 1e-4, false);
+    let page = dir.path().join("viewer.html");
+    std::fs::write(&page, viewer_html(&data).unwrap()).unwrap();
+    let (dom, stderr) = run_chromium(
+        &browser,
+        &dir.path().join("profile"),
+        &format!("file://{}#t=0&speed=0.005&play", page.display()),
+        &["--dump-dom".into()],
+    );
+    assert!(console_lines(&stderr).is_empty(), "{stderr}");
+    let report = report(&dom);
+    assert_eq!(report["errors"].as_array().unwrap().len(), 0, "{report}");
+    let frame = report["frame"].as_u64().unwrap();
+    assert!(
+        frame > 0,
+        "still at the first frame after playing: {report}"
+    );
+    let t = f(&report["time"]);
+    assert!(
+        t > 0.0125 && t < 0.0265,
+        "simulated time {t} s after 5 s at x0.005"
+    );
+}
