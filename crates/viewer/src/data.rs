@@ -53,7 +53,9 @@ impl LinkView {
     }
 
     /// Deflection (m) at an arbitrary `xi` of frame `frame`: the modal sum of the mode
-    /// shapes interpolated linearly between the samples (exact at a sample point).
+    /// shapes interpolated linearly between the samples (exact at a sample point). Needs at
+    /// least two samples (as [`ViewerData::validate`] checks); `xi` outside the samples
+    /// takes the end value.
     pub fn deflection_at(&self, frame: usize, xi: f64) -> f64 {
         let n = self.xi.len();
         let j = self.xi.partition_point(|&x| x <= xi).clamp(1, n - 1);

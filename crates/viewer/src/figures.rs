@@ -417,9 +417,13 @@ pub fn machine_svg(
             }
         }
         // Path of the platform reference point.
+        // At most 2000 points of the path (uniform stride, ends kept) keep the file small.
         chart
             .draw_series(std::iter::once(PathElement::new(
-                path.iter().map(|p| mm([p[0], p[1]])).collect::<Vec<_>>(),
+                crate::decimate::frame_indices(path.len(), 2000)
+                    .into_iter()
+                    .map(|k| mm([path[k][0], path[k][1]]))
+                    .collect::<Vec<_>>(),
                 PATH.stroke_width(2),
             )))
             .map_err(figure_error)?;
@@ -523,6 +527,16 @@ fn nearest_frame(time: &[f64], t: f64) -> usize {
     }
 }
 
+/// An amplification factor as text: whole numbers from 10 on, else 3 significant digits.
+fn amplification_text(a: f64) -> String {
+    if a >= 10.0 {
+        format!("{a:.0}")
+    } else {
+        let decimals = (2.0 - a.log10().floor()).max(0.0) as usize;
+        format!("{a:.decimals$}")
+    }
+}
+
 /// A 1-2-5 number near `value` (for amplification factors).
 fn round_125(value: f64) -> f64 {
     let magnitude = 10f64.powf(value.log10().floor());
@@ -571,6 +585,14 @@ pub fn snapshots_svg(
                 max_w = max_w.max(link.deflection(k, j).abs());
             }
         }
+    }
+    if let Some(a) = amplification.filter(|a| !(a.is_finite() && *a > 0.0)) {
+        return Err(ViewerError::Invalid {
+            field: "amplification".into(),
+            index: 0,
+            value: a,
+            reason: "must be finite and positive",
+        });
     }
     let min_length = data.links.iter().map(|l| l.length).fold(f64::MAX, f64::min);
     let amp = amplification.unwrap_or(if max_w > 0.0 {
@@ -649,7 +671,7 @@ pub fn snapshots_svg(
         let title = format!(
             "{}: deformed links, deflection drawn \u{d7}{}",
             data.title,
-            si(amp, "").trim()
+            amplification_text(amp)
         );
         root.draw(&Text::new(
             title,
@@ -768,6 +790,13 @@ mod tests {
         assert_eq!(si(2.0e-5, "m"), "20 \u{b5}m");
         assert_eq!(si(-350.4, "N"), "\u{2212}350.4 N");
         assert_eq!(si(1500.0, "N"), "1.5 kN");
+    }
+
+    #[test]
+    fn amplification_labels() {
+        assert_eq!(amplification_text(2000.0), "2000");
+        assert_eq!(amplification_text(5.0), "5.00");
+        assert_eq!(amplification_text(0.5), "0.500");
     }
 
     #[test]

@@ -103,4 +103,8 @@ fn snapshots_figure_labels_and_errors() {
         snapshots_svg(&data, &[], None),
         Err(ViewerError::Length { .. })
     ));
+    assert!(matches!(
+        snapshots_svg(&data, &[0.0], Some(f64::NAN)),
+        Err(ViewerError::Invalid { .. })
+    ));
 }
