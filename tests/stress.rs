@@ -13,7 +13,9 @@
 use flexprr_bench::classify::{Attempt, Failure, Outcome, attempt};
 use flexprr_run::guard::DIVERGENCE_FRACTION;
 use flexprr_run::{RunError, run};
-use flexprr_scene::{Method, ScenarioError, Scene, SceneFile, parse_scene};
+use flexprr_scene::{
+    FormulationChoice, Method, OutputKind, ScenarioError, Scene, SceneFile, parse_scene,
+};
 
 const METHODS: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
 
@@ -212,8 +214,8 @@ fn high_speed_buckling_intervals_follow_euler_load_and_period() {
     let p_cr = euler_load();
     for (f, expect_buckling) in [(30, false), (35, true), (40, true)] {
         let s = scene(&format!("high_speed_f{f}"), |file| {
-            file.model.formulation = "paper".into();
-            file.output.requests = vec!["frequencies".into()];
+            file.model.formulation = FormulationChoice::Paper;
+            file.output.requests = vec![OutputKind::Frequencies];
         });
         let result = run(&s, &mut |_| {}).expect("frequencies only");
         let hist = result.frequencies.expect("requested");
@@ -310,7 +312,7 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
         let name = format!("high_speed_f{f}");
         let s = scene(&name, |file| file.integrator.max_steps = 200_000);
         let frequencies = scene(&name, |file| {
-            file.output.requests = vec!["frequencies".into()];
+            file.output.requests = vec![OutputKind::Frequencies];
         });
         let hist = run(&frequencies, &mut |_| {})
             .expect("frequencies only")
@@ -356,7 +358,8 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
 fn run_and_classification_share_the_divergence_guard() {
     let check = |name: &str| {
         let s = scene(name, |_| {});
-        (run(&s, &mut |_| {}), attempt(&s, s.method))
+        let method = Method::parse(s.method.name()).expect("a built-in method");
+        (run(&s, &mut |_| {}), attempt(&s, method))
     };
     let (run_40, stepwise) = check("high_speed_f40");
     let Err(Failure::Diverged {

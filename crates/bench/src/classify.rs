@@ -236,7 +236,24 @@ pub fn attempt(scene: &Scene, method: Method) -> Attempt {
             };
         }
     };
-    let integrator = method.integrator(scene.options.clone());
+    let integrator = flexprr_scene::Registry::default()
+        .method(method.name())
+        .map(|handle| handle.integrator(scene.options.clone()));
+    let Some(integrator) = integrator else {
+        return Attempt {
+            method,
+            result: Err(Failure::Model {
+                source: DynamicsError::Inconsistent(format!(
+                    "no integrator {:?} in the default registry",
+                    method.name()
+                )),
+            }),
+            stats: Stats::default(),
+            max_deflection_m: 0.0,
+            wall_time_s: clock.elapsed().as_secs_f64(),
+            deflection_model: None,
+        };
+    };
     let integration =
         flexprr_run::integrate_model(scene, integrator.as_ref(), model.as_mut(), &mut |_| {});
     let stats = integration.solution.stats.clone();

@@ -167,7 +167,10 @@ fn solve(
     let t_out = &scene.output_times;
     let y0 = model.initial_state();
     let stops = flexprr_run::stop_times(scene);
-    method
+    let handle = flexprr_scene::Registry::default()
+        .method(method.name())
+        .ok_or_else(|| format!("no integrator {:?} in the default registry", method.name()))?;
+    handle
         .integrator(options)
         .solve_dyn(model, t_out[0], &y0, t_out, &stops, &mut ())
         .map_err(|interrupted| match model.take_failure() {
@@ -238,8 +241,8 @@ impl Reference {
         })
     }
 
-    /// Computes the reference for a scene: [`Rk45`] at `config.reference_rtol`, checked
-    /// against [`Abm`] at the same tolerance (a different method family: a one-step
+    /// Computes the reference for a scene: [`flexprr_integrators::Rk45`] at `config.reference_rtol`, checked
+    /// against [`flexprr_integrators::Abm`] at the same tolerance (a different method family: a one-step
     /// Runge-Kutta pair against a multistep Adams code, so their errors are independent).
     ///
     /// # Errors

@@ -1,7 +1,7 @@
 //! Derived quantities of one case and the typed columns they fill in `results.csv`
 //! (`docs/studies.md`, "Derived quantities").
 
-use flexprr_run::RunResult;
+use flexprr_run::{Quantity as RunQuantity, RunResult};
 use serde::{Deserialize, Serialize};
 
 use crate::record::format_value;
@@ -260,11 +260,10 @@ impl Quantity {
                 let table = result
                     .table("deflections")
                     .ok_or_else(|| needs("deflections"))?;
-                let prefix = format!("w_{}_xi", i + 1);
                 let column = table
                     .columns
                     .iter()
-                    .position(|c| c.starts_with(&prefix) && !c.contains("no_axial"))
+                    .position(|c| c.quantity == RunQuantity::Deflection && c.link == Some(i))
                     .ok_or_else(|| needs("deflections"))?;
                 let peak = table.data[column]
                     .iter()

@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
 
-use flexprr_run::{RunResult, run};
+use flexprr_run::{RunError, RunResult, run};
 use flexprr_scene::{ScenarioError, Scene, locate, parse_toml};
 
 pub use crate::error::{MAX_INPUT_BYTES, StudyError, read_input_file};
@@ -31,7 +31,7 @@ pub use crate::file::{AxisConfig, Combine, PlotConfig, RangeConfig, Spacing, Stu
 pub use crate::plot::write_plots;
 pub use crate::quantity::{Column, ColumnValues, Quantity};
 pub use crate::record::{
-    CaseFailure, CaseRecord, CaseStatus, FailureKind, classify_run_failure, format_value,
+    CaseFailure, CaseRecord, CaseStatus, FailureKind, format_value,
     read_case_records, results_csv,
 };
 pub use crate::runner::{
@@ -419,17 +419,13 @@ impl Study {
         let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| run(&scene, &mut |_| {})));
         let result = match outcome {
             Ok(Ok(r)) => r,
-            Ok(Err(e)) if e.is_input() => {
+            Ok(Err(failure)) => {
+                let e = &failure.error;
                 return Err(CaseFailure::new(
-                    FailureKind::InvalidInput,
-                    None,
+                    run_failure_kind(e),
+                    e.time(),
                     &e.to_string(),
                 ));
-            }
-            Ok(Err(e)) => {
-                let message = e.to_string();
-                let (kind, time) = classify_run_failure(&message);
-                return Err(CaseFailure::new(kind, time, &message));
             }
             Err(panic) => {
                 let what = panic
@@ -444,7 +440,7 @@ impl Study {
                 ));
             }
         };
-        if let Some((time, message)) = divergence(&scene, &result) {
+        if let Some((time, message)) = divergence(&result) {
             return Err(CaseFailure::new(FailureKind::Diverged, time, &message));
         }
         let values = self.derive_quantities(&result)?;
@@ -636,43 +632,48 @@ fn check_quantities(quantities: &[Quantity], at: &Locator<'_>) -> Result<(), Stu
     Ok(())
 }
 
-/// Why a finished run is not physical: a non-finite value in a table, or a deflection larger
-/// than the link itself (the small-deflection model has diverged, typically after buckling).
-fn divergence(scene: &Scene, result: &RunResult) -> Option<(Option<f64>, String)> {
-    let length = scene.file.links.length;
+/// Why a finished run is not physical: a non-finite value in a table (a runaway deflection
+/// is the run layer's divergence guard, which stops the run).
+fn divergence(result: &RunResult) -> Option<(Option<f64>, String)> {
     for table in &result.tables {
-        let t = table.column("t_s").unwrap_or(&[]);
-        for (name, values) in table.columns.iter().zip(&table.data).skip(1) {
-            let deflection = table.name == "deflections";
-            let bad = values
-                .iter()
-                .position(|v| !v.is_finite() || (deflection && v.abs() > length));
-            if let Some(k) = bad {
-                let at = t.get(k).copied().unwrap_or(f64::NAN);
-                let message = if deflection && values[k].is_finite() {
-                    format!(
-                        "diverged: {name} = {:.3e} m at t = {at:.5} s exceeds the link length {length} m{}",
-                        values[k],
-                        if result
-                            .frequencies
-                            .as_ref()
-                            .is_some_and(|h| !h.buckling.is_empty())
-                        {
-                            " (a link buckles)"
-                        } else {
-                            ""
-                        }
-                    )
-                } else {
-                    format!(
-                        "diverged: {}.{name} = {} at t = {at:.5} s",
-                        table.name, values[k]
-                    )
-                };
-                return Some((Some(at).filter(|t| t.is_finite()), message));
+        let t = table.time();
+        for (column, values) in table.columns.iter().zip(&table.data).skip(1) {
+            if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+                let at = t.get(k).copied();
+                let message = format!(
+                    "non-finite value: {}.{column} = {} at t = {:.5} s",
+                    table.name,
+                    values[k],
+                    at.unwrap_or(f64::NAN)
+                );
+                return Some((at.filter(|t| t.is_finite()), message));
             }
         }
     }
     None
+}
+
+/// The record's failure kind for a run error (typed, from the run layer).
+fn run_failure_kind(e: &RunError) -> FailureKind {
+    match e.kind() {
+        "diverged" => FailureKind::Diverged,
+        "step-size-collapse" => FailureKind::StepSize,
+        "too-many-steps" => FailureKind::StepBudget,
+        "non-finite" => FailureKind::NonFinite,
+        "stiff" => FailureKind::Stiff,
+        "input" => FailureKind::InvalidInput,
+        _ => match e {
+            RunError::Integrator { source, .. }
+                if matches!(
+                    source,
+                    flexprr_integrators::IntegratorError::NewtonFailure { .. }
+                        | flexprr_integrators::IntegratorError::SingularMatrix { .. }
+                ) =>
+            {
+                FailureKind::Newton
+            }
+            _ => FailureKind::Run,
+        },
+    }
 }
 
