@@ -120,8 +120,13 @@ fn main() {
     registry.register_basis("legendre", Arc::new(LegendreFactory));
     let modes = 10;
     let run = |basis: &str| {
-        let scene = Scene::from_text_with(&registry, "custom_basis.toml", "custom", &scene_text(basis, modes))
-            .unwrap_or_else(|e| panic!("scene rejected: {e}"));
+        let scene = Scene::from_text_with(
+            &registry,
+            "custom_basis.toml",
+            "custom",
+            &scene_text(basis, modes),
+        )
+        .unwrap_or_else(|e| panic!("scene rejected: {e}"));
         let result = flexprr_run::run(&scene, &mut |_| {}).unwrap_or_else(|e| panic!("run: {e}"));
         let history = result.frequencies.expect("frequencies were requested");
         let ranges: Vec<_> = history.ranges.into_iter().filter(|r| r.link == 0).collect();
@@ -133,7 +138,9 @@ fn main() {
     let (e, rho, t, h, l) = (7.3e10, 2770.0, 0.002, 0.03, 0.2);
     let (ei, rho_a) = (e * h * t * t * t / 12.0, rho * t * h);
     println!("basis: {name}");
-    println!("| mode | closed form (Hz) | nominal (Hz) | min (Hz) | max (Hz) | sine min (Hz) | sine max (Hz) |");
+    println!(
+        "| mode | closed form (Hz) | nominal (Hz) | min (Hz) | max (Hz) | sine min (Hz) | sine max (Hz) |"
+    );
     println!("|---|---|---|---|---|---|---|");
     for (p, s) in legendre.iter().zip(&sine).take(3) {
         let j = (p.mode + 1) as f64;
@@ -155,7 +162,10 @@ fn main() {
             p.mode + 1,
             p.nominal_hz
         );
-        for (a, b, what) in [(p.min_hz, s.min_hz, "minimum"), (p.max_hz, s.max_hz, "maximum")] {
+        for (a, b, what) in [
+            (p.min_hz, s.min_hz, "minimum"),
+            (p.max_hz, s.max_hz, "maximum"),
+        ] {
             assert!(
                 rel(a, b) < 1e-4,
                 "mode {} {what}: legendre {a} Hz against sine {b} Hz",

@@ -578,4 +578,3 @@ impl Method {
         }
     }
 }
-
