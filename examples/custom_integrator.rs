@@ -204,12 +204,12 @@ fn deflections(registry: &Registry, text: &str) -> Vec<f64> {
         .iter()
         .find(|t| t.name == "deflections")
         .expect("a deflections table");
-    let column = table
-        .columns
-        .iter()
+    let header = table
+        .headers()
+        .into_iter()
         .find(|c| c.starts_with("w_1_"))
         .expect("a link 1 column");
-    table.column(column).expect("the column").to_vec()
+    table.column(&header).expect("the column").to_vec()
 }
 
 fn max_difference(a: &[f64], b: &[f64]) -> f64 {

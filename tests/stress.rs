@@ -10,9 +10,9 @@
 //! The full-length runs are `flexprr run configs/stress/<scene>.toml`; the table of all
 //! cases is printed by `cargo test --release --test stress -- --ignored --nocapture`.
 
-use flexprr_bench::classify::{Attempt, Failure, Limits, Outcome, attempt};
-use flexprr_run::guard::RUNAWAY_DEFLECTION_FRACTION;
-use flexprr_run::{integrate, run};
+use flexprr_bench::classify::{Attempt, Failure, Outcome, attempt};
+use flexprr_run::guard::DIVERGENCE_FRACTION;
+use flexprr_run::{RunError, run};
 use flexprr_scene::{Method, ScenarioError, Scene, SceneFile, parse_scene};
 
 const METHODS: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
@@ -51,7 +51,7 @@ fn reference(name: &str, method: Method, edit: impl Fn(&mut SceneFile)) -> Attem
         f.integrator.atol = 1e-15;
         f.integrator.max_steps = 50_000_000;
     });
-    let a = attempt(&tight, other, &Limits::default());
+    let a = attempt(&tight, other);
     assert!(a.result.is_ok(), "{name}: reference failed: {:?}", a.result);
     a
 }
@@ -86,10 +86,7 @@ fn classify_all(
     slow_factor: usize,
 ) -> Vec<(Attempt, Outcome)> {
     let s = scene(name, edit);
-    let attempts: Vec<Attempt> = METHODS
-        .iter()
-        .map(|&m| attempt(&s, m, &Limits::default()))
-        .collect();
+    let attempts: Vec<Attempt> = METHODS.iter().map(|&m| attempt(&s, m)).collect();
     let cheapest = attempts
         .iter()
         .filter(|a| a.result.is_ok())
@@ -265,10 +262,10 @@ fn high_speed_integration_is_bounded_or_diverges_clearly() {
             file.time.end = 0.03;
             file.integrator.max_steps = 200_000;
         });
-        let limit = Limits::default().deflection_fraction * 0.2;
+        let limit = DIVERGENCE_FRACTION * 0.2;
         let mut diverged_at = Vec::new();
         for m in METHODS {
-            let a = attempt(&s, m, &Limits::default());
+            let a = attempt(&s, m);
             println!("{}", describe(&name, &a, &a.classify(None, None)));
             match &a.result {
                 Ok(sol) => {
@@ -309,9 +306,6 @@ fn high_speed_integration_is_bounded_or_diverges_clearly() {
 /// link that diverges is one that has started buckling.
 #[test]
 fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
-    let loose = Limits {
-        deflection_fraction: 0.5,
-    };
     for f in [30, 35, 40] {
         let name = format!("high_speed_f{f}");
         let s = scene(&name, |file| file.integrator.max_steps = 200_000);
@@ -325,7 +319,7 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
         let first_buckling = hist.buckling.iter().map(|b| b.t_start).reduce(f64::min);
         let mut peaks = Vec::new();
         for m in METHODS {
-            let a = attempt(&s, m, &loose);
+            let a = attempt(&s, m);
             println!("{}", describe(&name, &a, &a.classify(None, None)));
             match (&a.result, first_buckling) {
                 (Ok(sol), None) => {
@@ -355,57 +349,40 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
     }
 }
 
-/// The after-the-run check `deflection_excess` (proposed for `flexprr_run::run`) on a plain
-/// `flexprr_run::integrate`: at 40 Hz the buckling link 3 passes half its length at the output
-/// sample after the stepwise check of `attempt` found it; the bounded 30 Hz run passes.
+/// A run and the stress classification share one stepping loop and one divergence guard:
+/// at 40 Hz `flexprr run` stops with the divergence of the same link at the same accepted
+/// step as `attempt`, keeping its outputs up to there; the bounded 30 Hz run passes both.
 #[test]
-fn runaway_check_after_a_plain_run() {
+fn run_and_classification_share_the_divergence_guard() {
     let check = |name: &str| {
         let s = scene(name, |_| {});
-        let mut system = flexprr_dynamics::ModalSystem::new(
-            s.machine.clone(),
-            s.trajectory.clone(),
-            s.formulation,
-            s.damping.clone(),
-        )
-        .expect("model");
-        // `integrate` (what `flexprr run` uses) applies the same runaway check itself.
-        let integrated = integrate(&s, &mut system, &mut |_| {});
-        let stepwise = attempt(
-            &s,
-            s.method,
-            &Limits {
-                deflection_fraction: RUNAWAY_DEFLECTION_FRACTION,
-            },
-        );
-        (integrated, stepwise)
+        (run(&s, &mut |_| {}), attempt(&s, s.method))
     };
-    let (integrated, stepwise) = check("high_speed_f40");
+    let (run_40, stepwise) = check("high_speed_f40");
     let Err(Failure::Diverged {
         link, t: t_step, ..
     }) = &stepwise.result
     else {
         panic!("40 Hz stepwise: {:?}", stepwise.result);
     };
-    let message = integrated.expect_err("40 Hz must diverge").to_string();
-    assert!(message.contains("diverged"), "{message}");
-    assert!(message.contains(&format!("link {}", link + 1)), "{message}");
-    // Outputs every 0.1 ms: the first sample at or after the accepted step.
-    let t: f64 = message
-        .split("at t = ")
-        .nth(1)
-        .and_then(|rest| rest.split(" s").next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("no time in: {message}"));
+    let failure = run_40.expect_err("40 Hz must diverge");
+    let RunError::Diverged { link: l, t, .. } = failure.error else {
+        panic!("40 Hz run: {}", failure.error);
+    };
+    assert_eq!(l, *link);
+    assert!((t - t_step).abs() <= 1e-12, "{t} vs {t_step}");
+    // The outputs are kept up to the last output time before the divergence.
+    let deflections = failure.partial.table("deflections").expect("kept");
+    let last = *deflections.time().last().expect("rows");
     assert!(
-        t >= *t_step - 1e-4 && t <= *t_step + 1e-4,
-        "{t} vs {t_step}"
+        last <= t && last > t - 2e-4,
+        "last kept {last} vs divergence {t}"
     );
-    let (integrated, stepwise) = check("high_speed_f30");
+    let (run_30, stepwise) = check("high_speed_f30");
     assert!(
-        integrated.is_ok() && stepwise.result.is_ok(),
+        run_30.is_ok() && stepwise.result.is_ok(),
         "{:?}",
-        integrated.err()
+        run_30.err().map(|f| f.to_string())
     );
 }
 
@@ -464,7 +441,7 @@ fn long_horizon_drift_is_small() {
     };
     let s = scene("long_horizon_f20", short);
     for m in METHODS {
-        let a = attempt(&s, m, &Limits::default());
+        let a = attempt(&s, m);
         let r = reference("long_horizon_f20", m, short);
         let outcome = a.classify(r.result.as_ref().ok(), None);
         println!("{}", describe("long_horizon_f20", &a, &outcome));
@@ -489,7 +466,7 @@ fn tolerance_extremes_finish_without_nan() {
     }
     let s = scene("tolerance_loose", |_| {});
     for m in METHODS {
-        let a = attempt(&s, m, &Limits::default());
+        let a = attempt(&s, m);
         println!(
             "{}",
             describe("tolerance_loose", &a, &a.classify(None, None))
@@ -508,7 +485,7 @@ fn tolerance_extremes_finish_without_nan() {
 fn max_step_extremes() {
     let s = scene("max_step_tiny", |f| f.integrator.max_steps = 20_000);
     for m in METHODS {
-        let a = attempt(&s, m, &Limits::default());
+        let a = attempt(&s, m);
         match &a.result {
             Err(Failure::Integrator {
                 error: flexprr_integrators::IntegratorError::TooManySteps { t, max_steps },

@@ -4,7 +4,9 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use flexprr_run::{run as run_scene, table_one_markdown, write_outputs};
+use flexprr_run::{
+    RunResult, WriteOptions, run as run_scene, table_one_markdown, write_outputs_with,
+};
 use flexprr_scene::{InputKind, ScenarioError, Scene};
 
 use super::Failure;
@@ -20,6 +22,9 @@ pub struct RunArgs {
     /// No progress display.
     #[arg(long)]
     pub quiet: bool,
+    /// Replace the output directory even if it is not a flexprr output directory.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Arguments of `flexprr check`.
@@ -93,24 +98,42 @@ impl ProgressLine {
     }
 }
 
-/// Runs a scene and writes its outputs.
+/// Runs a scene and writes its outputs; a failed run writes what it computed up to the
+/// failure, with `"status": "failed"` in `summary.json`, and exits 1.
 pub fn run(args: RunArgs) -> Result<(), Failure> {
     let scene = Scene::load(&args.scene).map_err(failure)?;
     let out = args
         .out
+        .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     let mut progress = ProgressLine::new(args.quiet);
-    let result = run_scene(&scene, &mut |f| progress.update(f));
+    let outcome = run_scene(&scene, &mut |f| progress.update(f));
     progress.finish();
-    let result = result.map_err(failure)?;
-    let written = write_outputs(&scene, &result, &out).map_err(Failure::run)?;
+    let options = WriteOptions { force: args.force };
+    let (result, error) = match &outcome {
+        Ok(result) => (result, None),
+        Err(f) => (f.partial.as_ref(), Some(&f.error)),
+    };
+    let written = write_outputs_with(&scene, result, error, &out, options).map_err(failure)?;
+    if let Some(e) = error {
+        let rows = result.tables.first().map_or(0, |t| t.rows());
+        return Err(Failure::run(format!(
+            "{e} (outputs up to the failure, {rows} samples, written to {} with \"status\": \"failed\")",
+            out.display()
+        )));
+    }
+    report(&scene, result, written.len(), &out);
+    Ok(())
+}
+
+/// Prints what a successful run did, Table I and the buckling warnings.
+fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path) {
     let stats = &result.stats;
     println!(
-        "{}: {} formulation, {} model, {} outputs written to {} in {:.3} s",
+        "{}: {} formulation, {} model, {files} outputs written to {} in {:.3} s",
         scene.name,
         scene.formulation.name(),
         scene.coupling.name(),
-        written.len(),
         out.display(),
         stats.wall_time_s
     );
@@ -123,22 +146,25 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
             s.rhs_evaluations
         );
     }
-    if let Some(table) = table_one_markdown(&result) {
+    if let Some(table) = table_one_markdown(result) {
         println!("\nTable I (link 1 frequencies over the motion):\n{table}");
     }
     if let Some(h) = &result.frequencies {
         for b in &h.buckling {
+            let margin = if b.margin.is_finite() {
+                format!(", margin {:.3}", b.margin)
+            } else {
+                String::new()
+            };
             println!(
-                "  warning: link {} buckles from t = {:.5} s to {:.5} s (lowest omega^2 = {:.3e} rad^2/s^2, margin {:.3})",
+                "  warning: link {} buckles from t = {:.5} s to {:.5} s (lowest omega^2 = {:.3e} rad^2/s^2{margin})",
                 b.link + 1,
                 b.t_start,
                 b.t_end,
                 b.min_eigenvalue,
-                b.margin
             );
         }
     }
-    Ok(())
 }
 
 /// Validates a scene without running it. A study or link file is named as such, with the

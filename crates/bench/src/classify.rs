@@ -2,12 +2,11 @@
 //! but slow, or failed with a clear reason. Used by the stress suite (`configs/stress/`,
 //! `docs/stability.md`).
 //!
-//! [`attempt`] integrates a scene's modal ODE with a chosen [`Method`] (the scene's own method
-//! is ignored), stepping by hand so that the integrator's work counters survive a failure and
-//! so that the deflection of every link can be checked after each accepted step: the modal
-//! equations are linear (small deflections), so a link that buckles grows exponentially and
-//! the run is stopped with [`Failure::Diverged`] once a deflection exceeds a fraction of the
-//! link length ([`Limits::deflection_fraction`]), instead of integrating to overflow.
+//! [`attempt`] integrates a scene's own model (KED or coupled, from the scene's one builder)
+//! with a chosen [`Method`] (the scene's own method is ignored) through the run layer's one
+//! observed stepping loop, so the integrator's work counters survive a failure and the
+//! divergence guard ([`flexprr_run::guard`], one limit) stops a link that buckles with
+//! [`Failure::Diverged`] instead of integrating to overflow.
 //!
 //! [`Attempt::classify`] then labels the attempt: [`Outcome::Solved`] with the relative
 //! deflection error against a reference solution (the same scene with another integrator at
@@ -17,34 +16,14 @@
 use std::fmt;
 use std::time::Instant as Clock;
 
-use flexprr_dynamics::{DynamicsError, ModalSystem};
-use flexprr_integrators::{
-    Abm, Bdf, Integrator, IntegratorError, OdeSystem, Rk45, Solution, Stats, Stepper,
-};
-
-use flexprr_run::guard::{DeflectionModel, GUARD_POINTS};
+use flexprr_dynamics::DynamicsError;
+use flexprr_integrators::{IntegratorError, Solution, Stats};
+use flexprr_run::RunError;
+use flexprr_run::guard::{DeflectionModel, deflection_error};
 use flexprr_scene::{Method, Scene};
 
 /// Points `xi` along each link where deflections are checked and compared.
 pub const CHECK_POINTS: [f64; 3] = [0.25, 0.5, 0.75];
-
-/// Limits applied while integrating.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Limits {
-    /// Largest transverse deflection allowed anywhere on a link, as a fraction of the link
-    /// length. Beyond a few percent of the length the small-deflection (linear) beam model
-    /// no longer holds, so a larger deflection is reported as a divergence. Default 0.1
-    /// (20 mm on the paper's 0.2 m links, slopes up to about 0.3 rad).
-    pub deflection_fraction: f64,
-}
-
-impl Default for Limits {
-    fn default() -> Self {
-        Self {
-            deflection_fraction: 0.1,
-        }
-    }
-}
 
 /// Why an attempt failed.
 #[derive(Debug, Clone, PartialEq)]
@@ -57,7 +36,7 @@ pub enum Failure {
         /// When the method had found the problem stiff before it stopped, if it did.
         stiffness_detected_at: Option<f64>,
     },
-    /// A link deflected beyond [`Limits::deflection_fraction`] of its length.
+    /// A link deflected beyond the divergence limit ([`flexprr_run::guard`]).
     Diverged {
         /// Link index (0-based).
         link: usize,
@@ -210,154 +189,73 @@ impl Attempt {
     }
 }
 
-/// Relative deflection error of `solution` against `reference`: the largest difference of
-/// the deflections at [`CHECK_POINTS`] of all links over all output times, divided by the
-/// largest reference deflection there. `None` when the output times differ or the
-/// reference is identically zero.
-pub fn deflection_error(
-    model: &DeflectionModel,
-    solution: &Solution,
-    reference: &Solution,
-) -> Option<f64> {
-    if solution.len() != reference.len() || solution.dim != reference.dim {
-        return None;
-    }
-    let (mut worst, mut scale) = (0.0_f64, 0.0_f64);
-    for k in 0..solution.len() {
-        let (y, y_ref) = (solution.y(k), reference.y(k));
-        for i in 0..3 {
-            for p in 0..model.points() {
-                let w_ref = model.deflection(i, p, y_ref);
-                worst = worst.max((model.deflection(i, p, y) - w_ref).abs());
-                scale = scale.max(w_ref.abs());
-            }
+impl From<RunError> for Failure {
+    fn from(e: RunError) -> Self {
+        match e {
+            RunError::Diverged {
+                link,
+                t,
+                xi,
+                w,
+                limit,
+                ..
+            } => Failure::Diverged {
+                link,
+                t,
+                xi,
+                deflection_m: w,
+                limit_m: limit,
+            },
+            RunError::Model(source) => Failure::Model { source },
+            RunError::Integrator { source, .. } => Failure::Integrator {
+                error: source,
+                stiffness_detected_at: None,
+            },
+            other => Failure::Model {
+                source: DynamicsError::Inconsistent(other.to_string()),
+            },
         }
     }
-    (scale > 0.0).then(|| worst / scale)
 }
 
-/// Integrates the scene's modal ODE with `method` and the scene's options, checking the
-/// deflections after every accepted step against `limits`. Never panics on a failed run:
+/// Integrates the scene's model with `method` and the scene's options through the run
+/// layer's one stepping loop (divergence guard, stop times). Never panics on a failed run:
 /// the failure is in [`Attempt::result`].
-pub fn attempt(scene: &Scene, method: Method, limits: &Limits) -> Attempt {
+pub fn attempt(scene: &Scene, method: Method) -> Attempt {
     let clock = Clock::now();
-    let failed = |source: DynamicsError| Attempt {
-        method,
-        result: Err(Failure::Model { source }),
-        stats: Stats::default(),
-        max_deflection_m: 0.0,
-        wall_time_s: clock.elapsed().as_secs_f64(),
-        deflection_model: None,
+    let mut model = match scene.build_model() {
+        Ok(m) => m,
+        Err(source) => {
+            return Attempt {
+                method,
+                result: Err(Failure::Model { source }),
+                stats: Stats::default(),
+                max_deflection_m: 0.0,
+                wall_time_s: clock.elapsed().as_secs_f64(),
+                deflection_model: None,
+            };
+        }
     };
-    let mut system = match ModalSystem::new(
-        scene.machine.clone(),
-        scene.trajectory.clone(),
-        scene.formulation,
-        scene.damping.clone(),
-    ) {
-        Ok(s) => s,
-        Err(e) => return failed(e),
+    let integrator = method.integrator(scene.options.clone());
+    let integration =
+        flexprr_run::integrate_model(scene, integrator.as_ref(), model.as_mut(), &mut |_| {});
+    let stats = integration.solution.stats.clone();
+    let result = match integration.failure {
+        None => Ok(integration.solution),
+        Some(e) => Err(match Failure::from(e) {
+            Failure::Integrator { error, .. } => Failure::Integrator {
+                error,
+                stiffness_detected_at: stats.stiffness_detected_at,
+            },
+            other => other,
+        }),
     };
-    let guard = DeflectionModel::new(scene, &system, &GUARD_POINTS);
-    let lengths: [f64; 3] = std::array::from_fn(|i| scene.machine.links[i].length());
-    let opts = scene.options.clone();
-    let mut run = Run {
-        guard: &guard,
-        limits: [0, 1, 2].map(|i| limits.deflection_fraction * lengths[i]),
-        max_deflection: 0.0,
-    };
-    let (result, stats) = match method {
-        Method::Abm => run.drive(&Abm::new(opts), &mut system, &scene.output_times),
-        Method::Rk45 => run.drive(&Rk45::new(opts), &mut system, &scene.output_times),
-        Method::Bdf => run.drive(&Bdf::new(opts), &mut system, &scene.output_times),
-    };
-    let result = result.map_err(|e| match e {
-        Failure::Integrator { .. } => match system.take_failure() {
-            Some(source) => Failure::Model { source },
-            None => e,
-        },
-        other => other,
-    });
     Attempt {
         method,
         result,
         stats,
-        max_deflection_m: run.max_deflection,
+        max_deflection_m: integration.max_deflection_m,
         wall_time_s: clock.elapsed().as_secs_f64(),
-        deflection_model: Some(DeflectionModel::new(scene, &system, &CHECK_POINTS)),
-    }
-}
-
-/// The stepping loop with the deflection guard.
-struct Run<'a> {
-    guard: &'a DeflectionModel,
-    limits: [f64; 3],
-    max_deflection: f64,
-}
-
-impl Run<'_> {
-    /// Like [`Integrator::solve`], but keeps the statistics on failure and stops when a
-    /// deflection exceeds its limit.
-    fn drive<I: Integrator, S: OdeSystem>(
-        &mut self,
-        integrator: &I,
-        system: &mut S,
-        t_out: &[f64],
-    ) -> (Result<Solution, Failure>, Stats) {
-        let integ = |error: IntegratorError, stats: &Stats| Failure::Integrator {
-            error,
-            stiffness_detected_at: stats.stiffness_detected_at,
-        };
-        let y0 = vec![0.0; system.dim()];
-        let (t0, t_end) = (t_out[0], t_out[t_out.len() - 1]);
-        let mut solution = Solution::with_capacity(y0.len(), t_out.len());
-        solution.push(t0, &y0);
-        let mut stepper = match integrator.start(system, t0, &y0, t_end) {
-            Ok(s) => s,
-            Err(e) => return (Err(integ(e, &Stats::default())), Stats::default()),
-        };
-        let mut buf = y0;
-        let mut k = 1;
-        while k < t_out.len() {
-            if let Err(e) = stepper.step(system) {
-                let stats = stepper.stats().clone();
-                return (Err(integ(e, &stats)), stats);
-            }
-            let t_now = stepper.t();
-            if let Some(failure) = self.check(t_now, stepper.y()) {
-                return (Err(failure), stepper.stats().clone());
-            }
-            while k < t_out.len() && t_out[k] <= t_now {
-                if (t_out[k] - t_now).abs() <= f64::EPSILON * t_now.abs().max(1.0) {
-                    buf.copy_from_slice(stepper.y());
-                } else {
-                    stepper.interpolate(t_out[k], &mut buf);
-                }
-                solution.push(t_out[k], &buf);
-                k += 1;
-            }
-        }
-        solution.stats = stepper.stats().clone();
-        let stats = solution.stats.clone();
-        (Ok(solution), stats)
-    }
-
-    fn check(&mut self, t: f64, y: &[f64]) -> Option<Failure> {
-        for (i, limit) in self.limits.iter().enumerate() {
-            for (p, xi) in GUARD_POINTS.iter().enumerate() {
-                let w = self.guard.deflection(i, p, y);
-                self.max_deflection = self.max_deflection.max(w.abs());
-                if w.abs() > *limit {
-                    return Some(Failure::Diverged {
-                        link: i,
-                        t,
-                        xi: *xi,
-                        deflection_m: w,
-                        limit_m: *limit,
-                    });
-                }
-            }
-        }
-        None
+        deflection_model: Some(DeflectionModel::new(model.as_ref(), &CHECK_POINTS)),
     }
 }

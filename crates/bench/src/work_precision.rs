@@ -24,8 +24,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant as Clock;
 
-use flexprr_dynamics::{CoupledOptions, CoupledSystem, CouplingModel, ModalSystem};
-use flexprr_integrators::{IntegratorError, OdeSystem, Options};
+use flexprr_dynamics::SceneModel;
+use flexprr_integrators::{Options, Solution};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -154,106 +154,36 @@ pub struct Reference {
     pub agreement: Option<AchievedError>,
 }
 
-/// The ODE a scene integrates: the KED modal system or the coupled model
-/// (`model.coupling`), behind one [`OdeSystem`] so every method and tolerance runs on either.
-#[derive(Debug)]
-pub enum SceneSystem {
-    /// Prescribed rigid motion ([`ModalSystem`]).
-    Ked(Box<ModalSystem>),
-    /// The coupled model ([`CoupledSystem`]).
-    Coupled(Box<CoupledSystem>),
+/// Solves the scene's model with `method` and `options` over the scene's output times,
+/// stopping at the scene's stop times (the same loop as `flexprr run`). On failure, the
+/// message names the method, the tolerance and the model's own cause when it has one.
+fn solve(
+    scene: &Scene,
+    model: &mut dyn SceneModel,
+    method: Method,
+    options: Options,
+) -> Result<Solution, String> {
+    let rtol = options.rtol;
+    let t_out = &scene.output_times;
+    let y0 = model.initial_state();
+    let stops = flexprr_run::stop_times(scene);
+    method
+        .integrator(options)
+        .solve_dyn(model, t_out[0], &y0, t_out, &stops, &mut ())
+        .map_err(|interrupted| match model.take_failure() {
+            Some(cause) => format!(
+                "{} at rtol {rtol:e}: {cause} (integrator: {interrupted})",
+                method.name()
+            ),
+            None => format!("{} at rtol {rtol:e}: {interrupted}", method.name()),
+        })
 }
 
-impl SceneSystem {
-    /// The zero initial state.
-    pub fn initial_state(&self) -> Vec<f64> {
-        match self {
-            SceneSystem::Ked(s) => s.initial_state(),
-            SceneSystem::Coupled(s) => s.initial_state(),
-        }
-    }
-    /// Number of modal coordinates.
-    pub fn modes(&self) -> usize {
-        match self {
-            SceneSystem::Ked(s) => s.modes(),
-            SceneSystem::Coupled(s) => s.modes(),
-        }
-    }
-    /// The first failure met inside the right-hand side.
-    pub fn take_failure(&mut self) -> Option<flexprr_dynamics::DynamicsError> {
-        match self {
-            SceneSystem::Ked(s) => s.take_failure(),
-            SceneSystem::Coupled(s) => s.take_failure(),
-        }
-    }
-}
-
-impl OdeSystem for SceneSystem {
-    fn dim(&self) -> usize {
-        2 * self.modes()
-    }
-    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
-        match self {
-            SceneSystem::Ked(s) => s.rhs(t, y, dy),
-            SceneSystem::Coupled(s) => s.rhs(t, y, dy),
-        }
-    }
-    fn jacobian(&mut self, t: f64, y: &[f64], jac: faer::MatMut<'_, f64>) {
-        match self {
-            SceneSystem::Ked(s) => s.jacobian(t, y, jac),
-            SceneSystem::Coupled(s) => s.jacobian(t, y, jac),
-        }
-    }
-    fn has_analytic_jacobian(&self) -> bool {
-        match self {
-            SceneSystem::Ked(s) => s.has_analytic_jacobian(),
-            SceneSystem::Coupled(s) => s.has_analytic_jacobian(),
-        }
-    }
-    fn jacobian_rhs_evaluations(&self) -> usize {
-        match self {
-            SceneSystem::Ked(s) => s.jacobian_rhs_evaluations(),
-            SceneSystem::Coupled(s) => s.jacobian_rhs_evaluations(),
-        }
-    }
-}
-
-/// Builds the system the scene integrates (KED or coupled).
-///
-/// # Errors
-/// [`ScenarioError::Run`] when the operators cannot be formed.
-pub fn modal_system(scene: &Scene) -> Result<SceneSystem, ScenarioError> {
-    let run = |e: flexprr_dynamics::DynamicsError| ScenarioError::Run(e.to_string());
-    Ok(match scene.coupling {
-        CouplingModel::Ked => SceneSystem::Ked(Box::new(
-            ModalSystem::new(
-                scene.machine.clone(),
-                scene.trajectory.clone(),
-                scene.formulation,
-                scene.damping.clone(),
-            )
-            .map_err(run)?,
-        )),
-        CouplingModel::Coupled => SceneSystem::Coupled(Box::new(
-            CoupledSystem::new(
-                scene.machine.clone(),
-                scene.trajectory.clone(),
-                scene.damping.clone(),
-                CoupledOptions::full(),
-            )
-            .map_err(run)?,
-        )),
-    })
-}
-
-fn run_error(system: &mut SceneSystem, method: Method, rtol: f64, e: &IntegratorError) -> String {
-    match system.take_failure() {
-        Some(cause) => format!(
-            "{} at rtol {rtol:e}: {cause} (integrator: {e})",
-            method.name()
-        ),
-        None => format!("{} at rtol {rtol:e}: {e}", method.name()),
-    }
+/// The scene's model from its one builder.
+fn build(scene: &Scene) -> Result<Box<dyn SceneModel>, ScenarioError> {
+    scene
+        .build_model()
+        .map_err(|e| ScenarioError::Run(e.to_string()))
 }
 
 impl Reference {
@@ -317,33 +247,29 @@ impl Reference {
     /// `config.reference_agreement_limit`.
     pub fn compute(scene: &Scene, config: &WorkPrecisionConfig) -> Result<Self, ScenarioError> {
         config.validate()?;
-        let mut system = modal_system(scene)?;
+        let mut system = build(scene)?;
         let t_out = scene.output_times.clone();
-        let y0 = system.initial_state();
         let modes = system.modes();
         // A pilot run gives the size of the displacements for the absolute tolerance.
         let pilot_rtol = 1e-8;
-        let pilot = Method::Abm
-            .solve(
-                scene.options.clone().rtol(pilot_rtol),
-                &mut system,
-                &y0,
-                &t_out,
-            )
-            .map_err(|e| ScenarioError::Run(run_error(&mut system, Method::Abm, pilot_rtol, &e)))?;
+        let pilot = solve(
+            scene,
+            system.as_mut(),
+            Method::Abm,
+            scene.options.clone().rtol(pilot_rtol),
+        )
+        .map_err(ScenarioError::Run)?;
         let pilot = Self::from_states(t_out.clone(), pilot.states, modes)
             .map_err(|e| ScenarioError::Run(format!("pilot run for the reference: {e}")))?;
         let rtol = config.reference_rtol;
         let options = Options::default()
             .rtol(rtol)
             .atol(rtol * pilot.displacement_size);
-        let mut solve = |method: Method| {
-            method
-                .solve(options.clone(), &mut system, &y0, &t_out)
-                .map_err(|e| ScenarioError::Run(run_error(&mut system, method, rtol, &e)))
+        let mut solve_with = |method: Method| {
+            solve(scene, system.as_mut(), method, options.clone()).map_err(ScenarioError::Run)
         };
-        let main = solve(Method::Rk45)?;
-        let check = solve(Method::Abm)?;
+        let main = solve_with(Method::Rk45)?;
+        let check = solve_with(Method::Abm)?;
         let mut reference = Self::from_states(t_out, main.states, modes)
             .map_err(|e| ScenarioError::Run(format!("reference: {e}")))?;
         let agreement = reference.errors(&check.states)?;
@@ -593,21 +519,19 @@ pub fn measure(
     progress: &mut dyn FnMut(&WorkPrecisionRow),
 ) -> Result<(Vec<WorkPrecisionRow>, Vec<String>), ScenarioError> {
     config.validate()?;
-    let mut system = modal_system(scene)?;
-    let y0 = system.initial_state();
-    let t_out = &scene.output_times;
+    let mut system = build(scene)?;
     let (mut rows, mut failures) = (Vec::new(), Vec::new());
     for &method in &config.methods {
         for &rtol in &config.tolerances {
             let atol = reference.atol(rtol);
             let options = Options::default().rtol(rtol).atol(atol);
             let timed = time_runs(config.warmup, config.repeats, || {
-                method.solve(options.clone(), &mut system, &y0, t_out)
+                solve(scene, system.as_mut(), method, options.clone())
             });
             let (solution, timing) = match timed {
                 Ok(ok) => ok,
-                Err(e) => {
-                    failures.push(run_error(&mut system, method, rtol, &e));
+                Err(message) => {
+                    failures.push(message);
                     continue;
                 }
             };

@@ -5,7 +5,7 @@
 
 use flexprr_bench::work_precision::{
     PACKAGE, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, markdown_at_error,
-    modal_system, read_csv, time_at_error, work_precision,
+    read_csv, time_at_error, work_precision,
 };
 use flexprr_integrators::{Bdf, Integrator, Options};
 use flexprr_scene::Method;
@@ -70,11 +70,11 @@ fn errors_fall_as_the_tolerance_tightens_and_the_reference_is_confirmed() {
     assert_ne!(reference.method, reference.check_method);
 
     // A third, independent method (implicit BDF at a tight tolerance) agrees with it too.
-    let mut system = modal_system(&scene).expect("system");
+    let mut system = scene.build_model().expect("system");
     let y0 = system.initial_state();
     let opts = Options::default().rtol(1e-10).atol(reference.atol(1e-10));
     let bdf = Bdf::new(opts)
-        .solve(&mut system, 0.0, &y0, &scene.output_times)
+        .solve(system.as_mut(), 0.0, &y0, &scene.output_times)
         .expect("bdf solves");
     let third = reference.errors(&bdf.states).expect("same shape");
     assert!(

@@ -8,7 +8,7 @@
 //! * [`JointReactionAxialForce`]: `-F_B.e`, the whole reaction projected on the link.
 
 use flexprr_beam::AxialLoad;
-use flexprr_kinematics::LegState;
+use flexprr_kinematics::LegKinematics;
 use nalgebra::Vector2;
 
 use crate::{JointReactions, LinkModel};
@@ -16,8 +16,8 @@ use crate::{JointReactions, LinkModel};
 /// Everything an axial force model may read for one link at one instant.
 #[derive(Debug, Clone, Copy)]
 pub struct AxialInput<'a> {
-    /// Kinematic state of the leg.
-    pub leg: &'a LegState,
+    /// Kinematic state of the leg (a `&LegState` coerces to it).
+    pub leg: &'a LegKinematics,
     /// Guide direction `u_i`.
     pub guide_direction: Vector2<f64>,
     /// The link.

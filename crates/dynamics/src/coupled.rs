@@ -48,7 +48,7 @@ use std::sync::Arc;
 
 use faer::{Mat, Side};
 use flexprr_integrators::OdeSystem;
-use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
+use flexprr_kinematics::{MachineKinematics, PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 use crate::{DynamicsError, Machine, ModalDamping};
@@ -615,10 +615,11 @@ impl CoupledSystem {
         let n = self.modes;
         let (eta, eta_dot) = y.split_at(n);
         let nominal = self.trajectory.motion(t);
-        let rigid = self
-            .machine
+        // Only the slider coordinates are read: in place, without the link angles.
+        let mut rigid = MachineKinematics::default();
+        self.machine
             .geometry
-            .inverse_kinematics_unchecked(&nominal)
+            .inverse_kinematics_unchecked_into(&nominal, &mut rigid)
             .map_err(|source| DynamicsError::Kinematics { t, source })?;
         let rho: [[f64; 3]; 3] = std::array::from_fn(|i| {
             let leg = &rigid.legs[i];

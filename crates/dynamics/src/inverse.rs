@@ -18,7 +18,7 @@
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
-use flexprr_kinematics::{LegState, MachineState};
+use flexprr_kinematics::{LegKinematics, MachineState, PlatformMotion};
 use nalgebra::{Vector2, Vector3};
 
 use crate::{DynamicsError, Machine};
@@ -51,7 +51,7 @@ pub struct ElasticInertia {
 
 /// Acceleration of link `i`'s centroid.
 #[inline]
-fn centroid_acceleration(leg: &LegState, u: &Vector2<f64>, length: f64) -> Vector2<f64> {
+fn centroid_acceleration(leg: &LegKinematics, u: &Vector2<f64>, length: f64) -> Vector2<f64> {
     leg.rho_ddot * u + 0.5 * length * (leg.beta_ddot * leg.n - leg.beta_dot * leg.beta_dot * leg.e)
 }
 
@@ -60,11 +60,26 @@ fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
+/// The legs of a state with or without the link angles (the dynamics never reads them).
+#[inline]
+fn legs_of<L: AsRef<LegKinematics>>(state: &MachineState<L>) -> [&LegKinematics; 3] {
+    [
+        state.legs[0].as_ref(),
+        state.legs[1].as_ref(),
+        state.legs[2].as_ref(),
+    ]
+}
+
 /// Normalised determinant of the platform equilibrium matrix (rows `(e_i, ((C_i - c̄) x e_i)/L)`
 /// scaled to unit length): the same dimensionless type-II measure as
-/// [`flexprr_kinematics::SingularityMeasures::type_ii`].
-pub fn equilibrium_measure(state: &MachineState) -> f64 {
-    let legs = &state.legs;
+/// [`flexprr_kinematics::SingularityMeasures::type_ii`]. `state` may carry the link angles
+/// ([`MachineState`]) or not ([`flexprr_kinematics::MachineKinematics`]).
+pub fn equilibrium_measure<L: AsRef<LegKinematics>>(state: &MachineState<L>) -> f64 {
+    equilibrium_measure_of(legs_of(state))
+}
+
+#[inline]
+fn equilibrium_measure_of(legs: [&LegKinematics; 3]) -> f64 {
     let centroid = (legs[0].c.coords + legs[1].c.coords + legs[2].c.coords) / 3.0;
     let radius = legs
         .iter()
@@ -95,14 +110,24 @@ fn det3(m: &[[f64; 3]; 3]) -> f64 {
 /// # Errors
 /// [`DynamicsError::SingularInverseDynamics`] when the pose is within the geometry's type-II
 /// threshold (the axial link forces are then undetermined and would be huge).
-pub fn inverse_dynamics(
+pub fn inverse_dynamics<L: AsRef<LegKinematics>>(
     machine: &Machine,
-    state: &MachineState,
+    state: &MachineState<L>,
+    elastic: Option<&ElasticInertia>,
+    t: f64,
+) -> Result<JointReactions, DynamicsError> {
+    inverse_dynamics_of(machine, &state.motion, legs_of(state), elastic, t)
+}
+
+fn inverse_dynamics_of(
+    machine: &Machine,
+    motion: &PlatformMotion,
+    legs: [&LegKinematics; 3],
     elastic: Option<&ElasticInertia>,
     t: f64,
 ) -> Result<JointReactions, DynamicsError> {
     let threshold = machine.geometry.thresholds.type_ii;
-    let measure = equilibrium_measure(state);
+    let measure = equilibrium_measure_of(legs);
     if measure.is_nan() || measure < threshold {
         return Err(DynamicsError::SingularInverseDynamics {
             t,
@@ -110,9 +135,9 @@ pub fn inverse_dynamics(
             threshold,
         });
     }
-    let p = state.motion.pose.position().coords;
-    let a_p = Vector2::new(state.motion.acceleration.x, state.motion.acceleration.y);
-    let phi_ddot = state.motion.acceleration.z;
+    let p = motion.pose.position().coords;
+    let a_p = Vector2::new(motion.acceleration.x, motion.acceleration.y);
+    let phi_ddot = motion.acceleration.z;
     let mut a = [[0.0; 3]; 3];
     let mut g = [
         -machine.platform_mass * a_p.x,
@@ -122,7 +147,7 @@ pub fn inverse_dynamics(
     let mut normal = [0.0; 3];
     let mut a_g = [Vector2::zeros(); 3];
     for i in 0..3 {
-        let leg = &state.legs[i];
+        let leg = legs[i];
         let link = &machine.links[i];
         let (m, l) = (link.mass(), link.length());
         let u = machine.geometry.legs[i].guide.direction.into_inner();
@@ -153,7 +178,7 @@ pub fn inverse_dynamics(
         driving_force: [0.0; 3],
     };
     for i in 0..3 {
-        let leg = &state.legs[i];
+        let leg = legs[i];
         let link = &machine.links[i];
         let u = machine.geometry.legs[i].guide.direction.into_inner();
         let f_c = f[i] * leg.e + normal[i] * leg.n;
@@ -172,11 +197,12 @@ pub fn inverse_dynamics(
 ///
 /// # Errors
 /// As [`inverse_dynamics`].
-pub fn inverse_dynamics_full(
+pub fn inverse_dynamics_full<L: AsRef<LegKinematics>>(
     machine: &Machine,
-    state: &MachineState,
+    state: &MachineState<L>,
     t: f64,
 ) -> Result<JointReactions, DynamicsError> {
+    let legs = legs_of(state);
     let threshold = machine.geometry.thresholds.type_ii;
     let measure = equilibrium_measure(state);
     if measure.is_nan() || measure < threshold {
@@ -190,8 +216,7 @@ pub fn inverse_dynamics_full(
     let mut a = Mat::<f64>::zeros(12, 12);
     let mut b = Mat::<f64>::zeros(12, 1);
     let p = state.motion.pose.position().coords;
-    for i in 0..3 {
-        let leg = &state.legs[i];
+    for (i, leg) in legs.into_iter().enumerate() {
         let link = &machine.links[i];
         let (m, l) = (link.mass(), link.length());
         let u = machine.geometry.legs[i].guide.direction.into_inner();
@@ -234,17 +259,20 @@ pub fn inverse_dynamics_full(
         let f_b = Vector2::new(b[(4 * i, 0)], b[(4 * i + 1, 0)]);
         out.slider_on_link[i] = f_b;
         out.platform_on_link[i] = Vector2::new(b[(4 * i + 2, 0)], b[(4 * i + 3, 0)]);
-        out.driving_force[i] = machine.slider_mass[i] * state.legs[i].rho_ddot + f_b.dot(&u);
+        out.driving_force[i] = machine.slider_mass[i] * legs[i].rho_ddot + f_b.dot(&u);
     }
     Ok(out)
 }
 
 /// Rigid kinetic energy `T` of sliders, links and platform (J), for the power-balance check
 /// `sum F_ai rho_i' = dT/dt`.
-pub fn rigid_kinetic_energy(machine: &Machine, state: &MachineState) -> f64 {
+pub fn rigid_kinetic_energy<L: AsRef<LegKinematics>>(
+    machine: &Machine,
+    state: &MachineState<L>,
+) -> f64 {
+    let legs = legs_of(state);
     let mut energy = 0.0;
-    for i in 0..3 {
-        let leg = &state.legs[i];
+    for (i, leg) in legs.into_iter().enumerate() {
         let link = &machine.links[i];
         let u = machine.geometry.legs[i].guide.direction.into_inner();
         let v_g = leg.rho_dot * u + 0.5 * link.length() * leg.beta_dot * leg.n;

@@ -20,7 +20,7 @@ use faer::linalg::solvers::DenseSolveCore;
 use faer::{Mat, MatMut, Side};
 use flexprr_beam::{AxialLoad, Coupling};
 use flexprr_integrators::OdeSystem;
-use flexprr_kinematics::{MachineState, Trajectory};
+use flexprr_kinematics::{MachineKinematics, MachineState, Trajectory};
 
 use crate::axial::{AxialForceModel, AxialInput};
 use crate::inverse::{ElasticInertia, JointReactions, inverse_dynamics};
@@ -365,22 +365,24 @@ impl ModalSystem {
     /// Kinematic failure or a singular inverse dynamics, with the time.
     #[inline]
     pub fn instant(&mut self, t: f64) -> Result<Instant, DynamicsError> {
-        let state = self.kinematic_state(t)?;
+        let mut state = MachineKinematics::default();
+        self.kinematic_state(t, &mut state)?;
         let (reactions, loads) = self.axial_loads(&state, t)?;
         Ok(Instant {
-            state,
+            state: state.with_angles(),
             reactions,
             loads,
         })
     }
 
-    /// Inverse kinematics of the prescribed motion at `t`.
+    /// Inverse kinematics of the prescribed motion at `t`, in place and without the link
+    /// angles (the right-hand side needs only `e`, `n` and the rates).
     #[inline]
-    fn kinematic_state(&self, t: f64) -> Result<MachineState, DynamicsError> {
+    fn kinematic_state(&self, t: f64, state: &mut MachineKinematics) -> Result<(), DynamicsError> {
         let motion = self.trajectory.motion(t);
         self.machine
             .geometry
-            .inverse_kinematics_unchecked(&motion)
+            .inverse_kinematics_unchecked_into(&motion, state)
             .map_err(|source| DynamicsError::Kinematics { t, source })
     }
 
@@ -388,7 +390,7 @@ impl ModalSystem {
     #[inline]
     fn axial_loads(
         &mut self,
-        state: &MachineState,
+        state: &MachineKinematics,
         t: f64,
     ) -> Result<(Option<JointReactions>, [AxialLoad; 3]), DynamicsError> {
         let reactions = if self.axial.needs_inverse_dynamics() {
@@ -414,7 +416,7 @@ impl ModalSystem {
     #[inline]
     fn accelerations(
         &self,
-        state: &MachineState,
+        state: &MachineKinematics,
         loads: &[AxialLoad; 3],
         y: &[f64],
         out: &mut [f64],
@@ -472,9 +474,11 @@ impl ModalSystem {
     /// # Errors
     /// As [`ModalSystem::instant`].
     pub fn modal_accelerations(&mut self, t: f64, y: &[f64]) -> Result<Vec<f64>, DynamicsError> {
-        let inst = self.instant(t)?;
+        let mut state = MachineKinematics::default();
+        self.kinematic_state(t, &mut state)?;
+        let (_, loads) = self.axial_loads(&state, t)?;
         let mut out = vec![0.0; self.modes];
-        self.accelerations(&inst.state, &inst.loads, y, &mut out);
+        self.accelerations(&state, &loads, y, &mut out);
         Ok(out)
     }
 
@@ -511,11 +515,12 @@ impl OdeSystem for ModalSystem {
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
         self.counters.rhs_evaluations += 1;
-        // The kinematic state and the loads are used in place (no `Instant` is assembled).
-        let state = match self.kinematic_state(t) {
-            Ok(state) => state,
-            Err(e) => return self.fail(e, dy),
-        };
+        // The kinematic state (without link angles) is filled in place and the loads are
+        // used where they are computed (no `Instant` is assembled).
+        let mut state = MachineKinematics::default();
+        if let Err(e) = self.kinematic_state(t, &mut state) {
+            return self.fail(e, dy);
+        }
         let loads = match self.axial_loads(&state, t) {
             Ok((_, loads)) => loads,
             Err(e) => return self.fail(e, dy),
@@ -534,8 +539,12 @@ impl OdeSystem for ModalSystem {
         for k in 0..n {
             jac[(k, n + k)] = 1.0;
         }
-        let inst = match self.instant(t) {
-            Ok(inst) => inst,
+        let mut state = MachineKinematics::default();
+        let loaded = self
+            .kinematic_state(t, &mut state)
+            .and_then(|()| self.axial_loads(&state, t));
+        let loads = match loaded {
+            Ok((_, loads)) => loads,
             Err(e) => {
                 if self.failure.is_none() {
                     self.failure = Some(e);
@@ -545,8 +554,8 @@ impl OdeSystem for ModalSystem {
             }
         };
         for (i, op) in self.ops.iter().enumerate() {
-            let leg = &inst.state.legs[i];
-            let load = &inst.loads[i];
+            let leg = &state.legs[i];
+            let load = &loads[i];
             let (c0, c1, c2) = (load.p0 / op.length, load.p1, load.p2 * op.length);
             let softening = if self.formulation.centrifugal_softening {
                 leg.beta_dot * leg.beta_dot

@@ -716,7 +716,7 @@ impl Stepper for AbmStepper {
     /// Dense output by the Adams interpolating polynomial of degree `k_old + 1` through the
     /// stored differences (Shampine & Gordon 1975, ch. 7, routine INTRP):
     /// `y(x + s) = y + s sum_{i<=k+1} g_i(s) phi_i`, with `g_i(s)` from the recursion on
-    /// `psi` (the same recursion as [`Coefficients::update`] for a step of length `s`).
+    /// `psi` (the same recursion as `Coefficients::update` for a step of length `s`).
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         let n = self.dim;
         let s = t - self.t;

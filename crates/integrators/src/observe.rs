@@ -219,6 +219,10 @@ fn interior_stops(t0: f64, t_end: f64, stops: &[f64]) -> Result<Vec<f64>, Integr
 }
 
 /// The stepping loop behind [`Integrator::solve_observed`] (see there).
+#[allow(
+    clippy::result_large_err,
+    reason = "the error carries the partial solution, as large as the Ok value; returned once per run"
+)]
 pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
     integrator: &I,
     system: &mut S,
@@ -381,6 +385,10 @@ pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
 ///     assert!((sol.y(0)[0] - (-2.0_f64).exp()).abs() < 1e-7, "{}", m.name());
 /// }
 /// ```
+#[allow(
+    clippy::result_large_err,
+    reason = "the error carries the partial solution, as large as the Ok value; returned once per run"
+)]
 pub trait DynIntegrator: Send + Sync {
     /// Short name of the method.
     fn name(&self) -> &str;

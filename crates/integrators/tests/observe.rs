@@ -322,7 +322,7 @@ fn observer_stop_keeps_the_outputs_so_far() {
         let Interruption::Stopped { t } = e.reason else {
             panic!("{}: expected Stopped, got {:?}", m.name(), e.reason);
         };
-        assert!(t >= 0.1 && t < T_END, "{}: stopped at {t}", m.name());
+        assert!((0.1..T_END).contains(&t), "{}: stopped at {t}", m.name());
         assert_eq!(e.last_time(), Some(t));
         let expected = t_out.iter().filter(|&&s| s <= t).count();
         assert_eq!(e.solution.len(), expected, "{}", m.name());

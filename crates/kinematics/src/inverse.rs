@@ -28,17 +28,20 @@ pub struct LegPosition {
     pub r: Vector2<f64>,
 }
 
-/// Position, velocity and acceleration state of one leg.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LegState {
+/// Position, velocity and acceleration of one leg without the link angle: everything the
+/// dynamics reads (the link direction `e_i` replaces `beta_i = atan2(e_i)`).
+///
+/// Computed in place by [`Geometry::inverse_kinematics_unchecked_into`] and
+/// [`Geometry::inverse_kinematics_into`]; the angle is available on demand from
+/// [`LegKinematics::beta`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LegKinematics {
     /// Slider position `rho_i` (m).
     pub rho: f64,
     /// Slider velocity `rho_i'` (m/s).
     pub rho_dot: f64,
     /// Slider acceleration `rho_i''` (m/s^2).
     pub rho_ddot: f64,
-    /// Link angle `beta_i` (rad).
-    pub beta: f64,
     /// Link angular velocity `beta_i'` (rad/s).
     pub beta_dot: f64,
     /// Link angular acceleration `beta_i''` (rad/s^2).
@@ -53,19 +56,99 @@ pub struct LegState {
     pub c_dot: Vector2<f64>,
     /// Acceleration of `C_i`.
     pub c_ddot: Vector2<f64>,
-    /// Unit link direction `e_i` (from `B_i` to `C_i`).
+    /// Unit link direction `e_i = (C_i - B_i) / l_i = (cos beta_i, sin beta_i)`.
     pub e: Vector2<f64>,
     /// Link normal `n_i = (-e_y, e_x)`.
     pub n: Vector2<f64>,
 }
 
+impl LegKinematics {
+    /// Link angle `beta_i = atan2(e_y, e_x)` in `(-pi, pi]` (rad), computed on each call.
+    #[inline]
+    pub fn beta(&self) -> f64 {
+        self.e.y.atan2(self.e.x)
+    }
+}
+
+impl AsRef<LegKinematics> for LegKinematics {
+    fn as_ref(&self) -> &LegKinematics {
+        self
+    }
+}
+
+/// Position, velocity and acceleration state of one leg: [`LegKinematics`] and the link
+/// angle `beta_i`.
+///
+/// The fields of [`LegKinematics`] are read through `Deref` (`leg.rho_dot`), so a
+/// `&LegState` is accepted where a `&LegKinematics` is expected.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LegState {
+    /// Everything but the angle.
+    pub kinematics: LegKinematics,
+    /// Link angle `beta_i = atan2(e_i)` in `(-pi, pi]` (rad).
+    pub beta: f64,
+}
+
+impl LegState {
+    /// The state of a leg with its angle computed from the link direction.
+    #[inline]
+    pub fn from_kinematics(kinematics: LegKinematics) -> Self {
+        Self {
+            beta: kinematics.beta(),
+            kinematics,
+        }
+    }
+}
+
+impl std::ops::Deref for LegState {
+    type Target = LegKinematics;
+    #[inline]
+    fn deref(&self) -> &LegKinematics {
+        &self.kinematics
+    }
+}
+
+impl std::ops::DerefMut for LegState {
+    #[inline]
+    fn deref_mut(&mut self) -> &mut LegKinematics {
+        &mut self.kinematics
+    }
+}
+
+impl AsRef<LegKinematics> for LegState {
+    fn as_ref(&self) -> &LegKinematics {
+        &self.kinematics
+    }
+}
+
 /// Full rigid-body state of the machine for one platform motion.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MachineState {
+///
+/// The leg type `L` is [`LegState`] (with the link angles) by default, or [`LegKinematics`]
+/// (without them, see [`MachineKinematics`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MachineState<L = LegState> {
     /// The platform motion the state was computed from.
     pub motion: PlatformMotion,
     /// The three legs.
-    pub legs: [LegState; 3],
+    pub legs: [L; 3],
+}
+
+/// The machine's rigid-body state without the link angles: what a right-hand side needs,
+/// filled in place by [`Geometry::inverse_kinematics_unchecked_into`].
+pub type MachineKinematics = MachineState<LegKinematics>;
+
+impl MachineKinematics {
+    /// The state with the link angles `beta_i = atan2(e_i)` added.
+    pub fn with_angles(&self) -> MachineState {
+        MachineState {
+            motion: self.motion,
+            legs: [
+                LegState::from_kinematics(self.legs[0]),
+                LegState::from_kinematics(self.legs[1]),
+                LegState::from_kinematics(self.legs[2]),
+            ],
+        }
+    }
 }
 
 /// Distance to the two kinds of singularity (small = close; both dimensionless, in `[0, 1]`).
@@ -117,15 +200,46 @@ fn perp(a: &Vector2<f64>) -> Vector2<f64> {
     Vector2::new(-a.y, a.x)
 }
 
-/// Position IK of one leg with the given link length.
+/// Position IK of one leg without the angle (the shared core of every IK entry point).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LegPoint {
+    pub(crate) rho: f64,
+    pub(crate) a: Point2<f64>,
+    pub(crate) b: Point2<f64>,
+    pub(crate) c: Point2<f64>,
+    pub(crate) e: Vector2<f64>,
+    pub(crate) n: Vector2<f64>,
+    pub(crate) r: Vector2<f64>,
+}
+
+impl LegPoint {
+    /// The public position with the angle `beta = atan2(e)`.
+    #[inline]
+    fn with_angle(&self) -> LegPosition {
+        LegPosition {
+            rho: self.rho,
+            beta: self.e.y.atan2(self.e.x),
+            a: self.a,
+            b: self.b,
+            c: self.c,
+            e: self.e,
+            n: self.n,
+            r: self.r,
+        }
+    }
+}
+
+/// Position IK of one leg with the given link length: the root of the closure
+/// `|C - A - rho u|^2 = l^2` on the leg's branch and the link direction
+/// `e = (C - B) / l` straight from it (no angle).
 #[inline]
-pub(crate) fn leg_position(
+pub(crate) fn leg_point(
     index: usize,
     leg: &Leg,
     pose: &Pose,
     sin_cos: (f64, f64),
     length: f64,
-) -> Result<LegPosition, KinematicsError> {
+) -> Result<LegPoint, KinematicsError> {
     let (sin, cos) = sin_cos;
     let c_local = leg.attachment;
     let r = Vector2::new(
@@ -148,9 +262,8 @@ pub(crate) fn leg_position(
     let rho = along + leg.branch.sign() * discriminant.sqrt();
     let link = d - rho * u;
     let e = link / length;
-    Ok(LegPosition {
+    Ok(LegPoint {
         rho,
-        beta: e.y.atan2(e.x),
         a,
         b: a + rho * u,
         c,
@@ -201,9 +314,9 @@ impl Geometry {
         check_lengths(lengths)?;
         let sin_cos = pose.phi.sin_cos();
         Ok([
-            leg_position(0, &self.legs[0], pose, sin_cos, lengths[0])?,
-            leg_position(1, &self.legs[1], pose, sin_cos, lengths[1])?,
-            leg_position(2, &self.legs[2], pose, sin_cos, lengths[2])?,
+            leg_point(0, &self.legs[0], pose, sin_cos, lengths[0])?.with_angle(),
+            leg_point(1, &self.legs[1], pose, sin_cos, lengths[1])?.with_angle(),
+            leg_point(2, &self.legs[2], pose, sin_cos, lengths[2])?.with_angle(),
         ])
     }
 
@@ -221,42 +334,77 @@ impl Geometry {
     /// ```
     ///
     /// Errors on non-finite input, an unreachable leg, or an exactly type-I singular leg
-    /// (the rates would be infinite): never returns NaN.
+    /// (the rates would be infinite): never returns NaN. The same computation as
+    /// [`Geometry::inverse_kinematics_unchecked_into`], plus the link angles.
     pub fn inverse_kinematics_unchecked(
         &self,
         motion: &PlatformMotion,
     ) -> Result<MachineState, KinematicsError> {
+        let mut state = MachineKinematics::default();
+        self.inverse_kinematics_unchecked_into(motion, &mut state)?;
+        Ok(state.with_angles())
+    }
+
+    /// [`Geometry::inverse_kinematics_unchecked`] written into `state`, without the link
+    /// angles: no `atan2`, no copy of the state. The link direction comes straight from the
+    /// closure, `e_i = (C_i - B_i) / l_i`; the angle, where an output needs it, is
+    /// [`LegKinematics::beta`] or [`MachineKinematics::with_angles`]. Allocation-free; meant
+    /// for ODE right-hand sides.
+    ///
+    /// # Errors
+    /// As [`Geometry::inverse_kinematics_unchecked`]. On error `state` is partly
+    /// overwritten and must not be used.
+    ///
+    /// ```
+    /// use flexprr_kinematics::{Circle, Geometry, MachineKinematics, Trajectory};
+    ///
+    /// let geometry = Geometry::paper();
+    /// let motion = Circle::paper(20.0).unwrap().motion(0.01);
+    /// let mut state = MachineKinematics::default();
+    /// geometry.inverse_kinematics_unchecked_into(&motion, &mut state).unwrap();
+    /// let full = geometry.inverse_kinematics_unchecked(&motion).unwrap();
+    /// for (lean, leg) in state.legs.iter().zip(&full.legs) {
+    ///     assert_eq!(lean, &leg.kinematics);
+    ///     assert!((lean.beta() - leg.beta).abs() < 1e-15);
+    /// }
+    /// ```
+    pub fn inverse_kinematics_unchecked_into(
+        &self,
+        motion: &PlatformMotion,
+        state: &mut MachineKinematics,
+    ) -> Result<(), KinematicsError> {
         motion.check_finite()?;
-        let positions = self.leg_positions(&motion.pose)?;
-        self.rates(motion, &positions)
+        let positions = self.leg_points(&motion.pose)?;
+        self.rates_into(motion, &positions, state)
     }
 
     /// Position IK of the three legs with the geometry's link lengths (input checked finite).
     #[inline]
-    fn leg_positions(&self, pose: &Pose) -> Result<[LegPosition; 3], KinematicsError> {
+    fn leg_points(&self, pose: &Pose) -> Result<[LegPoint; 3], KinematicsError> {
         let sin_cos = pose.phi.sin_cos();
         Ok([
-            leg_position(0, &self.legs[0], pose, sin_cos, self.legs[0].link_length)?,
-            leg_position(1, &self.legs[1], pose, sin_cos, self.legs[1].link_length)?,
-            leg_position(2, &self.legs[2], pose, sin_cos, self.legs[2].link_length)?,
+            leg_point(0, &self.legs[0], pose, sin_cos, self.legs[0].link_length)?,
+            leg_point(1, &self.legs[1], pose, sin_cos, self.legs[1].link_length)?,
+            leg_point(2, &self.legs[2], pose, sin_cos, self.legs[2].link_length)?,
         ])
     }
 
-    /// Velocity and acceleration level of the IK from the legs' positions.
+    /// Velocity and acceleration level of the IK from the legs' positions, into `state`.
     #[inline]
-    fn rates(
+    fn rates_into(
         &self,
         motion: &PlatformMotion,
-        positions: &[LegPosition; 3],
-    ) -> Result<MachineState, KinematicsError> {
+        positions: &[LegPoint; 3],
+        state: &mut MachineKinematics,
+    ) -> Result<(), KinematicsError> {
         let v = Vector2::new(motion.velocity.x, motion.velocity.y);
         let omega = motion.velocity.z;
         let acc = Vector2::new(motion.acceleration.x, motion.acceleration.y);
         let alpha = motion.acceleration.z;
-        let leg_state = |index: usize| -> Result<LegState, KinematicsError> {
+        state.motion = *motion;
+        for (index, (out, pos)) in state.legs.iter_mut().zip(positions).enumerate() {
             let leg = &self.legs[index];
             let length = leg.link_length;
-            let pos = &positions[index];
             let u = leg.guide.direction.into_inner();
             let jr = perp(&pos.r);
             let c_dot = v + omega * jr;
@@ -274,11 +422,10 @@ impl Geometry {
                     threshold: 0.0,
                 });
             }
-            Ok(LegState {
+            *out = LegKinematics {
                 rho: pos.rho,
                 rho_dot,
                 rho_ddot,
-                beta: pos.beta,
                 beta_dot,
                 beta_ddot,
                 a: pos.a,
@@ -288,25 +435,39 @@ impl Geometry {
                 c_ddot,
                 e: pos.e,
                 n: pos.n,
-            })
-        };
-        Ok(MachineState {
-            motion: *motion,
-            legs: [leg_state(0)?, leg_state(1)?, leg_state(2)?],
-        })
+            };
+        }
+        Ok(())
     }
 
     /// Inverse kinematics with all checks: reachability, slider travel, type-I and type-II
     /// thresholds ([`Geometry::thresholds`]), in that order; the first failure is returned.
-    /// Allocation-free.
+    /// Allocation-free. The same computation as [`Geometry::inverse_kinematics_into`], plus
+    /// the link angles.
     pub fn inverse_kinematics(
         &self,
         motion: &PlatformMotion,
     ) -> Result<MachineState, KinematicsError> {
+        let mut state = MachineKinematics::default();
+        self.inverse_kinematics_into(motion, &mut state)?;
+        Ok(state.with_angles())
+    }
+
+    /// [`Geometry::inverse_kinematics`] written into `state`, without the link angles (see
+    /// [`Geometry::inverse_kinematics_unchecked_into`]). Allocation-free.
+    ///
+    /// # Errors
+    /// As [`Geometry::inverse_kinematics`]. On error `state` is partly overwritten and must
+    /// not be used.
+    pub fn inverse_kinematics_into(
+        &self,
+        motion: &PlatformMotion,
+        state: &mut MachineKinematics,
+    ) -> Result<(), KinematicsError> {
         motion.check_finite()?;
         // Position level first, so that travel and singularity are reported before rates
         // that may be huge near a type-I singularity.
-        let positions = self.leg_positions(&motion.pose)?;
+        let positions = self.leg_points(&motion.pose)?;
         for (i, (leg, pos)) in self.legs.iter().zip(&positions).enumerate() {
             let (min, max) = leg.guide.travel;
             if pos.rho < min || pos.rho > max {
@@ -319,7 +480,11 @@ impl Geometry {
                 });
             }
         }
-        let measures = measures_of(self, &positions);
+        let measures = measures_from(
+            self,
+            [positions[0].e, positions[1].e, positions[2].e],
+            [positions[0].r, positions[1].r, positions[2].r],
+        );
         for (i, &measure) in measures.type_i.iter().enumerate() {
             if measure < self.thresholds.type_i {
                 return Err(KinematicsError::Singular {
@@ -338,7 +503,7 @@ impl Geometry {
                 threshold: self.thresholds.type_ii,
             });
         }
-        self.rates(motion, &positions)
+        self.rates_into(motion, &positions, state)
     }
 
     /// Singularity measures at a pose (errors only if the pose is unreachable or not finite).
@@ -365,16 +530,26 @@ impl Geometry {
 
 /// Singularity measures from already computed leg positions.
 pub(crate) fn measures_of(geometry: &Geometry, legs: &[LegPosition; 3]) -> SingularityMeasures {
+    measures_from(
+        geometry,
+        [legs[0].e, legs[1].e, legs[2].e],
+        [legs[0].r, legs[1].r, legs[2].r],
+    )
+}
+
+/// Singularity measures from the link directions `e_i` and attachment vectors `r_i`.
+fn measures_from(
+    geometry: &Geometry,
+    e: [Vector2<f64>; 3],
+    r: [Vector2<f64>; 3],
+) -> SingularityMeasures {
     let mut type_i = [0.0; 3];
     for i in 0..3 {
-        type_i[i] = legs[i].e.dot(&geometry.legs[i].guide.direction).abs();
+        type_i[i] = e[i].dot(&geometry.legs[i].guide.direction).abs();
     }
     SingularityMeasures {
         type_i,
-        type_ii: type_ii_measure(
-            [legs[0].e, legs[1].e, legs[2].e],
-            [legs[0].r, legs[1].r, legs[2].r],
-        ),
+        type_ii: type_ii_measure(e, r),
     }
 }
 

@@ -5,7 +5,10 @@
 //!   (model.md section 1).
 //! - Inverse kinematics in closed form, allocation-free:
 //!   [`Geometry::inverse_kinematics`] (checked against travel and singularity
-//!   [`Thresholds`]), [`Geometry::inverse_kinematics_unchecked`], [`Geometry::inverse_position`].
+//!   [`Thresholds`]), [`Geometry::inverse_kinematics_unchecked`], [`Geometry::inverse_position`];
+//!   in place and without the link angles (no `atan2`, for right-hand sides):
+//!   [`Geometry::inverse_kinematics_unchecked_into`], [`Geometry::inverse_kinematics_into`]
+//!   filling a [`MachineKinematics`].
 //! - Forward kinematics by Newton on the closure: [`Geometry::forward_kinematics`],
 //!   [`Geometry::forward_kinematics_with_lengths`] (link lengths overridden, e.g. `l - delta`),
 //!   [`Geometry::forward_motion`] (rates by implicit differentiation), [`Geometry::closure`].
@@ -38,7 +41,10 @@ mod trajectory;
 pub use error::{KinematicsError, SingularityKind};
 pub use forward::{Closure, FORWARD_MAX_ITERATIONS, LegDrive};
 pub use geometry::{Branch, Geometry, Guide, Leg, Thresholds};
-pub use inverse::{LegPosition, LegState, MachineState, SingularityMeasures, VelocityJacobians};
+pub use inverse::{
+    LegKinematics, LegPosition, LegState, MachineKinematics, MachineState, SingularityMeasures,
+    VelocityJacobians,
+};
 pub use pose::{PlatformMotion, Pose};
 pub use trajectory::{
     Circle, Line, PointToPoint, Profile, Trajectory, TrajectoryReport, WaypointSpline,

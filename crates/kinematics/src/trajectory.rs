@@ -20,6 +20,14 @@ pub trait Trajectory {
     fn duration(&self) -> Option<f64> {
         None
     }
+
+    /// Times (s) at which a derivative of the motion up to the third jumps: the start and
+    /// end of a move, the knots of a spline. The forcing of the modal equations follows the
+    /// acceleration, so an integrator must stop and restart at each (an error estimate
+    /// cannot see a motion that has not started yet). Empty for smooth motions.
+    fn breakpoints(&self) -> Vec<f64> {
+        Vec::new()
+    }
 }
 
 fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> KinematicsError {
@@ -245,6 +253,11 @@ impl Trajectory for PointToPoint {
     fn duration(&self) -> Option<f64> {
         Some(self.start_time + self.duration)
     }
+
+    /// The start and the end of the move (the profile's higher derivatives jump there).
+    fn breakpoints(&self) -> Vec<f64> {
+        vec![self.start_time, self.start_time + self.duration]
+    }
 }
 
 /// Piecewise-cubic path through waypoints `(t_k, pose_k)`: in each of `x`, `y` and `phi`
@@ -358,6 +371,12 @@ impl Trajectory for WaypointSpline {
     fn duration(&self) -> Option<f64> {
         Some(self.times[self.times.len() - 1])
     }
+
+    /// Every knot: the cubic pieces join with a jump in the third derivative, and the path
+    /// rests before the first knot and after the last.
+    fn breakpoints(&self) -> Vec<f64> {
+        self.times.clone()
+    }
 }
 
 impl<T: Trajectory + ?Sized> Trajectory for Box<T> {
@@ -367,6 +386,10 @@ impl<T: Trajectory + ?Sized> Trajectory for Box<T> {
 
     fn duration(&self) -> Option<f64> {
         (**self).duration()
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        (**self).breakpoints()
     }
 }
 

@@ -4,7 +4,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use flexprr_kinematics::{Circle, Geometry, Trajectory};
+use flexprr_kinematics::{Circle, Geometry, MachineKinematics, Trajectory};
 
 struct Counting;
 
@@ -37,6 +37,7 @@ fn allocations() -> usize {
 fn inverse_kinematics_does_not_allocate() {
     let geometry = Geometry::paper();
     let circle = Circle::paper(20.0).unwrap();
+    let mut in_place = MachineKinematics::default();
     let before = allocations();
     let mut checksum = 0.0;
     for k in 0..1000 {
@@ -45,6 +46,14 @@ fn inverse_kinematics_does_not_allocate() {
         let unchecked = geometry.inverse_kinematics_unchecked(&motion).unwrap();
         let positions = geometry.inverse_position(&motion.pose).unwrap();
         let measures = geometry.singularity(&motion.pose).unwrap();
+        geometry
+            .inverse_kinematics_into(&motion, &mut in_place)
+            .unwrap();
+        checksum += in_place.legs[2].rho_ddot;
+        geometry
+            .inverse_kinematics_unchecked_into(&motion, &mut in_place)
+            .unwrap();
+        checksum += in_place.legs[0].beta_ddot + in_place.legs[1].beta();
         let closure = geometry.closure(
             &motion.pose,
             [positions[0].rho, positions[1].rho, positions[2].rho],

@@ -1,5 +1,5 @@
-//! Running a flexprr scene: only the requested outputs are computed, then written as CSV
-//! tables, `summary.json`, Table I and SVG plots.
+//! Running a flexprr scene: the one observed stepping loop, only the requested outputs,
+//! then CSV tables, `summary.json`, Table I and SVG plots.
 //!
 //! ```no_run
 //! use flexprr_scene::Scene;
@@ -9,10 +9,22 @@
 //! write_outputs(&scene, &result, std::path::Path::new("out/paper_f20")).unwrap();
 //! ```
 
+pub mod column;
+mod error;
 pub mod guard;
+mod integrate;
 mod output;
+mod outputs;
 pub mod plot;
 mod run;
+mod samples;
+mod table;
 
-pub use output::{summary_json, table_one_markdown, write_outputs};
-pub use run::{RunResult, RunStats, Table, integrate, run};
+pub use column::{Column, Quantity};
+pub use error::{RunError, RunFailure};
+pub use integrate::{Integration, integrate_model, stop_times};
+pub use output::{
+    WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs, write_outputs_with,
+};
+pub use run::{integrate, run, scene_integrator};
+pub use table::{RunResult, RunStats, Table};

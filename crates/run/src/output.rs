@@ -1,14 +1,19 @@
 //! Writing a run's results: one CSV per time series, `summary.json`, Table I and SVG plots.
-//! Every file is written to a temporary name and renamed, so a crash never leaves a
-//! half-written file behind.
+//!
+//! A run's directory is written whole: every file goes into a temporary sibling directory,
+//! which then replaces the target in one rename, so a crash never leaves a half-written
+//! directory and a second run never leaves stale files of the first. A previous flexprr
+//! output directory (one with a `summary.json`) is replaced; any other non-empty directory is
+//! refused unless the caller forces it.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use serde_json::{Value, json};
 
+use crate::error::RunError;
 use crate::plot::{Panel, Series, write_svg};
-use crate::run::{RunResult, Table};
+use crate::table::{RunResult, Table};
 use flexprr_scene::ScenarioError;
 use flexprr_scene::Scene;
 
@@ -19,17 +24,10 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> ScenarioError + '_ {
     }
 }
 
-/// Writes `bytes` to `path` atomically (temporary file + rename).
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ScenarioError> {
-    let tmp = path.with_extension("tmp~");
-    std::fs::write(&tmp, bytes).map_err(io(&tmp))?;
-    std::fs::rename(&tmp, path).map_err(io(path))
-}
-
 fn csv_bytes(table: &Table) -> Result<Vec<u8>, ScenarioError> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let csv_err = |e: csv::Error| ScenarioError::Run(format!("writing {}.csv: {e}", table.name));
-    w.write_record(&table.columns).map_err(csv_err)?;
+    w.write_record(table.headers()).map_err(csv_err)?;
     let mut row = Vec::with_capacity(table.columns.len());
     for k in 0..table.rows() {
         row.clear();
@@ -40,9 +38,31 @@ fn csv_bytes(table: &Table) -> Result<Vec<u8>, ScenarioError> {
         .map_err(|e| ScenarioError::Run(format!("writing {}.csv: {e}", table.name)))
 }
 
-/// The summary of a run as JSON: scene echo, formulation, integrator statistics, wall
-/// time, frequency ranges and buckling intervals.
-pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
+/// `null` for a non-finite number (JSON has none; the summary never shows `NaN` or `inf`).
+fn finite(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// The run's status for `summary.json`: `ok`, or `failed` with the failure's time, kind,
+/// link and message.
+fn status_json(failure: Option<&RunError>) -> (Value, Value) {
+    match failure {
+        None => (json!("ok"), Value::Null),
+        Some(e) => (
+            json!("failed"),
+            json!({
+                "kind": e.kind(),
+                "time_s": e.time().map_or(Value::Null, finite),
+                "link": e.link().map(|l| l + 1),
+                "message": e.to_string(),
+            }),
+        ),
+    }
+}
+
+/// The summary of a run as JSON: status (and failure), scene echo, formulation, integrator
+/// statistics, wall time, frequency ranges and buckling intervals.
+pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError>) -> Value {
     let f = &scene.formulation;
     let stats = &result.stats;
     let integrator = stats.integrator.as_ref().map(|s| {
@@ -65,9 +85,10 @@ pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
             .map(|r| {
                 json!({
                     "link": r.link + 1, "mode": r.mode + 1,
-                    "nominal_hz": r.nominal_hz, "min_hz": r.min_hz, "t_min_s": r.t_min,
-                    "max_hz": r.max_hz, "t_max_s": r.t_max,
-                    "min_stiffness_ratio": r.min_stiffness_ratio,
+                    "rigid": is_rigid(r),
+                    "nominal_hz": finite(r.nominal_hz), "min_hz": finite(r.min_hz),
+                    "t_min_s": r.t_min, "max_hz": finite(r.max_hz), "t_max_s": r.t_max,
+                    "min_stiffness_ratio": finite(r.min_stiffness_ratio),
                 })
             })
             .collect();
@@ -77,7 +98,7 @@ pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
             .map(|b| {
                 json!({
                     "link": b.link + 1, "t_start_s": b.t_start, "t_end_s": b.t_end,
-                    "min_eigenvalue_rad2_s2": b.min_eigenvalue, "margin": b.margin,
+                    "min_eigenvalue_rad2_s2": finite(b.min_eigenvalue), "margin": finite(b.margin),
                 })
             })
             .collect();
@@ -93,17 +114,20 @@ pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
                 .skip(1)
                 .map(move |(name, col)| {
                     let peak = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                    (format!("{}.{}", t.name, name), json!(peak))
+                    (format!("{}.{}", t.name, name), finite(peak))
                 })
         })
         .collect();
+    let (status, failure) = status_json(failure);
     json!({
+        "status": status,
+        "failure": failure,
         "scene": scene.name,
         "flexprr_version": env!("CARGO_PKG_VERSION"),
         "formulation": {
             "name": f.name(),
             "coupling": scene.coupling.name(),
-            "axial_force": format!("{:?}", f.axial),
+            "axial_force": scene.axial_model.name(),
             "geometric_stiffness": f.geometric_stiffness.name(),
             "coriolis_forcing": f.coriolis_forcing,
             "centrifugal_softening": f.centrifugal_softening,
@@ -115,6 +139,8 @@ pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
             "inverse_dynamics_solves": stats.inverse_dynamics_solves,
             "wall_time_s": stats.wall_time_s,
             "output_samples": scene.output_times.len(),
+            "output_samples_written": result.tables.first().map_or(0, |t| t.rows()),
+            "max_deflection_m": stats.max_deflection_m.map(finite),
         },
         "integrator": integrator,
         "frequencies": frequencies,
@@ -123,13 +149,24 @@ pub fn summary_json(scene: &Scene, result: &RunResult) -> Value {
     })
 }
 
-/// The paper's Table I for link 1 as markdown (nominal, min, max and relative change).
+/// Whether a frequency range belongs to a rigid-body mode (free-free or pinned-free bases):
+/// its nominal frequency is zero to rounding, so a relative change means nothing.
+pub fn is_rigid(r: &flexprr_dynamics::ModeRange) -> bool {
+    !(r.nominal_hz.is_finite() && r.nominal_hz > 1e-6 * r.max_hz.abs().max(1.0))
+}
+
+/// The paper's Table I for link 1 as markdown (nominal, min, max and relative change);
+/// rigid-body modes are shown as `rigid (0 Hz)`, without a percentage.
 pub fn table_one_markdown(result: &RunResult) -> Option<String> {
     let h = result.frequencies.as_ref()?;
     let mut s = String::from(
         "| link 1 | nominal (Hz) | minimum (Hz) | maximum (Hz) | change |\n|---|---|---|---|---|\n",
     );
     for r in h.ranges.iter().filter(|r| r.link == 0) {
+        if is_rigid(r) {
+            let _ = writeln!(s, "| mode {} | rigid (0 Hz) | - | - | - |", r.mode + 1);
+            continue;
+        }
         let change = (r.max_hz - r.min_hz) / r.nominal_hz * 100.0;
         let _ = writeln!(
             s,
@@ -144,28 +181,135 @@ pub fn table_one_markdown(result: &RunResult) -> Option<String> {
     Some(s)
 }
 
-/// Writes every output of `result` into `dir` (created if needed): CSV tables,
-/// `summary.json`, `table1.md`/`table1.csv` when frequencies were computed, SVG plots unless
-/// the scene turned them off.
+/// How [`write_outputs_with`] treats an existing directory.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// Replace a non-empty directory even if it is not a flexprr output directory.
+    pub force: bool,
+}
+
+/// Whether `dir` may be replaced: absent, empty, or a previous flexprr output (it has a
+/// `summary.json`); anything else only with `force`.
+fn check_target(dir: &Path, options: WriteOptions) -> Result<(), ScenarioError> {
+    let refuse = |message: String| ScenarioError::Input {
+        location: None,
+        key: "--out".to_string(),
+        message,
+    };
+    match std::fs::symlink_metadata(dir) {
+        Err(_) => Ok(()),
+        Ok(m) if !m.is_dir() => Err(refuse(format!(
+            "{} exists and is not a directory",
+            dir.display()
+        ))),
+        Ok(_) => {
+            let empty = std::fs::read_dir(dir).map_err(io(dir))?.next().is_none();
+            if empty || dir.join("summary.json").is_file() || options.force {
+                Ok(())
+            } else {
+                Err(refuse(format!(
+                    "{} is a non-empty directory that is not a flexprr output (no summary.json); \
+                     choose another --out or pass --force to replace it",
+                    dir.display()
+                )))
+            }
+        }
+    }
+}
+
+/// Writes every output of a successful run into `dir`, replacing a previous flexprr output
+/// there (see [`write_outputs_with`]).
 ///
 /// # Errors
-/// [`ScenarioError::Io`] when a file cannot be written.
+/// As [`write_outputs_with`].
 pub fn write_outputs(
     scene: &Scene,
     result: &RunResult,
     dir: &Path,
 ) -> Result<Vec<String>, ScenarioError> {
-    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    write_outputs_with(scene, result, None, dir, WriteOptions::default())
+}
+
+/// Writes every output of `result` (a complete run, or the partial outputs of a failed one
+/// with its `failure`) into `dir`: CSV tables, `summary.json` with the status,
+/// `table1.md`/`table1.csv` when frequencies were computed, SVG plots unless the scene turned
+/// them off. The files are written into a temporary sibling directory that then replaces
+/// `dir` whole.
+///
+/// # Errors
+/// [`ScenarioError::Input`] for a target that is not replaceable (a file, or a non-empty
+/// directory that is not a flexprr output, without `force`); [`ScenarioError::Io`] when a
+/// file cannot be written.
+pub fn write_outputs_with(
+    scene: &Scene,
+    result: &RunResult,
+    failure: Option<&RunError>,
+    dir: &Path,
+    options: WriteOptions,
+) -> Result<Vec<String>, ScenarioError> {
+    check_target(dir, options)?;
+    let parent = match dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&parent).map_err(io(&parent))?;
+    let stem = dir
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let staging = parent.join(format!(".{stem}.partial-{}", std::process::id()));
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging).map_err(io(&staging))?;
+    }
+    std::fs::create_dir(&staging).map_err(io(&staging))?;
+    let names = match write_files(scene, result, failure, &staging) {
+        Ok(names) => names,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&staging);
+            return Err(e);
+        }
+    };
+    replace_dir(&staging, dir)?;
+    Ok(names
+        .iter()
+        .map(|n| dir.join(n).display().to_string())
+        .collect())
+}
+
+/// Moves `staging` into place at `dir`, removing what was there.
+fn replace_dir(staging: &Path, dir: &Path) -> Result<(), ScenarioError> {
+    if std::fs::symlink_metadata(dir).is_ok() {
+        let old = staging.with_extension("old");
+        std::fs::rename(dir, &old).map_err(io(dir))?;
+        std::fs::rename(staging, dir).map_err(io(dir))?;
+        std::fs::remove_dir_all(&old).map_err(io(&old))
+    } else {
+        std::fs::rename(staging, dir).map_err(io(dir))
+    }
+}
+
+/// Writes the files of a run into `dir`; returns their names.
+fn write_files(
+    scene: &Scene,
+    result: &RunResult,
+    failure: Option<&RunError>,
+    dir: &Path,
+) -> Result<Vec<String>, ScenarioError> {
     let mut written = Vec::new();
+    let write = |written: &mut Vec<String>, name: String, bytes: &[u8]| {
+        let path = dir.join(&name);
+        std::fs::write(&path, bytes).map_err(io(&path))?;
+        written.push(name);
+        Ok::<(), ScenarioError>(())
+    };
     for table in &result.tables {
-        let path = dir.join(format!("{}.csv", table.name));
-        write_atomic(&path, &csv_bytes(table)?)?;
-        written.push(path.display().to_string());
+        write(
+            &mut written,
+            format!("{}.csv", table.name),
+            &csv_bytes(table)?,
+        )?;
     }
     if let Some(md) = table_one_markdown(result) {
-        let path = dir.join("table1.md");
-        write_atomic(&path, md.as_bytes())?;
-        written.push(path.display().to_string());
+        write(&mut written, "table1.md".into(), md.as_bytes())?;
         if let Some(h) = &result.frequencies {
             let mut csv = String::from("link,mode,nominal_hz,min_hz,t_min_s,max_hz,t_max_s\n");
             for r in &h.ranges {
@@ -174,30 +318,26 @@ pub fn write_outputs(
                     "{},{},{:.4},{:.4},{:.6},{:.4},{:.6}",
                     r.link + 1,
                     r.mode + 1,
-                    r.nominal_hz,
-                    r.min_hz,
+                    r.nominal_hz.max(0.0),
+                    r.min_hz.max(0.0),
                     r.t_min,
-                    r.max_hz,
+                    r.max_hz.max(0.0),
                     r.t_max
                 );
             }
-            let path = dir.join("table1.csv");
-            write_atomic(&path, csv.as_bytes())?;
-            written.push(path.display().to_string());
+            write(&mut written, "table1.csv".into(), csv.as_bytes())?;
         }
     }
     if scene.file.output.plots {
         for (file, title, x_label, panels) in plot_specs(scene, result) {
-            let path = dir.join(file);
+            let path = dir.join(&file);
             write_svg(&path, &title, x_label, &panels).map_err(ScenarioError::Run)?;
-            written.push(path.display().to_string());
+            written.push(file);
         }
     }
-    let summary = summary_json(scene, result);
-    let path = dir.join("summary.json");
+    let summary = summary_json(scene, result, failure);
     let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
-    write_atomic(&path, text.as_bytes())?;
-    written.push(path.display().to_string());
+    write(&mut written, "summary.json".into(), text.as_bytes())?;
     Ok(written)
 }
 

@@ -31,7 +31,7 @@ use thiserror::Error;
 
 use flexprr_run::plot::{Panel, Series, write_svg};
 use flexprr_run::write_outputs;
-use flexprr_run::{RunResult, run};
+use flexprr_run::{Quantity as RunQuantity, RunResult, run};
 use flexprr_scene::ScenarioError;
 use flexprr_scene::Scene;
 
@@ -322,11 +322,10 @@ impl Quantity {
                 let table = result
                     .table("deflections")
                     .ok_or_else(|| needs("deflections"))?;
-                let prefix = format!("w_{}_xi", i + 1);
                 let column = table
                     .columns
                     .iter()
-                    .position(|c| c.starts_with(&prefix) && !c.contains("no_axial"))
+                    .position(|c| c.quantity == RunQuantity::Deflection && c.link == Some(i))
                     .ok_or_else(|| needs("deflections"))?;
                 let peak = table.data[column]
                     .iter()
@@ -836,14 +835,7 @@ impl Study {
         let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| run(&scene, &mut |_| {})));
         let result = match outcome {
             Ok(Ok(r)) => r,
-            Ok(Err(e)) => {
-                let status = if e.is_input() {
-                    CaseStatus::Invalid
-                } else {
-                    CaseStatus::Failed
-                };
-                return fail(record, status, e.to_string());
-            }
+            Ok(Err(e)) => return fail(record, CaseStatus::Failed, e.to_string()),
             Err(panic) => {
                 let what = panic
                     .downcast_ref::<&str>()
@@ -853,7 +845,7 @@ impl Study {
                 return fail(record, CaseStatus::Failed, format!("panic: {what}"));
             }
         };
-        if let Some(message) = divergence(&scene, &result) {
+        if let Some(message) = divergence(&result) {
             return fail(record, CaseStatus::Failed, message);
         }
         let mut values = Vec::with_capacity(record.quantities.len());
@@ -876,39 +868,18 @@ impl Study {
     }
 }
 
-/// Why a finished run is not physical: a non-finite value in a table, or a deflection larger
-/// than the link itself (the small-deflection model has diverged, typically after buckling).
-fn divergence(scene: &Scene, result: &RunResult) -> Option<String> {
-    let length = scene.file.links.length;
+/// Why a finished run is not physical: a non-finite value in a table (divergence itself is
+/// the run layer's guard, which stops the run).
+fn divergence(result: &RunResult) -> Option<String> {
     for table in &result.tables {
-        let t = table.column("t_s").unwrap_or(&[]);
-        for (name, values) in table.columns.iter().zip(&table.data).skip(1) {
-            let deflection = table.name == "deflections";
-            let bad = values
-                .iter()
-                .position(|v| !v.is_finite() || (deflection && v.abs() > length));
-            if let Some(k) = bad {
+        let t = table.time();
+        for (column, values) in table.columns.iter().zip(&table.data).skip(1) {
+            if let Some(k) = values.iter().position(|v| !v.is_finite()) {
                 let at = t.get(k).copied().unwrap_or(f64::NAN);
-                return Some(if deflection && values[k].is_finite() {
-                    format!(
-                        "diverged: {name} = {:.3e} m at t = {at:.5} s exceeds the link length {length} m{}",
-                        values[k],
-                        if result
-                            .frequencies
-                            .as_ref()
-                            .is_some_and(|h| !h.buckling.is_empty())
-                        {
-                            " (a link buckles)"
-                        } else {
-                            ""
-                        }
-                    )
-                } else {
-                    format!(
-                        "diverged: {}.{name} = {} at t = {at:.5} s",
-                        table.name, values[k]
-                    )
-                });
+                return Some(format!(
+                    "non-finite value: {}.{column} = {} at t = {at:.5} s",
+                    table.name, values[k]
+                ));
             }
         }
     }

@@ -1,0 +1,120 @@
+//! Why a run failed, typed: the lower layers' errors, a divergence, an I/O failure.
+
+use flexprr_dynamics::DynamicsError;
+use flexprr_integrators::IntegratorError;
+use flexprr_scene::ScenarioError;
+use thiserror::Error;
+
+use crate::RunResult;
+
+/// Why a run stopped before the end of its time span, or could not write its outputs.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum RunError {
+    /// The model failed: a singular pose, a kinematic failure, a bad parameter.
+    #[error(transparent)]
+    Model(#[from] DynamicsError),
+    /// The integrator gave up (step size collapse, too many steps, non-finite state).
+    #[error("{method} integrator: {source}")]
+    Integrator {
+        /// The method's name.
+        method: String,
+        /// The integrator's reason, with the time.
+        #[source]
+        source: IntegratorError,
+    },
+    /// A link's deflection passed the divergence limit (see [`crate::guard`]).
+    #[error(
+        "diverged: link {} at t = {t} s: deflection {w:.3e} m at xi = {xi} exceeds {limit:.3e} m ({fraction} of the link length); the small-deflection model has left its range (a link buckles, or the tolerance is too loose); request \"frequencies\" to see the buckling intervals",
+        link + 1
+    )]
+    Diverged {
+        /// Link (0-based).
+        link: usize,
+        /// Time (s).
+        t: f64,
+        /// Position along the link.
+        xi: f64,
+        /// The deflection there (m).
+        w: f64,
+        /// The limit (m).
+        limit: f64,
+        /// The limit as a fraction of the link length.
+        fraction: f64,
+    },
+    /// Reading or writing outputs, or bad input met while running.
+    #[error(transparent)]
+    Scene(#[from] ScenarioError),
+}
+
+impl RunError {
+    /// A one-word kind for `summary.json` and study records: `diverged`, `singular-pose`,
+    /// `kinematics`, `step-size-collapse`, `too-many-steps`, `non-finite`, `integrator`,
+    /// `model`, `io`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            RunError::Diverged { .. } => "diverged",
+            RunError::Model(DynamicsError::SingularInverseDynamics { .. }) => "singular-pose",
+            RunError::Model(DynamicsError::Kinematics { .. }) => "kinematics",
+            RunError::Model(_) => "model",
+            RunError::Integrator { source, .. } => match source {
+                IntegratorError::StepSizeTooSmall { .. } => "step-size-collapse",
+                IntegratorError::TooManySteps { .. } => "too-many-steps",
+                IntegratorError::NonFinite { .. } => "non-finite",
+                IntegratorError::Stiff { .. } => "stiff",
+                _ => "integrator",
+            },
+            RunError::Scene(ScenarioError::Io { .. }) => "io",
+            RunError::Scene(_) => "input",
+        }
+    }
+
+    /// When it happened (s), where the error knows.
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            RunError::Diverged { t, .. } => Some(*t),
+            RunError::Model(DynamicsError::SingularInverseDynamics { t, .. })
+            | RunError::Model(DynamicsError::Kinematics { t, .. }) => Some(*t),
+            RunError::Integrator { source, .. } => match source {
+                IntegratorError::StepSizeTooSmall { t, .. }
+                | IntegratorError::TooManySteps { t, .. }
+                | IntegratorError::NonFinite { t, .. }
+                | IntegratorError::NewtonFailure { t, .. }
+                | IntegratorError::SingularMatrix { t }
+                | IntegratorError::Stiff { t, .. } => Some(*t),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// The link involved (0-based), where there is one.
+    pub fn link(&self) -> Option<usize> {
+        match self {
+            RunError::Diverged { link, .. } => Some(*link),
+            _ => None,
+        }
+    }
+}
+
+/// A run that stopped early: why, and everything computed up to the last accepted time.
+#[derive(Debug)]
+pub struct RunFailure {
+    /// Why.
+    pub error: RunError,
+    /// The outputs up to the last accepted time (tables may be empty when nothing was
+    /// computed).
+    pub partial: Box<RunResult>,
+}
+
+impl std::fmt::Display for RunFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.error)
+    }
+}
+
+impl std::error::Error for RunFailure {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&self.error)
+    }
+}
