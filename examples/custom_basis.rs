@@ -8,7 +8,8 @@
 //! with `basis = { kind = "legendre" }`.
 //!
 //! Checks: the unloaded frequencies of link 1 against the closed form
-//! `f_j = (j pi)^2 / (2 pi l^2) sqrt(EI / rhoA)` of a uniform pinned-pinned beam, and the
+//! `f_j = (j pi)^2 / (2 pi l^2) sqrt(EI / rhoA)` of a uniform pinned-pinned beam (a Ritz
+//! basis gives upper bounds, within 1e-5 for ten functions), and the
 //! frequency ranges over the paper's 20 Hz circle (Table I) against the built-in sine basis
 //! with the same number of functions: both Ritz bases converge to the same frequencies.
 //!
@@ -135,7 +136,7 @@ fn main() {
     let (name, legendre) = run("legendre");
     let (_, sine) = run("sine");
     // Closed form of the unloaded uniform pinned-pinned beam.
-    let (e, rho, t, h, l) = (7.3e10, 2770.0, 0.002, 0.03, 0.2);
+    let (e, rho, t, h, l): (f64, f64, f64, f64, f64) = (7.3e10, 2770.0, 0.002, 0.03, 0.2);
     let (ei, rho_a) = (e * h * t * t * t / 12.0, rho * t * h);
     println!("basis: {name}");
     println!(
@@ -156,8 +157,9 @@ fn main() {
             s.max_hz
         );
         let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+        // Rayleigh-Ritz: an upper bound that converges fast (1e-5 for r = 10 on mode 3).
         assert!(
-            rel(p.nominal_hz, exact) < 1e-6,
+            p.nominal_hz >= exact * (1.0 - 1e-12) && rel(p.nominal_hz, exact) < 1e-5,
             "mode {}: nominal {} Hz against the closed form {exact} Hz",
             p.mode + 1,
             p.nominal_hz
