@@ -8,7 +8,8 @@
 //! with `basis = { kind = "legendre" }`.
 //!
 //! Checks: the unloaded frequencies of link 1 against the closed form
-//! `f_j = (j pi)^2 / (2 pi l^2) sqrt(EI / rhoA)` of a uniform pinned-pinned beam, and the
+//! `f_j = (j pi)^2 / (2 pi l^2) sqrt(EI / rhoA)` of a uniform pinned-pinned beam (a Ritz
+//! basis gives upper bounds, within 1e-5 for ten functions), and the
 //! frequency ranges over the paper's 20 Hz circle (Table I) against the built-in sine basis
 //! with the same number of functions: both Ritz bases converge to the same frequencies.
 //!
@@ -120,8 +121,13 @@ fn main() {
     registry.register_basis("legendre", Arc::new(LegendreFactory));
     let modes = 10;
     let run = |basis: &str| {
-        let scene = Scene::from_text_with(&registry, "custom_basis.toml", "custom", &scene_text(basis, modes))
-            .unwrap_or_else(|e| panic!("scene rejected: {e}"));
+        let scene = Scene::from_text_with(
+            &registry,
+            "custom_basis.toml",
+            "custom",
+            &scene_text(basis, modes),
+        )
+        .unwrap_or_else(|e| panic!("scene rejected: {e}"));
         let result = flexprr_run::run(&scene, &mut |_| {}).unwrap_or_else(|e| panic!("run: {e}"));
         let history = result.frequencies.expect("frequencies were requested");
         let ranges: Vec<_> = history.ranges.into_iter().filter(|r| r.link == 0).collect();
@@ -130,10 +136,12 @@ fn main() {
     let (name, legendre) = run("legendre");
     let (_, sine) = run("sine");
     // Closed form of the unloaded uniform pinned-pinned beam.
-    let (e, rho, t, h, l) = (7.3e10, 2770.0, 0.002, 0.03, 0.2);
+    let (e, rho, t, h, l): (f64, f64, f64, f64, f64) = (7.3e10, 2770.0, 0.002, 0.03, 0.2);
     let (ei, rho_a) = (e * h * t * t * t / 12.0, rho * t * h);
     println!("basis: {name}");
-    println!("| mode | closed form (Hz) | nominal (Hz) | min (Hz) | max (Hz) | sine min (Hz) | sine max (Hz) |");
+    println!(
+        "| mode | closed form (Hz) | nominal (Hz) | min (Hz) | max (Hz) | sine min (Hz) | sine max (Hz) |"
+    );
     println!("|---|---|---|---|---|---|---|");
     for (p, s) in legendre.iter().zip(&sine).take(3) {
         let j = (p.mode + 1) as f64;
@@ -149,13 +157,17 @@ fn main() {
             s.max_hz
         );
         let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+        // Rayleigh-Ritz: an upper bound that converges fast (1e-5 for r = 10 on mode 3).
         assert!(
-            rel(p.nominal_hz, exact) < 1e-6,
+            p.nominal_hz >= exact * (1.0 - 1e-12) && rel(p.nominal_hz, exact) < 1e-5,
             "mode {}: nominal {} Hz against the closed form {exact} Hz",
             p.mode + 1,
             p.nominal_hz
         );
-        for (a, b, what) in [(p.min_hz, s.min_hz, "minimum"), (p.max_hz, s.max_hz, "maximum")] {
+        for (a, b, what) in [
+            (p.min_hz, s.min_hz, "minimum"),
+            (p.max_hz, s.max_hz, "maximum"),
+        ] {
             assert!(
                 rel(a, b) < 1e-4,
                 "mode {} {what}: legendre {a} Hz against sine {b} Hz",

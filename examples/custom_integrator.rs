@@ -116,8 +116,8 @@ impl Stepper for Rk4Stepper {
         self.y_prev.copy_from_slice(&self.y);
         self.f_prev.copy_from_slice(&self.f);
         for i in 0..n {
-            self.y[i] += h / 6.0
-                * (self.k[0][i] + 2.0 * self.k[1][i] + 2.0 * self.k[2][i] + self.k[3][i]);
+            self.y[i] +=
+                h / 6.0 * (self.k[0][i] + 2.0 * self.k[1][i] + 2.0 * self.k[2][i] + self.k[3][i]);
         }
         self.t_prev = t;
         self.t = if self.t_end - (t + h) <= 1e-12 * h {
@@ -141,7 +141,10 @@ impl Stepper for Rk4Stepper {
         // Cubic Hermite on [t_prev, t] from the states and derivatives at both ends.
         let h = self.t - self.t_prev;
         let s = if h > 0.0 { (t - self.t_prev) / h } else { 1.0 };
-        let (h00, h10) = ((1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s), s * (1.0 - s) * (1.0 - s));
+        let (h00, h10) = (
+            (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s),
+            s * (1.0 - s) * (1.0 - s),
+        );
         let (h01, h11) = (s * s * (3.0 - 2.0 * s), s * s * (s - 1.0));
         for (i, o) in out.iter_mut().enumerate() {
             *o = h00 * self.y_prev[i]
@@ -201,25 +204,25 @@ fn deflections(registry: &Registry, text: &str) -> Vec<f64> {
         .iter()
         .find(|t| t.name == "deflections")
         .expect("a deflections table");
-    let column = table
-        .columns
-        .iter()
+    let header = table
+        .headers()
+        .into_iter()
         .find(|c| c.starts_with("w_1_"))
         .expect("a link 1 column");
-    table.column(column).expect("the column").to_vec()
+    table.column(&header).expect("the column").to_vec()
 }
 
 fn max_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
 
 fn main() {
     let mut registry = Registry::default();
     for (name, h) in [("rk4", 2.5e-6), ("rk4_coarse", 5e-6)] {
-        registry.register_integrator(
-            name,
-            Arc::new(move |options| Box::new(Rk4 { options, h })),
-        );
+        registry.register_integrator(name, Arc::new(move |options| Box::new(Rk4 { options, h })));
     }
     let reference = deflections(&registry, &scene_text("abm"));
     let fine = deflections(&registry, &scene_text("rk4"));
@@ -233,7 +236,10 @@ fn main() {
     println!("  peak |w| (abm, rtol 1e-10)       {peak:.6e} m");
     println!("  rk4 h = 2.5e-6 s, max |rk4 - abm| {e_fine:.3e} m");
     println!("  rk4 h = 5.0e-6 s, max |rk4 - abm| {e_coarse:.3e} m");
-    println!("  error ratio (4th order: ~16)      {:.2}", e_coarse / e_fine);
+    println!(
+        "  error ratio (4th order: ~16)      {:.2}",
+        e_coarse / e_fine
+    );
     assert!(peak > 1e-6, "the scene must deflect the link");
     assert!(
         e_fine < 1e-4 * peak,

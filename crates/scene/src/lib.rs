@@ -28,12 +28,11 @@ pub use input::{
 pub use locate::{line_column, locate};
 pub use parse::{parse_scene, parse_toml};
 pub use registry::{
-    BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, ModeCount,
-    Registry,
+    BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, ModeCount, Registry,
 };
 pub use scene::Scene;
 pub use schema::{
-    BasisTable, BranchChoice, CouplingChoice, FormulationChoice, IntegratorConfig, LegConfig,
-    Layout, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig, OutputKind,
+    BasisTable, BranchChoice, CouplingChoice, FormulationChoice, IntegratorConfig, Layout,
+    LegConfig, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig, OutputKind,
     ProfileChoice, SceneFile, StiffnessChoice, TimeConfig, TrajectoryConfig,
 };

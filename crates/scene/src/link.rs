@@ -161,7 +161,11 @@ pub fn check_link(
             positive("section.thickness_start", *thickness_start, "m")?;
             positive("section.thickness_end", *thickness_end, "m")?;
             positive("section.height", *height, "m")?;
-            parts.push(("section".into(), thickness_start.max(*thickness_end), *height));
+            parts.push((
+                "section".into(),
+                thickness_start.max(*thickness_end),
+                *height,
+            ));
         }
         SectionConfig::Stepped { steps } => {
             for (k, s) in steps.iter().enumerate() {
@@ -180,11 +184,12 @@ pub fn check_link(
     for (key, thickness, height) in parts {
         let ratio = length / thickness;
         if ratio < MIN_SLENDERNESS {
-            let thickness_key = if key == "section" && !matches!(section, SectionConfig::Uniform { .. }) {
-                "section".to_string()
-            } else {
-                format!("{key}.thickness")
-            };
+            let thickness_key =
+                if key == "section" && !matches!(section, SectionConfig::Uniform { .. }) {
+                    "section".to_string()
+                } else {
+                    format!("{key}.thickness")
+                };
             return Err((
                 thickness_key,
                 format!(

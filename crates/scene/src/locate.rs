@@ -16,12 +16,23 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
 /// The location of the key path `path` (dot-separated; numeric parts index arrays) in `text`:
 /// the deepest part of the path that exists. `None` if the text does not parse.
 pub fn locate(file: &str, text: &str, path: &str) -> Option<Location> {
+    locate_impl(file, text, path, false)
+}
+
+/// As [`locate`], but at the value of the last part of the path when it is there (for an
+/// unknown word, the word itself).
+pub fn locate_value(file: &str, text: &str, path: &str) -> Option<Location> {
+    locate_impl(file, text, path, true)
+}
+
+fn locate_impl(file: &str, text: &str, path: &str, at_value: bool) -> Option<Location> {
+    let parts: Vec<&str> = path.split('.').filter(|p| !p.is_empty()).collect();
     let root = DeTable::parse(text).ok()?;
     let root_span = root.span();
     let mut current = DeValue::Table(root.into_inner());
     let mut span = root_span;
     let mut found_any = false;
-    for part in path.split('.').filter(|p| !p.is_empty()) {
+    for (k, part) in parts.iter().copied().enumerate() {
         let next = if let Ok(index) = part.parse::<usize>() {
             current.get(index)
         } else {
@@ -35,7 +46,7 @@ pub fn locate(file: &str, text: &str, path: &str) -> Option<Location> {
         };
         match next {
             Some(value) => {
-                if part.parse::<usize>().is_ok() {
+                if part.parse::<usize>().is_ok() || (at_value && k + 1 == parts.len()) {
                     span = value.span();
                 }
                 current = value.get_ref().clone();

@@ -76,6 +76,13 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(
                 if let Some((found, entry)) = entry_with_value(text, &key, &message) {
                     offset = found;
                     key = join_key(&key, &entry);
+                    // An unknown word is shown at the word.
+                    if let Some(variant) = named("unknown variant `") {
+                        let line_end = text[found..].find('\n').map_or(text.len(), |i| found + i);
+                        if let Some(at) = text[found..line_end].find(variant.as_str()) {
+                            offset = found + at.saturating_sub(1);
+                        }
+                    }
                 }
             }
             let (line, column) = line_column(text, offset);
@@ -168,14 +175,18 @@ fn key_path_at(text: &str, span: std::ops::Range<usize>) -> String {
 /// `None` when `table_path` is not a table, the message names no value, or the value is not
 /// found exactly once.
 fn entry_with_value(text: &str, table_path: &str, message: &str) -> Option<(usize, String)> {
-    let rest = message
-        .strip_prefix("invalid type: ")
-        .or_else(|| message.strip_prefix("invalid value: "))?;
-    let described = rest.split(", expected").next()?;
-    let literal = if let Some((_, quoted)) = described.split_once('"') {
-        quoted.rsplit_once('"')?.0
+    let literal = if let Some(rest) = message.strip_prefix("unknown variant `") {
+        rest.split('`').next()?
     } else {
-        described.split('`').nth(1)?
+        let rest = message
+            .strip_prefix("invalid type: ")
+            .or_else(|| message.strip_prefix("invalid value: "))?;
+        let described = rest.split(", expected").next()?;
+        if let Some((_, quoted)) = described.split_once('"') {
+            quoted.rsplit_once('"')?.0
+        } else {
+            described.split('`').nth(1)?
+        }
     };
     let root = DeTable::parse(text).ok()?;
     let mut current = DeValue::Table(root.into_inner());
@@ -292,7 +303,6 @@ fn find_key_from(text: &str, from: usize, key: &str) -> Option<usize> {
     }
     None
 }
-
 
 /// Serde's wording made plain: one line, no Rust type names.
 fn plain_message(message: &str) -> String {

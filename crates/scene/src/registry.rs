@@ -16,14 +16,14 @@ use flexprr_dynamics::{
     AxialForceModel, AxialModel, JointReactionAxialForce, NoAxialForce, PaperAxialForce,
 };
 use flexprr_integrators::{
-    Abm, Bdf, DynIntegrator, Interruption, IntegratorError, OdeSystem, Options, Rk45, Solution,
+    Abm, Bdf, DynIntegrator, IntegratorError, Interruption, OdeSystem, Options, Rk45, Solution,
 };
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use crate::error::ScenarioError;
 use crate::link::EndsConfig;
-use crate::locate::locate;
+use crate::locate::{locate, locate_value};
 
 /// Builds an integrator from the scene's options.
 pub type IntegratorConstructor = Arc<dyn Fn(Options) -> Box<dyn DynIntegrator> + Send + Sync>;
@@ -139,6 +139,9 @@ impl<'a> BasisParams<'a> {
     pub fn parse<T: DeserializeOwned>(&self) -> Result<T, ScenarioError> {
         let text = toml::to_string(self.table).map_err(|e| self.error("", e.to_string()))?;
         crate::parse::parse_toml::<T>("", &text).map_err(|e| match e {
+            ScenarioError::Input { key, message, .. } if message.starts_with("unknown variant") => {
+                self.value_error(&key, message)
+            }
             ScenarioError::Input { key, message, .. } => self.error(&key, message),
             other => other,
         })
@@ -146,15 +149,29 @@ impl<'a> BasisParams<'a> {
 
     /// A bad-input error at `key` (relative to the basis table; empty for the table).
     pub fn error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
+        self.error_impl(key, message.into(), false)
+    }
+
+    /// As [`BasisParams::error`], located at the value of `key` (for a bad word).
+    pub fn value_error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
+        self.error_impl(key, message.into(), true)
+    }
+
+    fn error_impl(&self, key: &str, message: String, at_value: bool) -> ScenarioError {
         let key = if key.is_empty() {
             self.prefix.to_string()
         } else {
             format!("{}.{key}", self.prefix)
         };
+        let location = if at_value {
+            locate_value(self.file, self.text, &key)
+        } else {
+            locate(self.file, self.text, &key)
+        };
         ScenarioError::Input {
-            location: locate(self.file, self.text, &key),
+            location,
             key,
-            message: message.into(),
+            message,
         }
     }
 }
@@ -224,7 +241,8 @@ impl BasisFactory for SineFactory {
         modes: Option<usize>,
     ) -> Result<Arc<dyn Basis>, ScenarioError> {
         let NoKeys {} = params.parse()?;
-        let basis = SineBasis::new(modes.unwrap_or(3)).map_err(|e| params.error("", e.to_string()))?;
+        let basis =
+            SineBasis::new(modes.unwrap_or(3)).map_err(|e| params.error("", e.to_string()))?;
         Ok(Arc::new(basis))
     }
 }
@@ -434,7 +452,7 @@ impl Registry {
         modes: Option<usize>,
     ) -> Result<Arc<dyn Basis>, ScenarioError> {
         let factory = self.basis(kind).ok_or_else(|| {
-            at.error(
+            at.value_error(
                 "kind",
                 format!(
                     "unknown basis kind \"{kind}\", expected one of {}",
@@ -449,7 +467,7 @@ impl Registry {
                         at,
                         modes_key,
                         format!(
-                            "the {kind} basis takes its size from its own keys ({}); remove modes",
+                            "the {kind} basis takes its size from its own keys ({}), not from modes; remove modes",
                             at.prefix
                         ),
                     ));

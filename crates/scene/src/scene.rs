@@ -13,8 +13,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use flexprr_dynamics::{
-    AxialForceModel, Coupling, CouplingModel, Formulation, LinkModel, Machine,
-    ModalDamping,
+    AxialForceModel, Coupling, CouplingModel, Formulation, LinkModel, Machine, ModalDamping,
 };
 use flexprr_integrators::Options;
 use flexprr_kinematics::{
@@ -26,7 +25,7 @@ use nalgebra::{Point2, Unit, Vector2};
 use crate::error::ScenarioError;
 use crate::input::{read_input_file, sanitize_name, unsafe_name_reason};
 use crate::link::{build_section, check_link};
-use crate::locate::locate;
+use crate::locate::{locate, locate_value};
 use crate::parse::parse_scene;
 use crate::registry::{BasisParams, MethodHandle, Registry, quoted_list};
 use crate::schema::{
@@ -86,6 +85,14 @@ struct Checker<'a> {
 }
 
 impl Checker<'_> {
+    /// An error at the value of `key` (for an unknown name).
+    fn value_error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
+        ScenarioError::Input {
+            location: locate_value(self.file, self.text, key),
+            key: key.to_string(),
+            message: message.into(),
+        }
+    }
     fn error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
         ScenarioError::Input {
             location: locate(self.file, self.text, key),
@@ -492,7 +499,7 @@ fn build_model_section(
     let mut custom_axial = false;
     if let Some(name) = &mo.axial_force {
         let entry = registry.axial_entry(name).ok_or_else(|| {
-            c.error(
+            c.value_error(
                 "model.axial_force",
                 format!(
                     "unknown axial force model \"{name}\", expected one of {}",
@@ -565,7 +572,7 @@ fn build_integrator(
 ) -> Result<(MethodHandle, Options), ScenarioError> {
     let ic = &raw.integrator;
     let method = registry.method(&ic.method).ok_or_else(|| {
-        c.error(
+        c.value_error(
             "integrator.method",
             format!(
                 "unknown value \"{}\", expected one of {}",
@@ -691,4 +698,3 @@ fn build_trajectory(
         }
     })
 }
-

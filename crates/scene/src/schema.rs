@@ -551,6 +551,14 @@ impl Method {
         }
     }
 
+    /// The integrator this method names, with `options`, behind the object-safe adapter.
+    pub fn integrator(
+        self,
+        options: flexprr_integrators::Options,
+    ) -> Box<dyn flexprr_integrators::DynIntegrator> {
+        self.handle().integrator(options)
+    }
+
     /// The registered handle of this built-in method.
     pub fn handle(self) -> crate::MethodHandle {
         crate::Registry::default()
@@ -578,4 +586,3 @@ impl Method {
         }
     }
 }
-

@@ -12,7 +12,9 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use flexprr_scene::link::{MaterialConfig, SectionConfig, check_link};
-use flexprr_scene::{BasisParams, BasisTable, ModeCount, Registry, ScenarioError, Scene, parse_toml};
+use flexprr_scene::{
+    BasisParams, BasisTable, ModeCount, Registry, ScenarioError, Scene, parse_toml,
+};
 
 /// Mutants per input file (about 20 files: well over 500 in all).
 const MUTANTS_PER_FILE: usize = 24;
@@ -37,14 +39,50 @@ impl Lcg {
 }
 
 const VALUES: &[&str] = &[
-    "0", "-1", "0.0", "-0.0", "1e300", "1e-300", "nan", "inf", "-inf", "\"x\"", "true", "[]",
-    "{}", "[1, 2]", "817.0", "1e9", "99999999999999999999", "\"../../x\"", "\"\"", "'a b'",
+    "0",
+    "-1",
+    "0.0",
+    "-0.0",
+    "1e300",
+    "1e-300",
+    "nan",
+    "inf",
+    "-inf",
+    "\"x\"",
+    "true",
+    "[]",
+    "{}",
+    "[1, 2]",
+    "817.0",
+    "1e9",
+    "99999999999999999999",
+    "\"../../x\"",
+    "\"\"",
+    "'a b'",
 ];
 
 const WORDS: &[&str] = &[
-    "kind", "ends", "elements", "modes", "name", "stops", "rtol", "atol", "output_step",
-    "thickness", "height", "method", "layout", "branch", "profile", "axial_force", "coupling",
-    "requests", "formulation", "geometric_stiffness", "bogus",
+    "kind",
+    "ends",
+    "elements",
+    "modes",
+    "name",
+    "stops",
+    "rtol",
+    "atol",
+    "output_step",
+    "thickness",
+    "height",
+    "method",
+    "layout",
+    "branch",
+    "profile",
+    "axial_force",
+    "coupling",
+    "requests",
+    "formulation",
+    "geometric_stiffness",
+    "bogus",
 ];
 
 /// One random edit of `text`.
@@ -149,7 +187,12 @@ fn check_link_file(registry: &Registry, file: &str, text: &str) -> Result<(), Sc
     let sized = registry
         .basis(&link.basis.kind)
         .is_none_or(|f| f.mode_count() == ModeCount::FromModes);
-    registry.build_basis(&params, &link.basis.kind, "modes", sized.then_some(link.modes))?;
+    registry.build_basis(
+        &params,
+        &link.basis.kind,
+        "modes",
+        sized.then_some(link.modes),
+    )?;
     Ok(())
 }
 
