@@ -197,8 +197,8 @@ impl Study {
     /// Reads and checks a study file; `base` is resolved relative to its directory.
     ///
     /// # Errors
-    /// [`StudyError::InputFile`] if the study or the base scene is not a regular file of at
-    /// most [`MAX_INPUT_BYTES`], [`StudyError::Io`] if it cannot be read,
+    /// [`StudyError::InputFile`] if the study or the base scene is missing, unreadable or
+    /// not a regular file of at most [`MAX_INPUT_BYTES`],
     /// [`StudyError::Input`] (with `file:line:column` and the key) for anything wrong in the
     /// study, [`StudyError::Scene`] for a base scene that is not valid TOML.
     pub fn load(path: &Path) -> Result<Self, StudyError> {

@@ -235,3 +235,14 @@ fn studies_are_told_apart_from_scenes() {
     }
     assert!(!Study::looks_like_study("not = = toml"));
 }
+
+#[test]
+fn a_missing_study_or_base_scene_is_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let e = Study::load(&tmp.path().join("nowhere.toml")).unwrap_err();
+    assert!(e.is_input(), "{e}");
+    assert!(e.to_string().contains("nowhere.toml: cannot be read"), "{e}");
+    let e = Study::from_text("s.toml", "s", "base = \"absent.toml\"\n", tmp.path()).unwrap_err();
+    assert!(e.is_input(), "{e}");
+    assert!(e.to_string().contains("absent.toml: cannot be read"), "{e}");
+}
