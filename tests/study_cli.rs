@@ -227,13 +227,12 @@ fn progress_off_a_terminal_is_one_line_per_tenth_and_failures_are_short() {
         .lines()
         .filter(|l| l.starts_with("kill_resume: "))
         .collect();
-    assert!(
-        !progress.is_empty() && progress.len() <= 10,
-        "{progress:?}"
-    );
+    assert!(!progress.is_empty() && progress.len() <= 10, "{progress:?}");
     let last = progress.last().unwrap();
     assert!(
-        last.starts_with(&format!("kill_resume: {cases}/{cases} cases (100 %), 0 failed")),
+        last.starts_with(&format!(
+            "kill_resume: {cases}/{cases} cases (100 %), 0 failed"
+        )),
         "{last}"
     );
     let quiet = flexprr()
@@ -304,7 +303,10 @@ fn bad_input_files_and_values_are_refused_with_where_and_why() {
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     // Line 2, column of `link` (found by searching the line).
-    let column = "quantities = [{ kind = \"buckling\", link = 4 }]".find("link").unwrap() + 1;
+    let column = "quantities = [{ kind = \"buckling\", link = 4 }]"
+        .find("link")
+        .unwrap()
+        + 1;
     assert!(
         stderr.contains(&format!(
             "{}:2:{column}: quantities.0.link: link must be 1, 2 or 3",

@@ -52,7 +52,10 @@ series = "links.section.thickness"
     ] {
         assert!(svg.contains(text), "{text} missing");
     }
-    assert!(!svg.contains("f_min_1_1_Hz"), "raw column name used as a label");
+    assert!(
+        !svg.contains("f_min_1_1_Hz"),
+        "raw column name used as a label"
+    );
 }
 
 /// The units of the key table agree with the unit column of the scene-file reference.
@@ -73,10 +76,16 @@ fn key_units_agree_with_the_scene_reference() {
             .find(|l| l.contains(&format!("| `{name}` |")))
             .unwrap_or_else(|| panic!("{name} not in docs/scenes.md"));
         let cells: Vec<&str> = row.split('|').map(str::trim).collect();
-        let at = cells.iter().position(|c| *c == format!("`{name}`")).unwrap();
+        let at = cells
+            .iter()
+            .position(|c| *c == format!("`{name}`"))
+            .unwrap();
         assert_eq!(cells[at + 2], unit, "{row}");
         assert!(key_label(key).ends_with(&format!("({unit})")), "{key}");
-        assert!(key_value_label(key, "1").ends_with(&format!("= 1 {unit}")), "{key}");
+        assert!(
+            key_value_label(key, "1").ends_with(&format!("= 1 {unit}")),
+            "{key}"
+        );
     }
     assert_eq!(key_label("model.formulation"), "formulation");
     assert_eq!(key_label("some.unknown_key"), "some.unknown_key");
