@@ -296,5 +296,110 @@ fn merge_names_the_absent_and_incomplete_shards_and_resume_keeps_the_shard() {
     assert_eq!(
         std::fs::read_to_string(merged.join("results.csv")).unwrap(),
         std::fs::read_to_string(single.join("results.csv")).unwrap()
+/// Off a terminal the progress is one line per tenth of the cases (never more than ten),
+/// `--quiet` prints none, and a failed case is one short line naming its parameters by key.
+#[test]
+fn progress_off_a_terminal_is_one_line_per_tenth_and_failures_are_short() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases = 30;
+    let study = write_study(tmp.path(), cases);
+    let out = flexprr()
+        .args(["study", "--threads", "2", "--out"])
+        .arg(tmp.path().join("loud"))
+        .arg(&study)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let progress: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("kill_resume: "))
+        .collect();
+    assert!(!progress.is_empty() && progress.len() <= 10, "{progress:?}");
+    let last = progress.last().unwrap();
+    assert!(
+        last.starts_with(&format!(
+            "kill_resume: {cases}/{cases} cases (100 %), 0 failed"
+        )),
+        "{last}"
+    );
+    let quiet = flexprr()
+        .args(["study", "--quiet", "--out"])
+        .arg(tmp.path().join("quiet"))
+        .arg(&study)
+        .output()
+        .unwrap();
+    assert!(quiet.status.success());
+    assert_eq!(String::from_utf8_lossy(&quiet.stderr), "");
+
+    // Negative thicknesses: every other case is invalid.
+    let text = std::fs::read_to_string(&study).unwrap()
+        + "[[axis]]\nkey = \"links.section.thickness\"\nvalues = [0.002, -0.001]\n";
+    let failing = tmp.path().join("failing.toml");
+    std::fs::write(&failing, text).unwrap();
+    let out = flexprr()
+        .args(["study", "--quiet", "--out"])
+        .arg(tmp.path().join("failing"))
+        .arg(&failing)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    // At most 20 failure lines, then one line pointing to the table.
+    assert_eq!(lines.len(), 21, "{stderr}");
+    assert!(lines[20].contains("results.csv"), "{}", lines[20]);
+    for line in &lines[..20] {
+        assert!(
+            line.contains("(trajectory.frequency = ")
+                && line.contains(", links.section.thickness = -0.001): invalid (invalid_input): "),
+            "{line}"
+        );
+        assert!(line.chars().count() < 200, "{line}");
+    }
+}
+
+/// Input files must be regular files of bounded size; study errors are located.
+#[test]
+fn bad_input_files_and_values_are_refused_with_where_and_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    #[cfg(unix)]
+    {
+        let out = flexprr()
+            .args(["study", "--out"])
+            .arg(tmp.path().join("x"))
+            .arg("/dev/zero")
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains("not a regular file"), "{stderr}");
+    }
+    let bad = tmp.path().join("bad.toml");
+    let base = configs().join("paper_f20.toml").display().to_string();
+    std::fs::write(
+        &bad,
+        format!("base = {base:?}\nquantities = [{{ kind = \"buckling\", link = 4 }}]\n"),
+    )
+    .unwrap();
+    let out = flexprr()
+        .args(["study", "--out"])
+        .arg(tmp.path().join("x"))
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // Line 2, column of `link` (found by searching the line).
+    let column = "quantities = [{ kind = \"buckling\", link = 4 }]"
+        .find("link")
+        .unwrap()
+        + 1;
+    assert!(
+        stderr.contains(&format!(
+            "{}:2:{column}: quantities.0.link: link must be 1, 2 or 3",
+            bad.display()
+        )),
+        "{stderr}"
     );
 }

@@ -36,7 +36,8 @@ pub enum StudyError {
     /// The base scene itself cannot be read or parsed.
     #[error("base scene: {0}")]
     Scene(#[from] ScenarioError),
-    /// An input file (study or base scene) that is not a regular file, or is too large.
+    /// An input file (study or base scene) that is missing or unreadable, not a regular
+    /// file, too large or not UTF-8 text.
     #[error("{path}: {message}")]
     InputFile {
         /// The path as given.
@@ -115,14 +116,15 @@ pub(crate) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StudyError +
 /// so a file that grows while being read cannot exhaust memory either.
 ///
 /// # Errors
-/// [`StudyError::InputFile`] for a directory, device, pipe or socket, or a file over the
-/// limit; [`StudyError::Io`] if it cannot be read or is not UTF-8.
+/// [`StudyError::InputFile`] for a missing or unreadable file, a directory, device, pipe or
+/// socket, a file over the limit, or one that is not UTF-8.
 pub fn read_input_file(path: &Path) -> Result<String, StudyError> {
     let refuse = |message: String| StudyError::InputFile {
         path: path.display().to_string(),
         message,
     };
-    let meta = std::fs::metadata(path).map_err(io_err(path))?;
+    let unreadable = |e: std::io::Error| refuse(format!("cannot be read: {e}"));
+    let meta = std::fs::metadata(path).map_err(unreadable)?;
     let kind = meta.file_type();
     if !kind.is_file() {
         let what = if kind.is_dir() {
@@ -143,16 +145,13 @@ pub fn read_input_file(path: &Path) -> Result<String, StudyError> {
     if meta.len() > MAX_INPUT_BYTES {
         return Err(too_large(meta.len()));
     }
-    let file = std::fs::File::open(path).map_err(io_err(path))?;
+    let file = std::fs::File::open(path).map_err(unreadable)?;
     let mut bytes = Vec::new();
     file.take(MAX_INPUT_BYTES + 1)
         .read_to_end(&mut bytes)
-        .map_err(io_err(path))?;
+        .map_err(unreadable)?;
     if bytes.len() as u64 > MAX_INPUT_BYTES {
         return Err(too_large(bytes.len() as u64));
     }
-    String::from_utf8(bytes).map_err(|e| StudyError::Io {
-        path: path.display().to_string(),
-        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e),
-    })
+    String::from_utf8(bytes).map_err(|e| refuse(format!("is not UTF-8 text: {e}")))
 }

@@ -115,7 +115,6 @@ impl RangeConfig {
     }
 }
 
-
 /// A plot of the results table: `y` columns against the parameter `x`, one line per value
 /// of the parameter `series` (if given). Only rows with status `ok` are drawn.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]

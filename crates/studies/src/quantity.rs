@@ -76,7 +76,12 @@ pub struct Column {
 impl Column {
     /// A column known only by its header (its values may be anything a column holds).
     pub fn untyped(name: &str) -> Self {
-        Self::new(name.to_string(), name.to_string(), "", ColumnValues::Unknown)
+        Self::new(
+            name.to_string(),
+            name.to_string(),
+            "",
+            ColumnValues::Unknown,
+        )
     }
 
     fn new(name: String, label: String, unit: &'static str, values: ColumnValues) -> Self {
@@ -289,4 +294,3 @@ impl Quantity {
         }
     }
 }
-

@@ -174,7 +174,6 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
-
 /// Locates study keys in the study's text for messages.
 struct Locator<'a> {
     file: &'a str,
@@ -197,8 +196,8 @@ impl Study {
     /// Reads and checks a study file; `base` is resolved relative to its directory.
     ///
     /// # Errors
-    /// [`StudyError::InputFile`] if the study or the base scene is not a regular file of at
-    /// most [`MAX_INPUT_BYTES`], [`StudyError::Io`] if it cannot be read,
+    /// [`StudyError::InputFile`] if the study or the base scene is missing, unreadable or
+    /// not a regular file of at most [`MAX_INPUT_BYTES`],
     /// [`StudyError::Input`] (with `file:line:column` and the key) for anything wrong in the
     /// study, [`StudyError::Scene`] for a base scene that is not valid TOML.
     pub fn load(path: &Path) -> Result<Self, StudyError> {
@@ -268,10 +267,7 @@ impl Study {
                     let axes: Vec<&str> = self.axes.iter().map(|a| a.key.as_str()).collect();
                     return Err(at.input(
                         &format!("plot.{k}.{field}"),
-                        format!(
-                            "\"{key}\" is not an axis key (axes: {})",
-                            axes.join(", ")
-                        ),
+                        format!("\"{key}\" is not an axis key (axes: {})", axes.join(", ")),
                     ));
                 }
             }
@@ -485,7 +481,10 @@ fn load_base(raw: &StudyFile, dir: &Path, at: &Locator<'_>) -> Result<toml::Tabl
         (Some(base), None) => {
             let path = dir.join(base);
             let text = read_input_file(&path)?;
-            Ok(parse_toml::<toml::Table>(&path.display().to_string(), &text)?)
+            Ok(parse_toml::<toml::Table>(
+                &path.display().to_string(),
+                &text,
+            )?)
         }
         (None, Some(scene)) => Ok(scene.clone()),
         (Some(_), Some(_)) => Err(at.input(
@@ -623,10 +622,7 @@ fn check_quantities(quantities: &[Quantity], at: &Locator<'_>) -> Result<(), Stu
             ));
         }
         if q.mode() == Some(0) {
-            return Err(at.input(
-                &format!("quantities.{k}.mode"),
-                "modes are numbered from 1",
-            ));
+            return Err(at.input(&format!("quantities.{k}.mode"), "modes are numbered from 1"));
         }
     }
     Ok(())

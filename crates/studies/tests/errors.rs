@@ -138,14 +138,18 @@ fn checks_after_parsing_are_located_at_their_key() {
 #[test]
 fn plot_keys_and_columns_are_checked_and_located() {
     let axis = "quantities = [{ kind = \"buckling\", link = 1 }]\n[[axis]]\nkey = \"trajectory.frequency\"\nvalues = [1.0]\n";
-    let body = format!("{axis}[[plot]]\nfile = \"p.svg\"\nx = \"machine.platform_mass\"\ny = [\"buckles_1\"]\n");
+    let body = format!(
+        "{axis}[[plot]]\nfile = \"p.svg\"\nx = \"machine.platform_mass\"\ny = [\"buckles_1\"]\n"
+    );
     assert_located(
         &error(&body),
         &at(&body, "x = ", 0),
         "plot.0.x",
         "\"machine.platform_mass\" is not an axis key (axes: trajectory.frequency)",
     );
-    let body = format!("{axis}[[plot]]\nfile = \"p.svg\"\nx = \"trajectory.frequency\"\ny = [\"buckles_1\", \"P_max_1_N\"]\n");
+    let body = format!(
+        "{axis}[[plot]]\nfile = \"p.svg\"\nx = \"trajectory.frequency\"\ny = [\"buckles_1\", \"P_max_1_N\"]\n"
+    );
     assert_located(
         &error(&body),
         &at(&body, "\"P_max_1_N\"", 0),
@@ -166,10 +170,7 @@ fn base_and_inline_scene_are_exclusive_and_one_is_required() {
     assert_located(&both, "bad.toml:1:1: ", "base", "not both");
     let none = Study::from_text("bad.toml", "bad", "name = \"x\"\n", &configs()).unwrap_err();
     let message = none.to_string();
-    assert!(
-        message.starts_with("bad.toml: base: missing"),
-        "{message}"
-    );
+    assert!(message.starts_with("bad.toml: base: missing"), "{message}");
 }
 
 #[test]
@@ -234,4 +235,18 @@ fn studies_are_told_apart_from_scenes() {
         }
     }
     assert!(!Study::looks_like_study("not = = toml"));
+}
+
+#[test]
+fn a_missing_study_or_base_scene_is_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let e = Study::load(&tmp.path().join("nowhere.toml")).unwrap_err();
+    assert!(e.is_input(), "{e}");
+    assert!(
+        e.to_string().contains("nowhere.toml: cannot be read"),
+        "{e}"
+    );
+    let e = Study::from_text("s.toml", "s", "base = \"absent.toml\"\n", tmp.path()).unwrap_err();
+    assert!(e.is_input(), "{e}");
+    assert!(e.to_string().contains("absent.toml: cannot be read"), "{e}");
 }

@@ -77,7 +77,10 @@ fn assert_refused_then_rerun(dir: &Path, id: usize, what: &str, table: &str) {
     let file = record_path(dir, id).display().to_string();
     assert!(message.starts_with(&format!("{file}: ")), "{message}");
     assert!(message.contains(what), "{message}");
-    assert!(message.ends_with("delete the file to run the case again"), "{message}");
+    assert!(
+        message.ends_with("delete the file to run the case again"),
+        "{message}"
+    );
     assert!(!message.contains('\n'), "{message}");
 
     std::fs::remove_file(record_path(dir, id)).unwrap();
@@ -123,7 +126,10 @@ fn records_have_a_status_and_failures_say_kind_and_time() {
 fn run_failures_are_classified_from_the_integrators_messages() {
     let cases = [
         (
-            IntegratorError::StepSizeTooSmall { t: 0.0125, h: 1e-18 },
+            IntegratorError::StepSizeTooSmall {
+                t: 0.0125,
+                h: 1e-18,
+            },
             FailureKind::StepSize,
             0.0125,
         ),
@@ -267,5 +273,8 @@ fn a_merge_refuses_a_bad_record_too() {
     let e = merge_studies(&shards, &tmp.path().join("merged")).unwrap_err();
     let file = record_path(&shards[0], 2).display().to_string();
     let message = e.to_string();
-    assert!(message.starts_with(&format!("{file}: f_min_1_1_Hz = \"inf\"")), "{message}");
+    assert!(
+        message.starts_with(&format!("{file}: f_min_1_1_Hz = \"inf\"")),
+        "{message}"
+    );
 }
