@@ -21,8 +21,9 @@ pub use sine::SineBasis;
 /// A one-function pinned-pinned basis `psi = xi (1 - xi)` (a Rayleigh-Ritz trial function).
 /// Its integrals have closed forms, `int psi^2 = 1/30` and `int psi''^2 = 4`, so a uniform
 /// link of length `l` gets `M = rhoA l / 30` and `Kf = 4 EI / l^3`, and Rayleigh's quotient
-/// `omega^2 = 120 EI / (rhoA l^4)` lies 1.3 % above the exact `pi^4 EI / (rhoA l^4)`
-/// (Meirovitch, *Fundamentals of Vibrations*, section 8.13):
+/// `omega^2 = 120 EI / (rhoA l^4)` is `120 / pi^4` times the exact `pi^4 EI / (rhoA l^4)`,
+/// an upper bound as Rayleigh's principle requires (Meirovitch, *Fundamentals of
+/// Vibrations*, section 8.13):
 ///
 /// ```
 /// use flexprr_beam::{Basis, ModalIntegrals, UniformSection};
