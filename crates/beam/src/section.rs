@@ -4,6 +4,42 @@
 use crate::BeamError;
 
 /// Bending stiffness and mass per unit length along the link.
+///
+/// # Implementing
+/// A link whose mass per length grows linearly, `rhoA = m0 (1 + xi)`, with constant `EI`.
+/// With the first sine mode `psi = sin(pi xi)` the integrals have closed forms:
+/// `M = l m0 int (1 + xi) sin^2(pi xi) dxi = 3 l m0 / 4` (since `int xi sin^2 = 1/4`),
+/// `Kf = EI pi^4 / (2 l^3)`, and the link's mass is `3 l m0 / 2`:
+///
+/// ```
+/// use flexprr_beam::{ModalIntegrals, Section, SineBasis};
+///
+/// struct Wedge {
+///     ei: f64,
+///     m0: f64,
+/// }
+///
+/// impl Section for Wedge {
+///     fn bending_stiffness(&self, _xi: f64) -> f64 {
+///         self.ei
+///     }
+///     fn mass_per_length(&self, xi: f64) -> f64 {
+///         self.m0 * (1.0 + xi)
+///     }
+///     fn polynomial_degrees(&self) -> Option<(usize, usize)> {
+///         Some((0, 1))
+///     }
+/// }
+///
+/// let (section, l) = (Wedge { ei: 1.46, m0: 0.1662 }, 0.2);
+/// let integrals = ModalIntegrals::compute(&SineBasis::new(1).unwrap(), &section, l).unwrap();
+/// let pi4 = std::f64::consts::PI.powi(4);
+/// let expected_mass = 0.75 * l * section.m0;
+/// let expected_stiffness = section.ei * pi4 / (2.0 * l.powi(3));
+/// assert!((integrals.mass[(0, 0)] - expected_mass).abs() <= 1e-12 * expected_mass);
+/// assert!((integrals.stiffness[(0, 0)] - expected_stiffness).abs() <= 1e-12 * expected_stiffness);
+/// assert!((integrals.total_mass - 1.5 * l * section.m0).abs() <= 1e-12 * integrals.total_mass);
+/// ```
 pub trait Section: Send + Sync {
     /// `EI(xi)` in N m^2 (bending in the plane of the mechanism).
     fn bending_stiffness(&self, xi: f64) -> f64;

@@ -6,28 +6,10 @@ use faer::Mat;
 use flexprr_beam::{
     AxialLoad, Coupling, FrequencySolver, HermiteBasis, ModalIntegrals, UniformSection,
 };
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use flexprr_testkit::alloc::{CountingAllocator, allocations};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn eigenvalues_and_geometric_stiffness_do_not_allocate() {
@@ -40,7 +22,7 @@ fn eigenvalues_and_geometric_stiffness_do_not_allocate() {
         let mut solver = FrequencySolver::new(&mi, coupling).unwrap();
         let mut stiffness = Mat::zeros(r, r);
         let mut out = vec![0.0; r];
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        let before = allocations();
         for step in 0..50 {
             let load = AxialLoad {
                 p0: -100.0 + 4.0 * step as f64,
@@ -50,7 +32,7 @@ fn eigenvalues_and_geometric_stiffness_do_not_allocate() {
             mi.total_stiffness_into(&load, stiffness.as_mut());
             solver.eigenvalues(stiffness.as_ref(), &mut out).unwrap();
         }
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        let after = allocations();
         assert_eq!(
             after - before,
             0,

@@ -10,8 +10,6 @@
 //! * the three integrators agree on it; the right-hand side allocates nothing; bad input is
 //!   an error, not a panic.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::sync::Arc;
 
 use faer::Mat;
@@ -24,34 +22,8 @@ use flexprr_kinematics::{Line, Pose, Trajectory};
 use proptest::prelude::*;
 
 // --- allocation counting on the current thread only (tests run in parallel threads) ---
-struct Counting;
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-fn note_allocation() {
-    // `try_with`: the thread-locals may be gone while a thread shuts down.
-    let _ = COUNTING.try_with(|c| {
-        if c.get() {
-            let _ = COUNT.try_with(|n| n.set(n.get() + 1));
-        }
-    });
-}
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_allocation();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_allocation();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: flexprr_testkit::CountingAllocator = flexprr_testkit::CountingAllocator;
 
 fn machine() -> Arc<flexprr_dynamics::Machine> {
     Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap())
@@ -493,13 +465,12 @@ fn rhs_allocates_nothing() {
     let y = state_from(&[0.3; 18]);
     let mut dy = vec![0.0; 18];
     c.rhs(0.01, &y, &mut dy);
-    COUNT.with(|n| n.set(0));
-    COUNTING.with(|f| f.set(true));
-    for k in 0..100 {
-        c.rhs(0.01 + 1e-4 * f64::from(k), &y, &mut dy);
-    }
-    COUNTING.with(|f| f.set(false));
-    assert_eq!(COUNT.with(Cell::get), 0);
+    let ((), allocations) = flexprr_testkit::count_allocations(|| {
+        for k in 0..100 {
+            c.rhs(0.01 + 1e-4 * f64::from(k), &y, &mut dy);
+        }
+    });
+    assert_eq!(allocations, 0);
     assert!(dy.iter().all(|v| v.is_finite()));
 }
 

@@ -2,9 +2,6 @@
 //! independent fixed-step classical Runge-Kutta reference, counting laws, and the Dormand-Prince
 //! integrator of this crate (work at equal accuracy).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use flexprr_integrators::abm::AbmStepper;
 use flexprr_integrators::test_problems::{
     ForcedOscillator, HarmonicOscillator, Mathieu, StiffLinear, TestProblem, VanDerPol,
@@ -17,32 +14,10 @@ use proptest::prelude::*;
 // ---------------------------------------------------------------------------------------
 // Allocation counter (per thread, so parallel tests do not disturb each other).
 
-struct CountingAllocator;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use flexprr_testkit::alloc::{CountingAllocator, allocations};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(Cell::get)
-}
 
 // ---------------------------------------------------------------------------------------
 // Helpers.

@@ -7,9 +7,8 @@ use flexprr_integrators::test_problems::{
 use flexprr_integrators::{
     Integrator, IntegratorError, OdeSystem, Options, Rk45, Stepper, StiffnessDetection,
 };
+use flexprr_testkit::alloc::{CountingAllocator, allocations as allocations_so_far};
 use proptest::prelude::*;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
 /// Reference solution by the classical 4th-order Runge-Kutta method with a fixed step
 /// (Kutta 1901; Hairer-Norsett-Wanner I, Table II.1.2): independent of the code under test.
@@ -52,33 +51,10 @@ fn classical_rk4<S: OdeSystem>(
     y
 }
 
-/// Counts heap allocations made by the current thread, to check that stepping allocates
-/// nothing (tests run in parallel threads, hence the thread-local counter).
-struct CountingAllocator;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards every call to the system allocator unchanged; only counts.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
+// Heap allocations made by the current thread, to check that stepping allocates nothing
+// (tests run in parallel threads, hence the thread-local counter of the test kit).
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
-
-fn allocations_so_far() -> usize {
-    ALLOCATIONS.with(Cell::get)
-}
 
 /// Largest componentwise absolute difference.
 fn max_abs_difference(a: &[f64], b: &[f64]) -> f64 {

@@ -11,6 +11,44 @@ use crate::inverse::measures_of;
 use crate::pose::{PlatformMotion, Pose};
 
 /// A prescribed platform motion. Object-safe: scenes hold `Box<dyn Trajectory + Send + Sync>`.
+///
+/// # Implementing
+/// A platform drifting at a constant velocity `v` along `x` from `x0`, with no rotation. The
+/// inverse kinematics must then give slider rates `rho'` equal to the time derivative of the
+/// slider positions `rho(t)`, here checked by a central difference (error `O(h^2)`):
+///
+/// ```
+/// use flexprr_kinematics::{Geometry, PlatformMotion, Pose, Trajectory};
+/// use nalgebra::Vector3;
+///
+/// struct Drift {
+///     start: Pose,
+///     speed: f64,
+/// }
+///
+/// impl Trajectory for Drift {
+///     fn motion(&self, t: f64) -> PlatformMotion {
+///         let pose = Pose::new(self.start.x + self.speed * t, self.start.y, self.start.phi);
+///         PlatformMotion {
+///             pose,
+///             velocity: Vector3::new(self.speed, 0.0, 0.0),
+///             acceleration: Vector3::zeros(),
+///         }
+///     }
+/// }
+///
+/// let drift = Drift { start: Pose::new(-0.05, 0.0, std::f64::consts::FRAC_PI_4), speed: 0.1 };
+/// let geometry = Geometry::paper();
+/// let (t, h) = (0.1, 1e-5);
+/// let now = geometry.inverse_kinematics(&drift.motion(t)).unwrap();
+/// let after = geometry.inverse_kinematics(&drift.motion(t + h)).unwrap();
+/// let before = geometry.inverse_kinematics(&drift.motion(t - h)).unwrap();
+/// for i in 0..3 {
+///     let difference = (after.legs[i].rho - before.legs[i].rho) / (2.0 * h);
+///     assert!((now.legs[i].rho_dot - difference).abs() <= 1e-6 * (1.0 + difference.abs()));
+/// }
+/// assert!(drift.breakpoints().is_empty() && drift.duration().is_none());
+/// ```
 pub trait Trajectory {
     /// Pose, twist and its derivative at time `t` (s).
     fn motion(&self, t: f64) -> PlatformMotion;

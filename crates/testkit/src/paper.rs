@@ -2,7 +2,7 @@
 //! `docs/model.md` ("parameter provenance"), the scene files of the workspace and the
 //! independent reference state.
 //!
-//! The numbers are plain constants (this crate depends on no flexprr crate); the test
+//! The numbers are plain constants (this crate depends on no flexprr crate); the
 //! unit tests of this module check them against `configs/paper_f20.toml` and against the
 //! parameters recorded in the reference file, which were written independently.
 //!
@@ -72,7 +72,9 @@ pub fn euler_load() -> f64 {
 
 /// The workspace root (the directory of the top `Cargo.toml`).
 pub fn workspace_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("..")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("..")
 }
 
 /// A scene file of `configs/` by name, e.g. `config("paper_f20.toml")`.
@@ -136,7 +138,10 @@ pub fn reference_state_f20() -> ReferenceState {
         .enumerate()
         .map(|(i, v)| {
             v.as_f64().unwrap_or_else(|| {
-                panic!("reference state {}: state[{i}] = {v} is not a number", path.display())
+                panic!(
+                    "reference state {}: state[{i}] = {v} is not a number",
+                    path.display()
+                )
             })
         })
         .collect::<Vec<_>>();
@@ -231,7 +236,13 @@ mod tests {
     #[test]
     fn derived_quantities_by_hand() {
         assert_close(flexural_rigidity(), 1.46, 1e-14, 0.0, "EI");
-        assert_close(euler_load(), 36.5 * std::f64::consts::PI.powi(2), 1e-14, 0.0, "P_cr");
+        assert_close(
+            euler_load(),
+            36.5 * std::f64::consts::PI.powi(2),
+            1e-14,
+            0.0,
+            "P_cr",
+        );
         assert_close(mass_per_length(), 0.1662, 1e-14, 0.0, "rho A");
     }
 }

@@ -16,6 +16,44 @@ pub use sine::SineBasis;
 ///
 /// Implementations must be cheap to evaluate and allocation-free in [`Basis::eval`];
 /// the modal integrals call it `r` times per quadrature node.
+///
+/// # Implementing
+/// A one-function pinned-pinned basis `psi = xi (1 - xi)` (a Rayleigh-Ritz trial function).
+/// Its integrals have closed forms, `int psi^2 = 1/30` and `int psi''^2 = 4`, so a uniform
+/// link of length `l` gets `M = rhoA l / 30` and `Kf = 4 EI / l^3`, and Rayleigh's quotient
+/// `omega^2 = 120 EI / (rhoA l^4)` is `120 / pi^4` times the exact `pi^4 EI / (rhoA l^4)`,
+/// an upper bound as Rayleigh's principle requires (Meirovitch, *Fundamentals of
+/// Vibrations*, section 8.13):
+///
+/// ```
+/// use flexprr_beam::{Basis, ModalIntegrals, UniformSection};
+///
+/// struct Parabola;
+///
+/// impl Basis for Parabola {
+///     fn len(&self) -> usize {
+///         1
+///     }
+///     fn eval(&self, _j: usize, xi: f64) -> [f64; 3] {
+///         [xi * (1.0 - xi), 1.0 - 2.0 * xi, -2.0]
+///     }
+///     fn name(&self) -> String {
+///         "parabola, r = 1".into()
+///     }
+///     fn polynomial_degree(&self) -> Option<usize> {
+///         Some(2)
+///     }
+/// }
+///
+/// let (ei, rho_a, l) = (1.46, 0.1662, 0.2);
+/// let section = UniformSection::new(ei, rho_a).unwrap();
+/// let integrals = ModalIntegrals::compute(&Parabola, &section, l).unwrap();
+/// let (mass, stiffness) = (integrals.mass[(0, 0)], integrals.stiffness[(0, 0)]);
+/// assert!((mass - rho_a * l / 30.0).abs() <= 1e-14 * mass);
+/// assert!((stiffness - 4.0 * ei / l.powi(3)).abs() <= 1e-12 * stiffness);
+/// let ratio = (stiffness / mass) / (std::f64::consts::PI.powi(4) * ei / (rho_a * l.powi(4)));
+/// assert!((ratio - 120.0 / std::f64::consts::PI.powi(4)).abs() <= 1e-12);
+/// ```
 pub trait Basis: Send + Sync {
     /// Number of shape functions `r`.
     fn len(&self) -> usize;
