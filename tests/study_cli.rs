@@ -296,6 +296,9 @@ fn merge_names_the_absent_and_incomplete_shards_and_resume_keeps_the_shard() {
     assert_eq!(
         std::fs::read_to_string(merged.join("results.csv")).unwrap(),
         std::fs::read_to_string(single.join("results.csv")).unwrap()
+    );
+}
+
 /// Off a terminal the progress is one line per tenth of the cases (never more than ten),
 /// `--quiet` prints none, and a failed case is one short line naming its parameters by key.
 #[test]

@@ -118,7 +118,7 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
     if let Some(e) = error {
         let rows = result.tables.first().map_or(0, |t| t.rows());
         return Err(Failure::run(format!(
-            "{e} (outputs up to the failure, {rows} samples, written to {} with \"status\": \"failed\")",
+            "run failed: {e} (outputs up to the failure, {rows} samples, written to {} with \"status\": \"failed\")",
             out.display()
         )));
     }

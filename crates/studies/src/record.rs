@@ -1,6 +1,8 @@
 //! Case records (`cases/<id>.json`): what one finished case produced, how a failure is
 //! described, how records are read back and checked, and how `results.csv` is assembled.
 
+use flexprr_integrators::IntegratorError;
+use flexprr_run::RunError;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -131,41 +133,25 @@ impl CaseFailure {
     }
 }
 
-/// The kind and time of a failed run, from the run's error.
-///
-/// The run layer reports failures as text for now (`ScenarioError::Run`), so the kind is
-/// read from the integrator's and the guard's wording and the time from the first `t = <s>`;
-/// this is the one place to switch to typed run failures.
-pub fn classify_run_failure(message: &str) -> (FailureKind, Option<f64>) {
-    let kind = if message.contains("non-finite") {
-        FailureKind::NonFinite
-    } else if message.contains("step size collapsed") {
-        FailureKind::StepSize
-    } else if message.contains("gave up after") {
-        FailureKind::StepBudget
-    } else if message.contains("Newton") || message.contains("singular iteration matrix") {
-        FailureKind::Newton
-    } else if message.contains("looks stiff") {
-        FailureKind::Stiff
-    } else if message.contains("diverged") {
-        FailureKind::Diverged
-    } else {
-        FailureKind::Run
+/// The kind and time of a failed run, from the run layer's typed error.
+pub fn classify_run_failure(e: &RunError) -> (FailureKind, Option<f64>) {
+    let kind = match e.kind() {
+        "diverged" => FailureKind::Diverged,
+        "step-size-collapse" => FailureKind::StepSize,
+        "too-many-steps" => FailureKind::StepBudget,
+        "non-finite" => FailureKind::NonFinite,
+        "stiff" => FailureKind::Stiff,
+        "input" => FailureKind::InvalidInput,
+        _ => match e {
+            RunError::Integrator {
+                source:
+                    IntegratorError::NewtonFailure { .. } | IntegratorError::SingularMatrix { .. },
+                ..
+            } => FailureKind::Newton,
+            _ => FailureKind::Run,
+        },
     };
-    (kind, time_in(message))
-}
-
-/// The number after the first `t = ` in `message`.
-fn time_in(message: &str) -> Option<f64> {
-    let (_, rest) = message.split_once("t = ")?;
-    let end = rest
-        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E')))
-        .unwrap_or(rest.len());
-    rest[..end]
-        .trim_end_matches('.')
-        .parse()
-        .ok()
-        .filter(|t: &f64| t.is_finite())
+    (kind, e.time())
 }
 
 /// One finished case, as stored in `cases/<id>.json`.

@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
 
-use flexprr_run::{RunError, RunResult, run};
+use flexprr_run::{RunResult, run};
 use flexprr_scene::{ScenarioError, Scene, locate, parse_toml};
 
 pub use crate::error::{MAX_INPUT_BYTES, StudyError, read_input_file};
@@ -31,7 +31,7 @@ pub use crate::file::{AxisConfig, Combine, PlotConfig, RangeConfig, Spacing, Stu
 pub use crate::plot::write_plots;
 pub use crate::quantity::{Column, ColumnValues, Quantity};
 pub use crate::record::{
-    CaseFailure, CaseRecord, CaseStatus, FailureKind, format_value,
+    CaseFailure, CaseRecord, CaseStatus, FailureKind, classify_run_failure, format_value,
     read_case_records, results_csv,
 };
 pub use crate::runner::{
@@ -416,12 +416,8 @@ impl Study {
         let result = match outcome {
             Ok(Ok(r)) => r,
             Ok(Err(failure)) => {
-                let e = &failure.error;
-                return Err(CaseFailure::new(
-                    run_failure_kind(e),
-                    e.time(),
-                    &e.to_string(),
-                ));
+                let (kind, time) = classify_run_failure(&failure.error);
+                return Err(CaseFailure::new(kind, time, &failure.error.to_string()));
             }
             Err(panic) => {
                 let what = panic
@@ -649,27 +645,4 @@ fn divergence(result: &RunResult) -> Option<(Option<f64>, String)> {
     None
 }
 
-/// The record's failure kind for a run error (typed, from the run layer).
-fn run_failure_kind(e: &RunError) -> FailureKind {
-    match e.kind() {
-        "diverged" => FailureKind::Diverged,
-        "step-size-collapse" => FailureKind::StepSize,
-        "too-many-steps" => FailureKind::StepBudget,
-        "non-finite" => FailureKind::NonFinite,
-        "stiff" => FailureKind::Stiff,
-        "input" => FailureKind::InvalidInput,
-        _ => match e {
-            RunError::Integrator { source, .. }
-                if matches!(
-                    source,
-                    flexprr_integrators::IntegratorError::NewtonFailure { .. }
-                        | flexprr_integrators::IntegratorError::SingularMatrix { .. }
-                ) =>
-            {
-                FailureKind::Newton
-            }
-            _ => FailureKind::Run,
-        },
-    }
-}
 

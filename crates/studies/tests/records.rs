@@ -169,20 +169,25 @@ fn run_failures_are_classified_from_the_integrators_messages() {
         ),
     ];
     for (error, kind, t) in cases {
-        let message = format!("run failed: abm integrator: {error}");
-        let (found, time) = classify_run_failure(&message);
-        assert_eq!(found, kind, "{message}");
+        let run_error = flexprr_run::RunError::Integrator {
+            method: "abm".to_string(),
+            source: error,
+        };
+        let (found, time) = classify_run_failure(&run_error);
+        assert_eq!(found, kind, "{run_error}");
         approx::assert_relative_eq!(time.unwrap(), t, max_relative = 1e-15);
     }
-    let (kind, time) = classify_run_failure(
-        "run failed: diverged: link 1 diverged at t = 0.0561 s: deflection 2.030e-1 m",
-    );
+    let diverged = flexprr_run::RunError::Diverged {
+        link: 0,
+        t: 0.0561,
+        xi: 0.5,
+        w: 0.203,
+        limit: 0.1,
+        fraction: 0.5,
+    };
+    let (kind, time) = classify_run_failure(&diverged);
     assert_eq!(kind, FailureKind::Diverged);
     approx::assert_relative_eq!(time.unwrap(), 0.0561);
-    assert_eq!(
-        classify_run_failure("run failed: something else"),
-        (FailureKind::Run, None)
-    );
 }
 
 #[test]
