@@ -42,6 +42,7 @@ mod system;
 
 pub mod abm;
 pub mod bdf;
+pub mod exponential;
 pub mod rk45;
 pub mod test_problems;
 
@@ -49,6 +50,7 @@ pub use abm::Abm;
 pub use bdf::Bdf;
 pub use common::{error_norm, initial_step};
 pub use error::IntegratorError;
+pub use exponential::{BlockOperators, LinearSecondOrder, Magnus, MagnusOrder, MagnusStepper};
 pub use options::{Options, Tolerance};
 pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};
 pub use solution::{Solution, Stats};
