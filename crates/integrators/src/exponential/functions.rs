@@ -20,8 +20,8 @@
 pub(crate) type PhiPairs = [(f64, f64); 4];
 
 /// Terms of the Taylor series of `phi_3` on the small branch: `2^N / (N + 3)!` is below
-/// `1e-30` for `N = 30`.
-const SERIES_TERMS: usize = 30;
+/// `3e-19` for `N = 22`.
+const SERIES_TERMS: usize = 22;
 /// Size of `Z` (`|m| + sqrt|theta2|`) below which the series is used.
 const SERIES_RADIUS: f64 = 2.0;
 
@@ -31,14 +31,21 @@ fn times_z(u: f64, v: f64, m: f64, theta2: f64) -> (f64, f64) {
     (u * m - v * theta2, u + v * m)
 }
 
-/// `1 / n!` for small `n`.
+/// `1 / n!` for `n = 0..=40`, built at compile time.
+const INV_FACTORIAL: [f64; 41] = {
+    let mut t = [1.0; 41];
+    let mut n = 1;
+    while n < 41 {
+        t[n] = t[n - 1] / n as f64;
+        n += 1;
+    }
+    t
+};
+
+/// `1 / n!` for `n <= 40`.
 #[inline]
 fn inv_factorial(n: usize) -> f64 {
-    let mut f = 1.0;
-    for k in 2..=n {
-        f *= k as f64;
-    }
-    1.0 / f
+    INV_FACTORIAL[n]
 }
 
 /// `(cos theta, sin(theta) / theta)` for `theta^2 = theta2` of either sign (cosh and
@@ -154,8 +161,11 @@ mod tests {
         let mut term = [[1.0, 0.0], [0.0, 1.0]];
         let mut sum = [[0.0; 2]; 2];
         for n in 0..200 {
-            let w = inv_factorial(n + k) * 1.0;
-            let w = if n + k > 170 { 0.0 } else { w };
+            let w = if n + k > 40 {
+                0.0
+            } else {
+                inv_factorial(n + k)
+            };
             for i in 0..2 {
                 for j in 0..2 {
                     sum[i][j] += w * term[i][j];
