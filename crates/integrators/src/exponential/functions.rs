@@ -25,6 +25,21 @@ const SERIES_TERMS: usize = 22;
 /// Size of `Z` (`|m| + sqrt|theta2|`) below which the series is used.
 const SERIES_RADIUS: f64 = 2.0;
 
+/// Terms of the series of `phi_3` for a matrix of size `size < 2`, such that
+/// `size^N / (N + 3)!` is below `1e-17` (`0.25^11 / 14!`, `0.5^13 / 16!`, `1 / 19!`, `2^22 / 25!`).
+#[inline]
+fn series_terms(size: f64) -> usize {
+    if size < 0.25 {
+        11
+    } else if size < 0.5 {
+        13
+    } else if size < 1.0 {
+        16
+    } else {
+        SERIES_TERMS
+    }
+}
+
 /// `(u I + v Y) Z` with `Z = m I + Y` and `Y^2 = -theta2 I`.
 #[inline]
 fn times_z(u: f64, v: f64, m: f64, theta2: f64) -> (f64, f64) {
@@ -97,8 +112,9 @@ pub(crate) fn phi_pairs(m: f64, theta2: f64) -> PhiPairs {
     let size = m.abs() + theta2.abs().sqrt();
     let mut out = [(0.0, 0.0); 4];
     if size < SERIES_RADIUS {
-        let (mut u, mut v) = (inv_factorial(SERIES_TERMS + 3), 0.0);
-        for n in (0..SERIES_TERMS).rev() {
+        let terms = series_terms(size);
+        let (mut u, mut v) = (inv_factorial(terms + 3), 0.0);
+        for n in (0..terms).rev() {
             let (a, b) = times_z(u, v, m, theta2);
             u = a + inv_factorial(n + 3);
             v = b;

@@ -76,8 +76,9 @@ pub enum MagnusOrder {
 ///    exact for constant coefficients with quadratic forcing (no resonance at
 ///    `h omega = 2 pi k`);
 /// 4. the difference of the two is the local error estimate of the 4th-order solution
-///    (weighted RMS norm of [`crate::error_norm`] in the system's state), with the usual
-///    step-size controller `h_new = h * 0.9 err^(-1/5)`. [`MagnusOrder`] selects which
+///    (weighted RMS norm of [`crate::error_norm`] in the system's state), with a PI
+///    step-size controller `h_new = h * 0.9 err^(-0.14) err_prev^(0.08)` (Gustafsson,
+///    *ACM TOMS* 17 (1991)) after acceptance and `h * 0.9 err^(-1/5)` after rejection. [`MagnusOrder`] selects which
 ///    solution is propagated (the 6th-order one is local extrapolation).
 ///
 /// All exponentials and `phi`-functions are closed forms of 2 x 2 matrices (cos/sin, or
@@ -486,6 +487,8 @@ pub struct MagnusStepper {
     s_coef: [Vec<f64>; 3],
     f_coef: [Vec<f64>; 3],
     last_rejected: bool,
+    /// Error norm of the last accepted step (memory of the PI controller).
+    error_previous: f64,
     finished: bool,
     stats: Stats,
     /// Scratch for dense output.
@@ -594,6 +597,7 @@ impl Integrator for Magnus {
             s_coef: std::array::from_fn(|_| vec![0.0; s_off]),
             f_coef: std::array::from_fn(|_| vec![0.0; f_off]),
             last_rejected: false,
+            error_previous: 1e-4,
             finished: false,
             stats,
             dense: RefCell::new(vec![0.0; 2 * n]),
@@ -883,7 +887,12 @@ impl Stepper for MagnusStepper {
             };
             let non_finite = self.y_new.iter().position(|v| !v.is_finite());
             if err <= 1.0 && non_finite.is_none() {
-                let fac = (SAFETY * err.max(1e-10).powf(-0.2)).clamp(FAC_MIN, FAC_MAX);
+                // PI control (Gustafsson, ACM TOMS 17 (1991); Hairer & Wanner II, IV.2):
+                // exponents 0.7 / 5 and 0.4 / 5 for an error of order h^5.
+                let err = err.max(1e-10);
+                let fac = (SAFETY * err.powf(-0.14) * self.error_previous.powf(0.08))
+                    .clamp(FAC_MIN, FAC_MAX);
+                self.error_previous = err.max(1e-4);
                 let mut h_new = h * if self.last_rejected {
                     fac.min(1.0)
                 } else {
