@@ -36,7 +36,7 @@ fn hermite(elements: usize) -> ModalSystem {
     let link = LinkModel::new(basis, &section, paper::LINK_LENGTH).expect("link");
     let base = paper::machine(1, paper::YOUNGS_MODULUS).expect("machine");
     let machine = Machine::new(
-        base.geometry.clone(),
+        base.geometry,
         [link.clone(), link.clone(), link],
         base.slider_mass,
         base.platform_mass,

@@ -31,7 +31,7 @@ fn hermite_system(elements: usize, formulation: Formulation) -> ModalSystem {
     let link = LinkModel::new(basis, &section, paper::LINK_LENGTH).unwrap();
     let base = paper::machine(1, paper::YOUNGS_MODULUS).unwrap();
     let machine = Machine::new(
-        base.geometry.clone(),
+        base.geometry,
         [link.clone(), link.clone(), link],
         base.slider_mass,
         base.platform_mass,
@@ -208,15 +208,10 @@ fn paper_scene_matches_the_independent_reference_state() {
         .unwrap();
     let sd = want[..9].iter().fold(0.0_f64, |a, v| a.max(v.abs()));
     let sv = want[9..].iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-    for i in 0..18 {
+    for (i, (got, w)) in sol.y(0).iter().zip(&want).enumerate() {
         let s = if i < 9 { sd } else { sv };
-        let e = (sol.y(0)[i] - want[i]).abs() / s;
-        assert!(
-            e < 1e-6,
-            "component {i}: {} vs {} ({e:e})",
-            sol.y(0)[i],
-            want[i]
-        );
+        let e = (got - w).abs() / s;
+        assert!(e < 1e-6, "component {i}: {got} vs {w} ({e:e})");
     }
 }
 

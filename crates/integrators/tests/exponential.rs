@@ -210,9 +210,9 @@ impl OdeSystem for Manufactured {
         let mut x = [0.0; 8];
         match &self.transform {
             Some((_, ti)) => {
-                for i in 0..2 * n {
+                for (i, xi) in x[..2 * n].iter_mut().enumerate() {
                     let (part, row) = (i / n, i % n);
-                    x[i] = (0..n).map(|k| ti[row * n + k] * y[part * n + k]).sum();
+                    *xi = (0..n).map(|k| ti[row * n + k] * y[part * n + k]).sum();
                 }
             }
             None => x[..2 * n].copy_from_slice(y),
@@ -233,9 +233,9 @@ impl OdeSystem for Manufactured {
         dx[n..2 * n].copy_from_slice(&acc[..n]);
         match &self.transform {
             Some((tm, _)) => {
-                for i in 0..2 * n {
+                for (i, dyi) in dy.iter_mut().enumerate() {
                     let (part, row) = (i / n, i % n);
-                    dy[i] = (0..n).map(|k| tm[row * n + k] * dx[part * n + k]).sum();
+                    *dyi = (0..n).map(|k| tm[row * n + k] * dx[part * n + k]).sum();
                 }
             }
             None => dy.copy_from_slice(&dx[..2 * n]),
@@ -399,10 +399,10 @@ fn adaptive_runs_agree_with_the_exact_solution_and_rk45() {
             let mut worst_rk: f64 = 0.0;
             for (k, &t) in t_out.iter().enumerate() {
                 let want = p.exact_state(t);
-                for i in 0..6 {
-                    worst = worst.max((sol.y(k)[i] - want[i]).abs() / want[i].abs().max(1.0));
-                    worst_rk = worst_rk
-                        .max((sol.y(k)[i] - reference.y(k)[i]).abs() / want[i].abs().max(1.0));
+                for (i, w) in want.iter().enumerate() {
+                    worst = worst.max((sol.y(k)[i] - w).abs() / w.abs().max(1.0));
+                    worst_rk =
+                        worst_rk.max((sol.y(k)[i] - reference.y(k)[i]).abs() / w.abs().max(1.0));
                 }
             }
             assert!(worst < 1e-6, "coupled {coupled}, {order:?}: {worst:e}");

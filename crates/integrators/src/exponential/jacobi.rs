@@ -77,7 +77,7 @@ mod tests {
         for i in 0..n {
             q[i * n + i] = 1.0;
         }
-        let mut rot = |p: usize, r: usize, ang: f64, q: &mut Vec<f64>| {
+        let rot = |p: usize, r: usize, ang: f64, q: &mut Vec<f64>| {
             let (s, c) = ang.sin_cos();
             for k in 0..n {
                 let a = q[k * n + p];

@@ -370,9 +370,9 @@ impl Block {
                 .filter(|k| k / r != k % r)
                 .fold(0.0_f64, |a, k| a.max(m[k].abs()));
             if off <= 1e-12 * big {
-                for k in 0..r * r {
+                for (k, v) in m.iter_mut().enumerate() {
                     if k / r != k % r {
-                        m[k] = 0.0;
+                        *v = 0.0;
                     }
                 }
             }
@@ -665,8 +665,8 @@ impl MagnusStepper {
         lin: &mut dyn LinearSecondOrder,
         h: f64,
     ) -> Result<(), IntegratorError> {
-        for i in 0..3 {
-            let ti = self.t + GAUSS3[i] * h;
+        for (i, c) in GAUSS3.iter().enumerate() {
+            let ti = self.t + c * h;
             lin.coefficients(ti, &mut self.s_coef[i], &mut self.f_coef[i]);
             self.stats.rhs_evaluations += 1;
             let bad = self.s_coef[i]
@@ -804,9 +804,9 @@ impl MagnusStepper {
         b.coupling.fill(0.0);
         for _ in 0..COUPLING_ITERATIONS {
             // States at the nodes with the current forces.
-            for i in 0..3 {
+            for (i, c) in GAUSS3.iter().enumerate() {
                 for j in 0..r {
-                    let (q, v) = b.modes[j].sub_step(GAUSS3[i], h);
+                    let (q, v) = b.modes[j].sub_step(*c, h);
                     b.node_states[i * 2 * r + j] = q;
                     b.node_states[i * 2 * r + r + j] = v;
                 }
