@@ -16,6 +16,7 @@ mod error;
 mod formulation;
 mod frequencies;
 mod inverse;
+pub mod linear;
 mod machine;
 mod modal;
 mod model;

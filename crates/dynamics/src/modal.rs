@@ -84,7 +84,7 @@ pub(crate) fn to_row_major(m: &Mat<f64>) -> Vec<f64> {
 }
 
 /// Solves `L X = B` in place for lower-triangular `L` (forward substitution, column by column).
-fn forward_substitute(l: &Mat<f64>, b: &mut Mat<f64>) {
+pub(crate) fn forward_substitute(l: &Mat<f64>, b: &mut Mat<f64>) {
     let n = l.nrows();
     for c in 0..b.ncols() {
         for i in 0..n {
@@ -242,16 +242,16 @@ pub struct Instant {
 
 /// The modal ODE of the three links under a prescribed platform motion (KED).
 pub struct ModalSystem {
-    machine: Arc<Machine>,
+    pub(crate) machine: Arc<Machine>,
     trajectory: Arc<dyn Trajectory + Send + Sync>,
-    formulation: Formulation,
-    damping: ModalDamping,
+    pub(crate) formulation: Formulation,
+    pub(crate) damping: ModalDamping,
     axial: Arc<dyn AxialForceModel>,
     ops: [LinkOperators; 3],
     offsets: [usize; 3],
     modes: usize,
     counters: Counters,
-    failure: Option<DynamicsError>,
+    pub(crate) failure: Option<DynamicsError>,
 }
 
 impl std::fmt::Debug for ModalSystem {
@@ -378,7 +378,11 @@ impl ModalSystem {
     /// Inverse kinematics of the prescribed motion at `t`, in place and without the link
     /// angles (the right-hand side needs only `e`, `n` and the rates).
     #[inline]
-    fn kinematic_state(&self, t: f64, state: &mut MachineKinematics) -> Result<(), DynamicsError> {
+    pub(crate) fn kinematic_state(
+        &self,
+        t: f64,
+        state: &mut MachineKinematics,
+    ) -> Result<(), DynamicsError> {
         let motion = self.trajectory.motion(t);
         self.machine
             .geometry
@@ -388,7 +392,7 @@ impl ModalSystem {
 
     /// Rigid joint reactions (if the axial model needs them) and the axial load of each link.
     #[inline]
-    fn axial_loads(
+    pub(crate) fn axial_loads(
         &mut self,
         state: &MachineKinematics,
         t: f64,
@@ -583,5 +587,10 @@ impl OdeSystem for ModalSystem {
 
     fn has_analytic_jacobian(&self) -> bool {
         true
+    }
+
+    /// The KED modal equations are linear in the state (see [`crate::linear`]).
+    fn linear_form(&mut self) -> Option<&mut dyn flexprr_integrators::LinearSecondOrder> {
+        Some(self)
     }
 }

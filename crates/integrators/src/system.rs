@@ -2,6 +2,8 @@
 
 use faer::MatMut;
 
+use crate::LinearSecondOrder;
+
 /// A first-order ODE system `y' = f(t, y)` of fixed dimension.
 ///
 /// Only [`OdeSystem::dim`] and [`OdeSystem::rhs`] are required. The Jacobian defaults to
@@ -70,6 +72,12 @@ pub trait OdeSystem {
             self.dim() + 1
         }
     }
+
+    /// The system's linear time-varying second-order form, when it has one (exponential
+    /// integrators need it; `None` for nonlinear systems).
+    fn linear_form(&mut self) -> Option<&mut dyn LinearSecondOrder> {
+        None
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -87,6 +95,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     }
     fn jacobian_rhs_evaluations(&self) -> usize {
         (**self).jacobian_rhs_evaluations()
+    }
+    fn linear_form(&mut self) -> Option<&mut dyn LinearSecondOrder> {
+        (**self).linear_form()
     }
 }
 
