@@ -271,6 +271,10 @@ fn follows_the_external_model_through_the_30_hz_collapse() {
             co.t[nc - 1] * 1e3
         );
         assert!(w < 0.05 && dphi < 0.05, "{window}: {w} {dphi}");
+        if window > 0.06 {
+            // The small-deflection coupled model has left 5 % by then: the test discriminates.
+            assert!(wc > 0.1, "coupled {wc}");
+        }
     }
 }
 
