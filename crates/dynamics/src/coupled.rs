@@ -794,7 +794,7 @@ impl CoupledSystem {
         measure: f64,
     ) -> DynamicsError {
         let nominal = crate::equilibrium_measure(rigid);
-        if !(nominal >= self.machine.geometry.thresholds.type_ii) {
+        if nominal.is_nan() || nominal < self.machine.geometry.thresholds.type_ii {
             return error;
         }
         let (link, deflection) = (0..3)

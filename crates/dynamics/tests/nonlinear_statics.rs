@@ -141,8 +141,8 @@ fn element_force_is_energy_gradient_and_tangent_its_derivative() {
             );
         }
         // Symmetric (conservative).
-        for i in 0..6 {
-            assert!((k[i][j] - k[j][i]).abs() <= 1e-9 * scale);
+        for (i, row) in k.iter().enumerate() {
+            assert!((row[j] - k[j][i]).abs() <= 1e-9 * scale);
         }
     }
     // Rigid motion: any translation and rotation of the straight element is strain free.
