@@ -127,6 +127,21 @@ impl PlanarBeam {
     ///
     /// `loads` and `constrained` are `(coordinate index, value)` pairs.
     ///
+    /// A cantilever under a small tip load deflects by the linear `P L^3 / (3 EI)`:
+    ///
+    /// ```
+    /// use flexprr_dynamics::nonlinear::PlanarBeam;
+    /// let (l, ea, ei, p) = (0.2, 4.38e6, 1.46, 0.1);
+    /// let beam = PlanarBeam::straight(l, ea, ei, 8).unwrap();
+    /// let tip = 3 * 8;
+    /// // Clamp node 0 (x, y, psi), pull the tip down.
+    /// let sol = beam
+    ///     .solve_static(&beam.reference, &[(0, 0.0), (1, 0.0), (2, 0.0)], &[(tip + 1, -p)], 1)
+    ///     .unwrap();
+    /// let linear = p * l.powi(3) / (3.0 * ei);
+    /// assert!((-sol.coordinates[tip + 1] - linear).abs() < 1e-3 * linear);
+    /// ```
+    ///
     /// # Errors
     /// A wrong-length guess, an index out of range, a singular tangent or no convergence
     /// (say at which increment, with the residual).
