@@ -226,15 +226,19 @@ def add_sensors(mbs, handles, n_elements):
 
 
 def simulate(scene, n_elements, step, spectral_radius=0.98, solver="alpha", verbose=False,
-             axial_damping_time=0.0):
-    """Run the coupled model from 0 to END_TIME. Returns (table (rows x COLUMNS), extras dict)."""
+             axial_damping_time=0.0, end_time=END_TIME, allow_failure=False):
+    """Run the coupled model from 0 to end_time. Returns (table (rows x COLUMNS), extras dict).
+
+    allow_failure: when the solver stops early (Newton failure near a collapse), keep the data
+    up to that time (extras["solver_ok"] is False) instead of raising.
+    """
     sc, mbs, handles = build_model(scene, n_elements, axial_damping_time)
     sensors = add_sensors(mbs, handles, n_elements)
     settings = exu.SimulationSettings()
     ti = settings.timeIntegration
     ti.startTime = 0.0
-    ti.endTime = END_TIME
-    n_steps = int(round(END_TIME / step))
+    ti.endTime = end_time
+    n_steps = int(round(end_time / step))
     ti.numberOfSteps = n_steps
     ti.verboseMode = 1 if verbose else 0
     # Newton with the Jacobian updated every step. The residual has a round-off floor of
@@ -261,11 +265,12 @@ def simulate(scene, n_elements, step, spectral_radius=0.98, solver="alpha", verb
     t0 = time.time()
     ok = mbs.SolveDynamic(settings, solverType=solver_type, showHints=verbose)
     wall = time.time() - t0
-    if not ok:
+    if not ok and not allow_failure:
         raise RuntimeError(f"Exudyn failed: f = {scene.frequency} Hz, {n_elements} elements, h = {step}")
     table, extras = collect(scene, mbs, sensors)
     extras["wall_s"] = wall
     extras["n_steps"] = n_steps
+    extras["solver_ok"] = bool(ok)
     return table, extras
 
 

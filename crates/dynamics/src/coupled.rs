@@ -660,7 +660,8 @@ impl CoupledSystem {
         }
         let (motion, f_inv) = if self.options.foreshortening {
             self.counters.forward_kinematics_solves += 1;
-            self.platform_motion(t, &nominal.pose, &rho, lengths, length_dot, length_ddot0)?
+            self.platform_motion(t, &nominal.pose, &rho, lengths, length_dot, length_ddot0)
+                .map_err(|e| self.collapse_or(e, t, eta, &rigid, 0.0))?
         } else {
             // Chords of length l: the platform on its nominal path.
             let closure = self
@@ -753,10 +754,13 @@ impl CoupledSystem {
             out.cos_ab[i] = cos_ab;
         }
         // Type-II measure of the actual chords, as [`crate::equilibrium_measure`].
-        let singular = |measure: f64| DynamicsError::SingularInverseDynamics {
-            t,
-            measure,
-            threshold: geometry.thresholds.type_ii,
+        let singular = |measure: f64| {
+            let rigid_singular = DynamicsError::SingularInverseDynamics {
+                t,
+                measure,
+                threshold: geometry.thresholds.type_ii,
+            };
+            self.collapse_or(rigid_singular, t, eta, &rigid, measure)
         };
         let measure = measure_cols.determinant().abs();
         if measure.is_nan() || measure < geometry.thresholds.type_ii {
@@ -777,6 +781,38 @@ impl CoupledSystem {
             out.tension_m = -(e_inv * n_cols * Matrix3::from_diagonal(&scale));
         }
         Ok(out)
+    }
+
+    /// A singular platform pose is a collapse when the nominal (rigid) pose is regular: the
+    /// deflection, not the trajectory, made the chords concurrent. Then
+    /// [`DynamicsError::Collapse`] with the most deflected link; otherwise `error` unchanged.
+    fn collapse_or(
+        &self,
+        error: DynamicsError,
+        t: f64,
+        eta: &[f64],
+        rigid: &flexprr_kinematics::MachineState,
+        measure: f64,
+    ) -> DynamicsError {
+        let nominal = crate::equilibrium_measure(rigid);
+        if nominal.is_nan() || nominal < self.machine.geometry.thresholds.type_ii {
+            return error;
+        }
+        let (link, deflection) = (0..3)
+            .map(|i| (i, dot(&self.links[i].psi_mid, &eta[self.link_range(i)])))
+            .fold(
+                (0, 0.0_f64),
+                |a, b| if b.1.abs() > a.1.abs() { b } else { a },
+            );
+        if deflection.abs() <= 0.0 {
+            return error;
+        }
+        DynamicsError::Collapse {
+            t,
+            link: link + 1,
+            deflection,
+            type_ii_measure: measure,
+        }
     }
 
     /// Solves for `eta''` (left in `scratch.acceleration`) and returns `(s, m)`,

@@ -27,6 +27,23 @@ pub enum DynamicsError {
         /// Threshold it fell below.
         threshold: f64,
     },
+    /// The mechanism collapsed: the links' deflection drove the platform into (or near) a
+    /// type-II singular pose, or a link's deflection passed the run's limit. A physical
+    /// outcome, not a numerical failure: the history up to `t` is valid.
+    #[error(
+        "the mechanism collapsed at t = {t} s: link {link} mid-point deflection {:.3} mm, type-II measure {type_ii_measure:.3e}",
+        .deflection * 1e3
+    )]
+    Collapse {
+        /// Time (s).
+        t: f64,
+        /// The link with the largest mid-point deflection (1-based, as in the message).
+        link: usize,
+        /// Its mid-point deflection from the chord (m).
+        deflection: f64,
+        /// Type-II measure of the (deflected) chords at `t`.
+        type_ii_measure: f64,
+    },
     /// A beam-layer failure (basis, section, eigenproblem).
     #[error(transparent)]
     Beam(#[from] flexprr_beam::BeamError),

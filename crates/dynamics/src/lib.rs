@@ -8,6 +8,8 @@
 //!   of model.md section 6) as an [`flexprr_integrators::OdeSystem`] with an analytic Jacobian.
 //! * [`FrequencyTracker`]: configuration-dependent frequencies (eq. 22 or the generalized
 //!   eigenproblem), buckling detection.
+//! * [`nonlinear`]: geometrically exact links (co-rotational beam elements) and the fully
+//!   nonlinear 3-PRR [`NonlinearSystem`], for large deflection and collapse.
 //! * [`Formulation`]: the named formulations `paper` and `consistent` and their switches.
 
 mod axial;
@@ -20,6 +22,7 @@ pub mod linear;
 mod machine;
 mod modal;
 mod model;
+pub mod nonlinear;
 pub mod paper;
 
 pub use axial::{
@@ -36,5 +39,6 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{ModelCounters, SceneModel};
+pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
 
 pub use flexprr_beam::{AxialLoad, Coupling};

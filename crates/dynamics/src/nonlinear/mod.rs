@@ -1,0 +1,18 @@
+//! Geometrically nonlinear links: planar co-rotational Euler-Bernoulli beam elements
+//! (Crisfield 1991, vol. 1, section 7.3; Felippa, *Nonlinear Finite Element Methods*), a
+//! static solver for validation against the elastica, and the fully nonlinear 3-PRR
+//! [`NonlinearSystem`] whose links stay right at large deflection.
+//!
+//! * [`CorotationalElement`]: one element's strains, forces and tangent stiffness;
+//! * [`PlanarBeam`]: a chain of elements with [`PlanarBeam::solve_static`] (Newton with
+//!   load or displacement increments);
+//! * [`NonlinearSystem`]: the machine with co-rotational links, prescribed sliders and a free
+//!   rigid platform, as an [`flexprr_integrators::OdeSystem`].
+
+mod element;
+mod statics;
+mod system;
+
+pub use element::{CorotationalElement, ElementState};
+pub use statics::{PlanarBeam, StaticSolution};
+pub use system::{NonlinearCounters, NonlinearOptions, NonlinearOutput, NonlinearSystem};

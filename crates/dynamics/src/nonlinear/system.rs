@@ -1,0 +1,704 @@
+//! The fully nonlinear 3-PRR: each link a chain of co-rotational Euler-Bernoulli elements
+//! ([`super::CorotationalElement`]), the sliders prescribed by the rigid inverse kinematics
+//! of the trajectory (position control), the platform a free rigid body pinned to the links'
+//! last nodes. No small-deflection assumption anywhere: the links may bend, rotate and
+//! shorten as far as they like, so the model follows the mechanism through a collapse.
+//!
+//! Generalized coordinates (model.md notation, `c_i` the platform attachment points):
+//!
+//! ```text
+//! z = (x_p, y_p, phi,  per link i: psi_0, (x_k, y_k, psi_k) for k = 1..N-1, psi_N)
+//! node 0 of link i      at B_i(t) = A_i + rho_i(t) u_i          (prescribed; revolute: psi_0 free)
+//! node N of link i      at C_i = p + R(phi) c_i                  (pinned to the platform; psi_N free)
+//! ```
+//!
+//! Masses are lumped (Hinton, Rock & Zienkiewicz, "A note on mass lumping and related
+//! processes in the finite element method", Earthquake Eng. Struct. Dyn. 4 (1976) 245-249):
+//! `rhoA L_e / 2` and rotary inertia `rhoA L_e^3 / 78` per element end. With a constant
+//! diagonal mass the equations of the free nodes are explicit,
+//! `m_k x_k'' = -f_k(z, z')`, `J_k psi_k'' = -f_psi_k`; the platform carries the links' end
+//! nodes, `(M_p + sum_i m_N G_i^T G_i) q'' = -sum_i G_i^T (f_Ni - m_N phi'^2 r_i)` with
+//! `G_i = [I | r_i^perp]`, `r_i = R(phi) c_i` (the Newton-Euler equations of the platform
+//! with the node masses moving with it: a 3x3 solve per evaluation). `f` is the assembled
+//! element internal force plus optional strain-rate damping (Kelvin-Voigt on the local axial
+//! stretch and end rotations, as the external ANCF model's axial damping).
+//!
+//! The initial state is the rigid one, as [`crate::CoupledSystem::initial_state`]: straight,
+//! unstrained links on the chords of the rigid inverse kinematics at `t0` with the rigid
+//! velocity field `B' + x b' n`, the platform at the nominal pose with the nominal velocity.
+
+use std::sync::Arc;
+
+use flexprr_integrators::OdeSystem;
+use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
+use nalgebra::{Matrix3, Vector2, Vector3};
+
+use super::element::{CorotationalElement, wrap_angle};
+use crate::{DynamicsError, Machine};
+
+/// Model switches of a [`NonlinearSystem`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NonlinearOptions {
+    /// Elements per link (even, so that the mid-point is a node; at least 2).
+    pub elements: usize,
+    /// Axial stiffness `EA` of each link (N).
+    pub axial_stiffness: [f64; 3],
+    /// Bending stiffness `EI` of each link (N m^2). The links are uniform: mass per length
+    /// is the machine link's `m / l`.
+    pub bending_stiffness: [f64; 3],
+    /// Kelvin-Voigt time `beta_a` (s) of the axial damping `N_d = beta_a EA u' / L_e`.
+    pub axial_damping_time: f64,
+    /// Kelvin-Voigt time `beta_b` (s) of the bending damping `M_d = beta_b M(th')`
+    /// (stiffness proportional: damping ratio `beta_b omega / 2` in the mode at `omega`).
+    pub bending_damping_time: f64,
+    /// Stop with [`DynamicsError::Collapse`] when the type-II measure of the chords falls
+    /// below the geometry's threshold.
+    pub stop_at_type_ii: bool,
+    /// Stop with [`DynamicsError::Collapse`] when a mid-point deflection exceeds this
+    /// fraction of its link's length (`None`: no limit).
+    pub collapse_deflection: Option<f64>,
+}
+
+impl NonlinearOptions {
+    /// Uniform links of the given `EA` and `EI`, `elements` per link, undamped, stopping at a
+    /// type-II pose and not at a deflection limit.
+    pub fn uniform(elements: usize, axial_stiffness: f64, bending_stiffness: f64) -> Self {
+        Self {
+            elements,
+            axial_stiffness: [axial_stiffness; 3],
+            bending_stiffness: [bending_stiffness; 3],
+            axial_damping_time: 0.0,
+            bending_damping_time: 0.0,
+            stop_at_type_ii: true,
+            collapse_deflection: None,
+        }
+    }
+
+    /// The paper's links ([`crate::paper`]: `EA = E t h`, `EI = E h t^3 / 12`) with Young's
+    /// modulus `youngs_modulus`, 32 elements per link (the lumped-mass error is second order
+    /// in the element length: 16 elements put the 20 Hz mid-point deflections 1.6 % from the
+    /// external ANCF model, 32 elements 0.46 %; docs/coupled.md).
+    pub fn paper(youngs_modulus: f64) -> Self {
+        use crate::paper::{HEIGHT, THICKNESS};
+        Self::uniform(
+            32,
+            youngs_modulus * THICKNESS * HEIGHT,
+            youngs_modulus * HEIGHT * THICKNESS.powi(3) / 12.0,
+        )
+    }
+}
+
+/// Work counters of a nonlinear system.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NonlinearCounters {
+    /// Right-hand-side evaluations.
+    pub rhs_evaluations: usize,
+}
+
+/// Everything the nonlinear model reports at one `(t, y)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NonlinearOutput {
+    /// Time (s).
+    pub t: f64,
+    /// The nominal platform motion (the trajectory's).
+    pub nominal: PlatformMotion,
+    /// The actual platform motion (pose and velocity from the state, acceleration from the
+    /// equations of motion).
+    pub platform: PlatformMotion,
+    /// Chord lengths `|C_i - B_i|` (m).
+    pub chord_length: [f64; 3],
+    /// Chord angles `b_i` (rad).
+    pub chord_angle: [f64; 3],
+    /// Transverse deflection of each link's mid-point (the middle node) from its chord, along
+    /// the chord normal `n = (-sin b, cos b)` (m).
+    pub midpoint_deflection: [f64; 3],
+    /// Axial force at `B_i`, `-F_B . e` with `F_B` the slider's force on the link (tension
+    /// positive, N).
+    pub axial_force_b: [f64; 3],
+    /// Axial force at `C_i`, `F_C . e` with `F_C` the platform's force on the link (N).
+    pub axial_force_c: [f64; 3],
+    /// Driving force of each slider along its guide, `m_s rho'' + F_B . u` (N).
+    pub driving_force: [f64; 3],
+    /// Type-II measure of the chords ([`crate::equilibrium_measure`]'s definition).
+    pub type_ii_measure: f64,
+    /// Kinetic energy of the links' nodes and the platform (J).
+    pub kinetic_energy: f64,
+    /// Strain energy of the links (J).
+    pub strain_energy: f64,
+    /// Power the sliders deliver to the links, `sum_i F_B_i . B_i'` (W): the rate of change
+    /// of the total energy when there is no damping.
+    pub slider_power: f64,
+}
+
+impl NonlinearOutput {
+    /// Platform pose minus the nominal pose `(dx, dy, dphi)` (m, m, rad).
+    pub fn pose_deviation(&self) -> [f64; 3] {
+        [
+            self.platform.pose.x - self.nominal.pose.x,
+            self.platform.pose.y - self.nominal.pose.y,
+            self.platform.pose.phi - self.nominal.pose.phi,
+        ]
+    }
+}
+
+/// Per-link constants.
+#[derive(Debug, Clone, Copy)]
+struct LinkData {
+    element: CorotationalElement,
+    /// Translational mass of an interior node (kg); the end nodes carry half.
+    node_mass: f64,
+    /// Rotary inertia of an interior node (kg m^2); the end nodes carry half.
+    node_inertia: f64,
+}
+
+/// Prescribed and platform kinematics of one evaluation.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    nominal: PlatformMotion,
+    rho: [[f64; 3]; 3],
+    /// `B_i`, `B_i'`, `B_i''`.
+    b: [[Vector2<f64>; 3]; 3],
+    /// `r_i = R(phi) c_i`.
+    r: [Vector2<f64>; 3],
+    /// `C_i`, `C_i'`.
+    c: [[Vector2<f64>; 2]; 3],
+}
+
+/// The fully nonlinear 3-PRR as an [`OdeSystem`]: state `y = (z, z')` with `z` the
+/// generalized coordinates of the module documentation (`3 + 3 (3 N - 1)` of them).
+pub struct NonlinearSystem {
+    machine: Arc<Machine>,
+    trajectory: Arc<dyn Trajectory + Send + Sync>,
+    options: NonlinearOptions,
+    links: [LinkData; 3],
+    /// Coordinates per link, `3 N - 1`.
+    per_link: usize,
+    /// Nodal force buffer of each link, `3 (N + 1)` entries per link (internal + damping).
+    forces: Vec<f64>,
+    /// Platform acceleration of the last evaluation.
+    platform_acceleration: Vector3<f64>,
+    counters: NonlinearCounters,
+    failure: Option<DynamicsError>,
+}
+
+impl std::fmt::Debug for NonlinearSystem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("NonlinearSystem")
+            .field("options", &self.options)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+#[inline]
+fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+#[inline]
+fn perp(a: &Vector2<f64>) -> Vector2<f64> {
+    Vector2::new(-a.y, a.x)
+}
+
+impl NonlinearSystem {
+    /// Builds the system for a machine (its link lengths and masses; sections from
+    /// `options`), a nominal trajectory (the sliders follow its rigid inverse kinematics)
+    /// and the options.
+    ///
+    /// # Errors
+    /// An odd or too small number of elements, non-positive stiffnesses, negative damping
+    /// times or a non-positive deflection limit.
+    pub fn new(
+        machine: Arc<Machine>,
+        trajectory: Arc<dyn Trajectory + Send + Sync>,
+        options: NonlinearOptions,
+    ) -> Result<Self, DynamicsError> {
+        let invalid =
+            |quantity: String, value: f64, reason: &'static str| DynamicsError::InvalidParameter {
+                quantity,
+                value,
+                reason,
+            };
+        let ne = options.elements;
+        if ne < 2 || ne % 2 == 1 {
+            return Err(invalid(
+                "elements per link".into(),
+                ne as f64,
+                "must be even and at least 2 (the mid-point is a node)",
+            ));
+        }
+        for i in 0..3 {
+            for (name, v) in [
+                ("axial stiffness EA", options.axial_stiffness[i]),
+                ("bending stiffness EI", options.bending_stiffness[i]),
+            ] {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(invalid(
+                        format!("{name} of link {}", i + 1),
+                        v,
+                        "must be finite and positive",
+                    ));
+                }
+            }
+        }
+        for (name, v) in [
+            ("axial damping time", options.axial_damping_time),
+            ("bending damping time", options.bending_damping_time),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(invalid(name.into(), v, "must be finite and non-negative"));
+            }
+        }
+        if let Some(limit) = options.collapse_deflection {
+            if !(limit.is_finite() && limit > 0.0) {
+                return Err(invalid(
+                    "collapse deflection fraction".into(),
+                    limit,
+                    "must be finite and positive",
+                ));
+            }
+        }
+        let links = std::array::from_fn(|i| {
+            let link = &machine.links[i];
+            let le = link.length() / ne as f64;
+            let me = link.mass_per_length() * le;
+            LinkData {
+                element: CorotationalElement {
+                    length: le,
+                    axial_stiffness: options.axial_stiffness[i],
+                    bending_stiffness: options.bending_stiffness[i],
+                },
+                node_mass: me,
+                node_inertia: 2.0 * me * le * le / 78.0,
+            }
+        });
+        Ok(Self {
+            machine,
+            trajectory,
+            options,
+            links,
+            per_link: 3 * ne - 1,
+            forces: vec![0.0; 9 * (ne + 1)],
+            platform_acceleration: Vector3::zeros(),
+            counters: NonlinearCounters::default(),
+            failure: None,
+        })
+    }
+
+    /// The machine.
+    pub fn machine(&self) -> &Machine {
+        &self.machine
+    }
+    /// The nominal trajectory.
+    pub fn trajectory(&self) -> &Arc<dyn Trajectory + Send + Sync> {
+        &self.trajectory
+    }
+    /// The options.
+    pub fn options(&self) -> NonlinearOptions {
+        self.options
+    }
+    /// Number of generalized coordinates (half the state dimension).
+    pub fn coordinates(&self) -> usize {
+        3 + 3 * self.per_link
+    }
+    /// Work counters so far.
+    pub fn counters(&self) -> NonlinearCounters {
+        self.counters
+    }
+    /// The first failure met inside the right-hand side (which then writes NaN so the
+    /// integrator stops): a [`DynamicsError::Collapse`] or a kinematic failure.
+    pub fn take_failure(&mut self) -> Option<DynamicsError> {
+        self.failure.take()
+    }
+
+    /// The rigid initial state at `t0`: straight, unstrained links on the rigid chords with
+    /// the rigid velocity field, the platform on its nominal pose and velocity.
+    ///
+    /// # Errors
+    /// The rigid inverse kinematics fails at `t0`.
+    pub fn initial_state(&self, t0: f64) -> Result<Vec<f64>, DynamicsError> {
+        let nominal = self.trajectory.motion(t0);
+        let rigid = self
+            .machine
+            .geometry
+            .inverse_kinematics_unchecked(&nominal)
+            .map_err(|source| DynamicsError::Kinematics { t: t0, source })?;
+        let n = self.coordinates();
+        let mut y = vec![0.0; 2 * n];
+        let (z, zd) = y.split_at_mut(n);
+        let p = nominal.pose;
+        z[..3].copy_from_slice(&[p.x, p.y, p.phi]);
+        zd[..3].copy_from_slice(nominal.velocity.as_slice());
+        let ne = self.options.elements;
+        for (i, leg) in rigid.legs.iter().enumerate() {
+            let off = 3 + i * self.per_link;
+            let le = self.links[i].element.length;
+            let u = self.machine.geometry.legs[i].guide.direction.into_inner();
+            let b_dot = leg.rho_dot * u;
+            z[off] = leg.beta;
+            zd[off] = leg.beta_dot;
+            for k in 1..ne {
+                let x = k as f64 * le;
+                let pos = leg.b.coords + x * leg.e;
+                let vel = b_dot + x * leg.beta_dot * leg.n;
+                let j = off + 3 * k - 2;
+                z[j..j + 3].copy_from_slice(&[pos.x, pos.y, leg.beta]);
+                zd[j..j + 3].copy_from_slice(&[vel.x, vel.y, leg.beta_dot]);
+            }
+            z[off + 3 * ne - 2] = leg.beta;
+            zd[off + 3 * ne - 2] = leg.beta_dot;
+        }
+        Ok(y)
+    }
+
+    /// Sliders from the rigid inverse kinematics of the nominal motion, platform points from
+    /// the state.
+    fn frame(&self, t: f64, y: &[f64]) -> Result<Frame, DynamicsError> {
+        let n = self.coordinates();
+        let nominal = self.trajectory.motion(t);
+        let rigid = self
+            .machine
+            .geometry
+            .inverse_kinematics_unchecked(&nominal)
+            .map_err(|source| DynamicsError::Kinematics { t, source })?;
+        let (phi, omega) = (y[2], y[n + 2]);
+        let (sin, cos) = phi.sin_cos();
+        let p = Vector2::new(y[0], y[1]);
+        let v = Vector2::new(y[n], y[n + 1]);
+        let mut frame = Frame {
+            nominal,
+            rho: [[0.0; 3]; 3],
+            b: [[Vector2::zeros(); 3]; 3],
+            r: [Vector2::zeros(); 3],
+            c: [[Vector2::zeros(); 2]; 3],
+        };
+        for (i, leg) in self.machine.geometry.legs.iter().enumerate() {
+            let s = &rigid.legs[i];
+            let u = leg.guide.direction.into_inner();
+            frame.rho[i] = [s.rho, s.rho_dot, s.rho_ddot];
+            frame.b[i] = [
+                leg.guide.anchor.coords + s.rho * u,
+                s.rho_dot * u,
+                s.rho_ddot * u,
+            ];
+            let a = leg.attachment;
+            let r = Vector2::new(cos * a.x - sin * a.y, sin * a.x + cos * a.y);
+            frame.r[i] = r;
+            frame.c[i] = [p + r, v + omega * perp(&r)];
+        }
+        Ok(frame)
+    }
+
+    /// Coordinates and rates `(x, y, psi)` of node `k` of link `i`.
+    #[inline]
+    fn node(&self, y: &[f64], frame: &Frame, i: usize, k: usize) -> ([f64; 3], [f64; 3]) {
+        let n = self.coordinates();
+        let ne = self.options.elements;
+        let off = 3 + i * self.per_link;
+        if k == 0 {
+            let [b, bd, _] = frame.b[i];
+            ([b.x, b.y, y[off]], [bd.x, bd.y, y[n + off]])
+        } else if k == ne {
+            let [c, cd] = frame.c[i];
+            let j = off + 3 * ne - 2;
+            ([c.x, c.y, y[j]], [cd.x, cd.y, y[n + j]])
+        } else {
+            let j = off + 3 * k - 2;
+            (
+                [y[j], y[j + 1], y[j + 2]],
+                [y[n + j], y[n + j + 1], y[n + j + 2]],
+            )
+        }
+    }
+
+    /// Assembles the nodal forces (internal plus damping) of every link into `self.forces`.
+    fn assemble(&mut self, y: &[f64], frame: &Frame) {
+        let ne = self.options.elements;
+        let stride = 3 * (ne + 1);
+        let (beta_a, beta_b) = (
+            self.options.axial_damping_time,
+            self.options.bending_damping_time,
+        );
+        let mut forces = std::mem::take(&mut self.forces);
+        forces.fill(0.0);
+        for i in 0..3 {
+            let el = self.links[i].element;
+            let f = &mut forces[i * stride..(i + 1) * stride];
+            let (mut q1, mut v1) = self.node(y, frame, i, 0);
+            for e in 0..ne {
+                let (q2, v2) = self.node(y, frame, i, e + 1);
+                let q = [q1[0], q1[1], q1[2], q2[0], q2[1], q2[2]];
+                let mut st = el.state(&q);
+                if beta_a > 0.0 || beta_b > 0.0 {
+                    let [c, s] = st.direction;
+                    let (dvx, dvy) = (v2[0] - v1[0], v2[1] - v1[1]);
+                    let stretch_rate = c * dvx + s * dvy;
+                    let beta_rate = (c * dvy - s * dvx) / st.chord_length;
+                    let (w1, w2) = (v1[2] - beta_rate, v2[2] - beta_rate);
+                    st.axial_force += beta_a * el.axial_stiffness * stretch_rate / el.length;
+                    let k = beta_b * 2.0 * el.bending_stiffness / el.length;
+                    st.moments[0] += k * (2.0 * w1 + w2);
+                    st.moments[1] += k * (w1 + 2.0 * w2);
+                }
+                let fe = CorotationalElement::force_from_state(&st);
+                for (j, v) in fe.iter().enumerate() {
+                    f[3 * e + j] += v;
+                }
+                (q1, v1) = (q2, v2);
+            }
+        }
+        self.forces = forces;
+    }
+
+    /// Type-II measure of the chords `B_i -> C_i` (as [`crate::equilibrium_measure`]).
+    fn measure(&self, frame: &Frame) -> f64 {
+        let centroid = (frame.r[0] + frame.r[1] + frame.r[2]) / 3.0;
+        let radius = frame
+            .r
+            .iter()
+            .map(|r| (r - centroid).norm())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut m = Matrix3::zeros();
+        for i in 0..3 {
+            let e = (frame.c[i][0] - frame.b[i][0]).normalize();
+            let moment = cross(&(frame.r[i] - centroid), &e) / radius;
+            let col = Vector3::new(e.x, e.y, moment);
+            m.set_column(i, &(col / col.norm()));
+        }
+        m.determinant().abs()
+    }
+
+    /// Mid-point deflections from the chords (m).
+    fn midpoint_deflections(&self, y: &[f64], frame: &Frame) -> [f64; 3] {
+        let mid = self.options.elements / 2;
+        std::array::from_fn(|i| {
+            let (q, _) = self.node(y, frame, i, mid);
+            let b = frame.b[i][0];
+            let e = (frame.c[i][0] - b).normalize();
+            (Vector2::new(q[0], q[1]) - b).dot(&perp(&e))
+        })
+    }
+
+    /// The collapse checks of [`NonlinearOptions`].
+    fn check_collapse(&self, t: f64, y: &[f64], frame: &Frame) -> Result<(), DynamicsError> {
+        let check_limit = self.options.collapse_deflection.is_some();
+        if !(self.options.stop_at_type_ii || check_limit) {
+            return Ok(());
+        }
+        let measure = self.measure(frame);
+        let w = self.midpoint_deflections(y, frame);
+        let (link, deflection) =
+            (0..3).map(|i| (i, w[i])).fold(
+                (0, 0.0_f64),
+                |a, b| if b.1.abs() > a.1.abs() { b } else { a },
+            );
+        let over_limit = self
+            .options
+            .collapse_deflection
+            .is_some_and(|f| deflection.abs() > f * self.machine.links[link].length());
+        let singular = self.options.stop_at_type_ii
+            && (measure.is_nan() || measure < self.machine.geometry.thresholds.type_ii);
+        if over_limit || singular {
+            return Err(DynamicsError::Collapse {
+                t,
+                link: link + 1,
+                deflection,
+                type_ii_measure: measure,
+            });
+        }
+        Ok(())
+    }
+
+    /// Accelerations into `dz_dot` (the second half of `dy`) and the platform's into
+    /// `self.platform_acceleration`; `self.forces` must be assembled.
+    fn accelerations(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        frame: &Frame,
+        acc: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let n = self.coordinates();
+        let ne = self.options.elements;
+        let stride = 3 * (ne + 1);
+        let omega = y[n + 2];
+        let mut a = Matrix3::from_diagonal(&Vector3::new(
+            self.machine.platform_mass,
+            self.machine.platform_mass,
+            self.machine.platform_inertia,
+        ));
+        let mut rhs = Vector3::zeros();
+        for i in 0..3 {
+            let link = &self.links[i];
+            let f = &self.forces[i * stride..(i + 1) * stride];
+            let off = 3 + i * self.per_link;
+            let (m, j) = (link.node_mass, link.node_inertia);
+            acc[off] = -2.0 * f[2] / j;
+            for k in 1..ne {
+                let d = off + 3 * k - 2;
+                acc[d] = -f[3 * k] / m;
+                acc[d + 1] = -f[3 * k + 1] / m;
+                acc[d + 2] = -f[3 * k + 2] / j;
+            }
+            acc[off + 3 * ne - 2] = -2.0 * f[3 * ne + 2] / j;
+            // The end node (half mass) moves with the platform.
+            let half = 0.5 * m;
+            let r = frame.r[i];
+            let rp = perp(&r);
+            let g = nalgebra::Matrix2x3::new(1.0, 0.0, rp.x, 0.0, 1.0, rp.y);
+            a += half * g.transpose() * g;
+            let fend = Vector2::new(f[3 * ne], f[3 * ne + 1]) - half * omega * omega * r;
+            rhs -= g.transpose() * fend;
+        }
+        let qdd = a
+            .cholesky()
+            .ok_or_else(|| {
+                DynamicsError::Inconsistent(format!(
+                    "at t = {t} s the platform mass matrix is not positive definite"
+                ))
+            })?
+            .solve(&rhs);
+        acc[..3].copy_from_slice(qdd.as_slice());
+        self.platform_acceleration = qdd;
+        Ok(())
+    }
+
+    /// Platform motion, chords, mid-point deflections, axial and driving forces at `(t, y)`.
+    ///
+    /// # Errors
+    /// A wrong state length or a kinematic failure (not the collapse checks: the output of a
+    /// collapsed state is still reported).
+    pub fn output(&mut self, t: f64, y: &[f64]) -> Result<NonlinearOutput, DynamicsError> {
+        self.check_state(y)?;
+        let frame = self.frame(t, y)?;
+        self.assemble(y, &frame);
+        let n = self.coordinates();
+        let mut acc = vec![0.0; n];
+        self.accelerations(t, y, &frame, &mut acc)?;
+        let ne = self.options.elements;
+        let stride = 3 * (ne + 1);
+        let omega = y[n + 2];
+        let qdd = self.platform_acceleration;
+        let mut out = NonlinearOutput {
+            t,
+            nominal: frame.nominal,
+            platform: PlatformMotion {
+                pose: Pose::new(y[0], y[1], y[2]),
+                velocity: Vector3::new(y[n], y[n + 1], y[n + 2]),
+                acceleration: qdd,
+            },
+            chord_length: [0.0; 3],
+            chord_angle: [0.0; 3],
+            midpoint_deflection: self.midpoint_deflections(y, &frame),
+            axial_force_b: [0.0; 3],
+            axial_force_c: [0.0; 3],
+            driving_force: [0.0; 3],
+            type_ii_measure: self.measure(&frame),
+            kinetic_energy: 0.5
+                * (self.machine.platform_mass * (y[n] * y[n] + y[n + 1] * y[n + 1])
+                    + self.machine.platform_inertia * omega * omega),
+            strain_energy: 0.0,
+            slider_power: 0.0,
+        };
+        for i in 0..3 {
+            let link = &self.links[i];
+            let f = &self.forces[i * stride..(i + 1) * stride];
+            let chord = frame.c[i][0] - frame.b[i][0];
+            let e = chord.normalize();
+            out.chord_length[i] = chord.norm();
+            out.chord_angle[i] = wrap_angle(e.y.atan2(e.x));
+            let half = 0.5 * link.node_mass;
+            // Node 0: half * B'' = F_B - f_0; node N: half * C'' = F_C - f_N.
+            let f_b = half * frame.b[i][2] + Vector2::new(f[0], f[1]);
+            let r = frame.r[i];
+            let c_ddot = Vector2::new(qdd.x, qdd.y) + qdd.z * perp(&r) - omega * omega * r;
+            let f_c = half * c_ddot + Vector2::new(f[3 * ne], f[3 * ne + 1]);
+            out.axial_force_b[i] = -f_b.dot(&e);
+            out.axial_force_c[i] = f_c.dot(&e);
+            let u = self.machine.geometry.legs[i].guide.direction.into_inner();
+            out.driving_force[i] = self.machine.slider_mass[i] * frame.rho[i][2] + f_b.dot(&u);
+            out.slider_power += f_b.dot(&frame.b[i][1]);
+            let el = link.element;
+            for k in 0..=ne {
+                let (q, v) = self.node(y, &frame, i, k);
+                let w = if k == 0 || k == ne { 0.5 } else { 1.0 };
+                out.kinetic_energy += 0.5
+                    * w
+                    * (link.node_mass * (v[0] * v[0] + v[1] * v[1])
+                        + link.node_inertia * v[2] * v[2]);
+                if k < ne {
+                    let (q2, _) = self.node(y, &frame, i, k + 1);
+                    let st = el.state(&[q[0], q[1], q[2], q2[0], q2[1], q2[2]]);
+                    let [t1, t2] = st.rotations;
+                    out.strain_energy += 0.5 * el.axial_stiffness * st.stretch * st.stretch
+                        / el.length
+                        + 2.0 * el.bending_stiffness / el.length * (t1 * t1 + t1 * t2 + t2 * t2);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Positions of every node of link `link` (0-based) at `(t, y)` (allocating; for plots).
+    ///
+    /// # Errors
+    /// A wrong state length or a kinematic failure.
+    pub fn node_positions(
+        &self,
+        t: f64,
+        y: &[f64],
+        link: usize,
+    ) -> Result<Vec<[f64; 2]>, DynamicsError> {
+        self.check_state(y)?;
+        let frame = self.frame(t, y)?;
+        Ok((0..=self.options.elements)
+            .map(|k| {
+                let (q, _) = self.node(y, &frame, link.min(2), k);
+                [q[0], q[1]]
+            })
+            .collect())
+    }
+
+    fn check_state(&self, y: &[f64]) -> Result<(), DynamicsError> {
+        if y.len() != 2 * self.coordinates() {
+            return Err(DynamicsError::Inconsistent(format!(
+                "state has {} entries, the nonlinear system {}",
+                y.len(),
+                2 * self.coordinates()
+            )));
+        }
+        Ok(())
+    }
+
+    fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {
+        if self.failure.is_none() {
+            self.failure = Some(error);
+        }
+        dy.fill(f64::NAN);
+    }
+}
+
+impl OdeSystem for NonlinearSystem {
+    fn dim(&self) -> usize {
+        2 * self.coordinates()
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.counters.rhs_evaluations += 1;
+        let frame = match self.frame(t, y) {
+            Ok(f) => f,
+            Err(e) => return self.fail(e, dy),
+        };
+        if let Err(e) = self.check_collapse(t, y, &frame) {
+            return self.fail(e, dy);
+        }
+        self.assemble(y, &frame);
+        let n = self.coordinates();
+        let (dz, dzd) = dy.split_at_mut(n);
+        dz.copy_from_slice(&y[n..]);
+        if let Err(e) = self.accelerations(t, y, &frame, dzd) {
+            self.fail(e, dy);
+        }
+    }
+}
