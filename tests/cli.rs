@@ -275,10 +275,9 @@ fn run_failure_exits_1_with_one_line() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(stderr.contains("run failed"), "{stderr}");
     // The outputs up to the failure are kept, and the summary says why.
-    let summary: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.path().join("summary.json")).unwrap(),
-    )
-    .unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
+            .unwrap();
     assert_eq!(summary["status"], "failed");
     assert_eq!(summary["failure"]["kind"], "too-many-steps");
 }

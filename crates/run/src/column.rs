@@ -89,24 +89,24 @@ pub enum Quantity {
 struct Spelling {
     stem: &'static str,
     suffix: Option<&'static str>,
-    unit: &'static str,
+    header_unit: &'static str,
     symbol: &'static str,
-    si_unit: &'static str,
+    unit: &'static str,
 }
 
 const fn sp(
     stem: &'static str,
     suffix: Option<&'static str>,
-    unit: &'static str,
+    header_unit: &'static str,
     symbol: &'static str,
-    si_unit: &'static str,
+    unit: &'static str,
 ) -> Spelling {
     Spelling {
         stem,
         suffix,
-        unit,
+        header_unit,
         symbol,
-        si_unit,
+        unit,
     }
 }
 
@@ -156,7 +156,7 @@ impl Quantity {
 
     /// The SI unit, as written in plot labels (`m`, `N`, `rad/s²`).
     pub fn unit(self) -> &'static str {
-        self.spelling().si_unit
+        self.spelling().unit
     }
 
     /// The symbol used in plot labels (Unicode Greek: `ρ`, `β`, `η`).
@@ -235,7 +235,7 @@ impl Column {
             h.push_str(suffix);
         }
         h.push('_');
-        h.push_str(s.unit);
+        h.push_str(s.header_unit);
         h
     }
 

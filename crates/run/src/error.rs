@@ -75,15 +75,7 @@ impl RunError {
             RunError::Diverged { t, .. } => Some(*t),
             RunError::Model(DynamicsError::SingularInverseDynamics { t, .. })
             | RunError::Model(DynamicsError::Kinematics { t, .. }) => Some(*t),
-            RunError::Integrator { source, .. } => match source {
-                IntegratorError::StepSizeTooSmall { t, .. }
-                | IntegratorError::TooManySteps { t, .. }
-                | IntegratorError::NonFinite { t, .. }
-                | IntegratorError::NewtonFailure { t, .. }
-                | IntegratorError::SingularMatrix { t }
-                | IntegratorError::Stiff { t, .. } => Some(*t),
-                _ => None,
-            },
+            RunError::Integrator { source, .. } => source.time(),
             _ => None,
         }
     }

@@ -84,11 +84,14 @@ pub(crate) fn driving_forces(
     Ok((table, solves))
 }
 
+/// One component of the joint reactions of link `i`.
+type ReactionPart = fn(&flexprr_dynamics::JointReactions, usize) -> f64;
+
 /// Rigid joint reactions at B and C (`joint_reactions.csv`).
 pub(crate) fn joint_reactions(scene: &Scene, s: &mut Samples) -> Result<Table, DynamicsError> {
     let mut table = Table::new("joint_reactions", &s.t);
     let reactions = s.with_reactions(&scene.machine)?;
-    let parts: [(Q, fn(&flexprr_dynamics::JointReactions, usize) -> f64); 4] = [
+    let parts: [(Q, ReactionPart); 4] = [
         (Q::ReactionBx, |r, i| r.slider_on_link[i].x),
         (Q::ReactionBy, |r, i| r.slider_on_link[i].y),
         (Q::ReactionCx, |r, i| r.platform_on_link[i].x),

@@ -644,5 +644,3 @@ fn divergence(result: &RunResult) -> Option<(Option<f64>, String)> {
     }
     None
 }
-
-

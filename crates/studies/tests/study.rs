@@ -453,7 +453,9 @@ values = [["deflections"], ["frequencies"]]
         ]
     );
     assert!(
-        records[&0].error.contains("run failed"),
+        records[&0]
+            .error
+            .contains("abm integrator: gave up after 3 steps"),
         "{}",
         records[&0].error
     );
