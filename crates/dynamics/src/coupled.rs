@@ -791,7 +791,7 @@ impl CoupledSystem {
         error: DynamicsError,
         t: f64,
         eta: &[f64],
-        rigid: &flexprr_kinematics::MachineState,
+        rigid: &flexprr_kinematics::MachineKinematics,
         measure: f64,
     ) -> DynamicsError {
         let nominal = crate::equilibrium_measure(rigid);
