@@ -1,0 +1,115 @@
+"""flexprr.run against the CLI: the same scene gives the same numbers under the same names."""
+
+import csv
+import json
+import pathlib
+
+import numpy as np
+import pytest
+
+import flexprr
+
+
+def read_csv(path: pathlib.Path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    data = np.array([[float(v) for v in r] for r in body])
+    return header, data
+
+
+@pytest.fixture(scope="module")
+def paper_result(root):
+    return flexprr.run(flexprr.Scene.load(root / "configs" / "paper_f20.toml"))
+
+
+def test_tables_equal_the_cli_csv_files(paper_result, paper_cli_out):
+    csv_files = sorted(p.stem for p in paper_cli_out.glob("*.csv"))
+    assert csv_files, "the CLI wrote no CSV"
+    # every CSV of the CLI is a table of the result, with the same header and values
+    for name in csv_files:
+        header, data = read_csv(paper_cli_out / f"{name}.csv")
+        table = paper_result.table(name)
+        assert table.columns == header, name
+        assert len(table) == data.shape[0], name
+        # the CSV is printed with a finite number of digits: agree to that precision
+        np.testing.assert_allclose(table.to_numpy(), data, rtol=1e-9, atol=1e-300, err_msg=name)
+        for j, column in enumerate(header):
+            np.testing.assert_allclose(table[column], data[:, j], rtol=1e-9, atol=1e-300)
+
+
+def test_summary_equals_summary_json(paper_result, paper_cli_out):
+    cli = json.loads((paper_cli_out / "summary.json").read_text())
+    py = paper_result.summary
+    assert py["status"] == cli["status"] == "ok"
+
+    # wall-clock entries differ between two runs; everything else is the same
+    def strip(v):
+        if isinstance(v, dict):
+            return {k: strip(x) for k, x in v.items() if "wall" not in k and "time_s" != k}
+        if isinstance(v, list):
+            return [strip(x) for x in v]
+        return v
+
+    a, b = strip(py), strip(cli)
+    assert a.keys() == b.keys()
+    np.testing.assert_equal(json.loads(json.dumps(a)), b)
+
+
+def test_stats_are_consistent(paper_result):
+    s = paper_result.stats
+    assert s["integrated"] is True
+    assert s["steps"] > 0 and s["rhs_evaluations"] >= s["steps"]
+    defl = paper_result.table("deflections")
+    mid = [c for c in defl.columns if c != "t_s"]
+    peak = max(np.max(np.abs(defl[c])) for c in mid)
+    # the run's own maximum is over accepted steps, the table samples output times only
+    assert s["max_deflection_m"] >= peak * (1 - 1e-9)
+
+
+def test_table_one_lists_the_paper_frequency(paper_result):
+    text = paper_result.table_one
+    assert text is not None and "Hz" in text or "|" in text
+
+
+def test_to_pandas_matches_to_numpy(paper_result):
+    pd = pytest.importorskip("pandas")
+    t = paper_result.table("kinematics")
+    df = t.to_pandas()
+    assert isinstance(df, pd.DataFrame)
+    assert list(df.columns) == t.columns
+    np.testing.assert_array_equal(df.to_numpy(), t.to_numpy())
+
+
+def test_missing_table_is_a_key_error(root):
+    scene = flexprr.Scene.load(root / "configs" / "paper_f20.toml")
+    scene.set("output.requests", ["kinematics"]).set("output.plots", False)
+    r = flexprr.run(scene)
+    assert r.tables == ["kinematics"]
+    with pytest.raises(KeyError, match="deflections"):
+        r.table("deflections")
+    assert r.stats["integrated"] is False
+
+
+def test_scene_sources_agree(root):
+    path = root / "configs" / "paper_f20.toml"
+    a = flexprr.Scene.load(path)
+    b = flexprr.Scene.from_toml(path.read_text(), name="paper_f20")
+    c = flexprr.Scene.from_dict(a.to_dict(), name="paper_f20")
+    for s in (a, b, c):
+        s.set("output.requests", ["kinematics", "driving_forces"]).set("output.plots", False)
+    ra, rb, rc = (flexprr.run(s) for s in (a, b, c))
+    for name in ("kinematics", "driving_forces"):
+        np.testing.assert_array_equal(ra.table(name).to_numpy(), rb.table(name).to_numpy())
+        np.testing.assert_array_equal(ra.table(name).to_numpy(), rc.table(name).to_numpy())
+
+
+def test_run_many_equals_run(root):
+    base = flexprr.Scene.load(root / "configs" / "paper_f20.toml")
+    base.set("output.requests", ["deflections"]).set("output.plots", False)
+    base.set("time.end", 0.05)
+    scenes = [base.copy().set("links.section.thickness", t) for t in (2e-3, 3e-3)]
+    many = flexprr.run_many(scenes, threads=2)
+    for s, r in zip(scenes, many):
+        single = flexprr.run(s)
+        np.testing.assert_array_equal(r.table("deflections").to_numpy(), single.table("deflections").to_numpy())
