@@ -42,7 +42,7 @@ def peak_at(thickness: float, scene: flexprr.Scene) -> float:
     return peak_deflection(flexprr.run(scene.copy().set("links.section.thickness", thickness)))
 
 
-def smallest_thickness(bound_m: float, lo: float = 1.5e-3, hi: float = 6e-3, xtol: float = 1e-4):
+def smallest_thickness(bound_m: float, lo: float = 2e-3, hi: float = 8e-3, xtol: float = 1e-4):
     """The smallest thickness (m) with peak mid-point deflection <= bound_m, and its peak.
 
     Raises ValueError when the bound is not crossed inside [lo, hi].
@@ -63,7 +63,7 @@ def smallest_thickness(bound_m: float, lo: float = 1.5e-3, hi: float = 6e-3, xto
 
 
 def main() -> int:
-    bound_mm = float(sys.argv[1]) if len(sys.argv) > 1 else 0.1
+    bound_mm = float(sys.argv[1]) if len(sys.argv) > 1 else 0.5
     t, peak = smallest_thickness(bound_mm * 1e-3)
     print(f"smallest thickness for a peak mid-point deflection <= {bound_mm} mm: {t * 1e3:.4f} mm (peak {peak * 1e3:.5f} mm)")
     return 0

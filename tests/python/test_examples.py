@@ -19,16 +19,16 @@ def load_example(root, name):
 def test_optimum_matches_a_thickness_sweep(root):
     pytest.importorskip("scipy")
     opt = load_example(root, "optimise_thickness")
-    bound = 1e-4
+    bound = 5e-4
     t_star, peak_star = opt.smallest_thickness(bound)
     assert peak_star <= bound
     # an independent sweep: 25 thicknesses, run in parallel
-    grid = np.geomspace(1.5e-3, 6e-3, 25)
+    grid = np.geomspace(2e-3, 8e-3, 25)
     base = opt.base_scene()
     results = flexprr.run_many([base.copy().set("links.section.thickness", float(t)) for t in grid])
     peaks = np.array([opt.peak_deflection(r) for r in results])
     ok = peaks <= bound
-    # the admissible set is an interval [t_min, 6 mm] on the grid (monotone in thickness) ...
+    # the admissible set is an interval [t_min, 8 mm] on the grid (monotone in thickness) ...
     first = int(np.argmax(ok))
     assert ok[first:].all() and not ok[:first].any()
     # ... and the optimum lies between the last inadmissible and the first admissible grid point
