@@ -19,7 +19,7 @@ fn geometry(py: Python<'_>, scene: Option<&PyScene>) -> PyResult<Geometry> {
         Some(s) => {
             let s = s.clone();
             let built = py.detach(move || s.build()).map_err(scene_error)?;
-            Ok(built.machine.geometry.clone())
+            Ok(built.machine.geometry)
         }
     }
 }
