@@ -11,7 +11,7 @@ rm -rf "$work"
 mkdir -p "$work"
 if ! "$python" -m venv "$work/venv" >/dev/null 2>&1; then
     # Debian splits venv out of the interpreter; install it (as root) and try again
-    apt-get install -y python3-venv >/dev/null
+    apt-get update >/dev/null && apt-get install -y python3-venv >/dev/null
     rm -rf "$work/venv"
     "$python" -m venv "$work/venv"
 fi
