@@ -1,0 +1,68 @@
+//! Python exceptions of flexprr and how Rust errors become them.
+
+use flexprr_scene::ScenarioError;
+use pyo3::create_exception;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+
+create_exception!(
+    _flexprr,
+    SceneError,
+    PyValueError,
+    "A scene (or link, or study) is invalid: `key` is the dotted key, `file`, `line`, `column` locate it when known, `message` says what was expected. The text is the CLI's message."
+);
+create_exception!(
+    _flexprr,
+    RunError,
+    PyRuntimeError,
+    "A run stopped early: `kind` (diverged, singular-pose, step-size-collapse, ...), `time` (s) and `link` (1-based) when known, and `partial`, the RunResult up to the failure."
+);
+create_exception!(
+    _flexprr,
+    KinematicsError,
+    PyValueError,
+    "A pose is unreachable, outside the slider travel or too close to a singularity; `index` is the position of the pose in the input array."
+);
+create_exception!(
+    _flexprr,
+    StudyError,
+    PyRuntimeError,
+    "A study could not be read or run (bad study file, base scene, output directory)."
+);
+
+/// A scene error as `SceneError`, with its key and location as attributes.
+pub fn scene_error(e: ScenarioError) -> PyErr {
+    Python::attach(|py| {
+        let err = SceneError::new_err(e.to_string());
+        let value = err.value(py);
+        let (key, location, message) = match &e {
+            ScenarioError::Input {
+                location,
+                key,
+                message,
+            } => (key.clone(), location.clone(), message.clone()),
+            other => (String::new(), None, other.to_string()),
+        };
+        let set = || -> PyResult<()> {
+            value.setattr("key", key)?;
+            value.setattr("message", message)?;
+            value.setattr("file", location.as_ref().map(|l| l.file.clone()))?;
+            value.setattr("line", location.as_ref().map(|l| l.line))?;
+            value.setattr("column", location.as_ref().map(|l| l.column))?;
+            Ok(())
+        };
+        match set() {
+            Ok(()) => err,
+            Err(e) => e,
+        }
+    })
+}
+
+/// A plain `SceneError` for a key (no location).
+pub fn key_error(key: &str, message: String) -> PyErr {
+    scene_error(ScenarioError::Input {
+        location: None,
+        key: key.to_string(),
+        message,
+    })
+}
