@@ -32,7 +32,26 @@ enum Command {
     WorkPrecision(cli::work_precision::WorkPrecisionArgs),
 }
 
+/// Let a closed reader end the program quietly, as it ends `cat` or `head`.
+///
+/// Rust starts programs with `SIGPIPE` ignored, so writing to a pipe whose reader has gone
+/// (`flexprr kinematics scene.toml | head`) turns into an `EPIPE` error, and `println!`
+/// panics on it. Restoring the default action makes the kernel end the process at that
+/// write, silently, which is what every Unix filter does.
+#[cfg(unix)]
+fn end_quietly_on_closed_pipe() {
+    // SAFETY: called first thing in `main`, before any other thread exists; `signal` with
+    // `SIG_DFL` installs no handler code, it only restores the kernel's default action.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(not(unix))]
+fn end_quietly_on_closed_pipe() {}
+
 fn main() -> ExitCode {
+    end_quietly_on_closed_pipe();
     let args = Args::parse();
     let result = match args.command {
         Command::Run(a) => cli::run::run(a),

@@ -68,6 +68,28 @@ pub trait SceneModel: OdeSystem + Send {
     fn deflection(&self, link: usize, xi: f64, y: &[f64]) -> f64 {
         self.machine().links[link].deflection(&y[self.link_range(link)], xi)
     }
+    /// A reader's name for state component `component`, for messages: the link, the mode and
+    /// whether it is the coordinate `eta` or its rate (the state holds every link's
+    /// coordinates, then their rates, in [`Self::link_range`] order). Models with other
+    /// state components override this.
+    fn component_name(&self, component: usize) -> String {
+        let modes = self.modes();
+        let (part, index) = if component < modes {
+            ("modal coordinate eta", component)
+        } else if component < 2 * modes {
+            ("modal rate d(eta)/dt", component - modes)
+        } else {
+            return format!("state component {component}");
+        };
+        match (0..3).find(|&l| self.link_range(l).contains(&index)) {
+            Some(link) => format!(
+                "{part} of link {}, mode {}",
+                link + 1,
+                index - self.link_range(link).start + 1
+            ),
+            None => format!("state component {component}"),
+        }
+    }
     /// The KED modal system, when this is one (outputs that need its operators).
     fn as_modal(&mut self) -> Option<&mut ModalSystem> {
         None

@@ -25,8 +25,9 @@ pub enum RunError {
     },
     /// A link's deflection passed the divergence limit (see [`crate::guard`]).
     #[error(
-        "diverged: link {} at t = {t} s: deflection {w:.3e} m at xi = {xi} exceeds {limit:.3e} m ({fraction} of the link length); the small-deflection model has left its range (a link buckles, or the tolerance is too loose); request \"frequencies\" to see the buckling intervals",
-        link + 1
+        "diverged: link {} at t = {}: deflection {w:.3e} m at xi = {xi} exceeds {limit:.3e} m ({fraction} of the link length); the small-deflection model has left its range (a link buckles, or the tolerance is too loose); request \"frequencies\" to see the buckling intervals",
+        link + 1,
+        seconds(*t)
     )]
     Diverged {
         /// Link (0-based).
@@ -42,6 +43,21 @@ pub enum RunError {
         /// The limit as a fraction of the link length.
         fraction: f64,
     },
+    /// The state became NaN or infinite (named by link, mode and derivative).
+    #[error(
+        "{method} integrator: {state} became non-finite at t = {} (the solution blew up within one step: check masses, stiffness, speed and tolerances for absurd values)",
+        seconds(*t)
+    )]
+    NonFinite {
+        /// The method's name.
+        method: String,
+        /// Time (s).
+        t: f64,
+        /// Which state component, in words (`modal rate d(eta)/dt of link 2, mode 1`).
+        state: String,
+        /// The link (0-based), where the component belongs to one.
+        link: Option<usize>,
+    },
     /// Reading or writing outputs, or bad input met while running.
     #[error(transparent)]
     Scene(#[from] ScenarioError),
@@ -54,6 +70,7 @@ impl RunError {
     pub fn kind(&self) -> &'static str {
         match self {
             RunError::Diverged { .. } => "diverged",
+            RunError::NonFinite { .. } => "non-finite",
             RunError::Model(DynamicsError::SingularInverseDynamics { .. }) => "singular-pose",
             RunError::Model(DynamicsError::Kinematics { .. }) => "kinematics",
             RunError::Model(_) => "model",
@@ -72,7 +89,7 @@ impl RunError {
     /// When it happened (s), where the error knows.
     pub fn time(&self) -> Option<f64> {
         match self {
-            RunError::Diverged { t, .. } => Some(*t),
+            RunError::Diverged { t, .. } | RunError::NonFinite { t, .. } => Some(*t),
             RunError::Model(DynamicsError::SingularInverseDynamics { t, .. })
             | RunError::Model(DynamicsError::Kinematics { t, .. }) => Some(*t),
             RunError::Integrator { source, .. } => source.time(),
@@ -84,6 +101,7 @@ impl RunError {
     pub fn link(&self) -> Option<usize> {
         match self {
             RunError::Diverged { link, .. } => Some(*link),
+            RunError::NonFinite { link, .. } => *link,
             _ => None,
         }
     }
@@ -108,5 +126,46 @@ impl std::fmt::Display for RunFailure {
 impl std::error::Error for RunFailure {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         Some(&self.error)
+    }
+}
+
+/// A time for a message: seconds with an SI prefix and four significant digits
+/// (`25.60 ms`, `333.3 ps`), so that tiny times do not print as long runs of zeros.
+pub(crate) fn seconds(t: f64) -> String {
+    if !t.is_finite() {
+        return format!("{t} s");
+    }
+    let magnitude = t.abs();
+    if magnitude < f64::MIN_POSITIVE {
+        return "0 s".to_string();
+    }
+    let (scale, unit) = [
+        (1.0, "s"),
+        (1e-3, "ms"),
+        (1e-6, "\u{b5}s"),
+        (1e-9, "ns"),
+        (1e-12, "ps"),
+    ]
+    .into_iter()
+    .find(|(scale, _)| magnitude >= *scale)
+    .unwrap_or((1e-12, "ps"));
+    let value = t / scale;
+    let decimals = 3usize.saturating_sub(value.abs().log10().floor().max(0.0) as usize);
+    format!("{value:.decimals$} {unit}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::seconds;
+
+    #[test]
+    fn seconds_pick_a_prefix_and_keep_four_digits() {
+        assert_eq!(seconds(0.0256), "25.60 ms");
+        assert_eq!(seconds(3.3328786676e-10), "333.3 ps");
+        assert_eq!(seconds(0.2), "200.0 ms");
+        assert_eq!(seconds(1.5), "1.500 s");
+        assert_eq!(seconds(12.25), "12.25 s");
+        assert_eq!(seconds(0.0), "0 s");
+        assert_eq!(seconds(1.4404821906729875e-7), "144.0 ns");
     }
 }

@@ -43,11 +43,20 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(
         let syntax_error = DeTable::parse(text).is_err();
         let mut key = String::new();
         let mut missing_value = false;
+        let mut unclosed_at = None;
         let location = e.span().map(|span| {
             let mut offset = span.start.min(text.len());
             if syntax_error {
-                key = key_on_line(text, offset);
-                missing_value = value_is_missing(text, offset);
+                if let Some(opened) = unclosed_array_before(text, offset) {
+                    // The parser trips over the line after an unclosed `[`; the array's own
+                    // key is the one to blame, at its opening bracket.
+                    key = key_on_line(text, opened);
+                    unclosed_at = Some(line_column(text, opened).0);
+                    offset = opened;
+                } else {
+                    key = key_on_line(text, offset);
+                    missing_value = value_is_missing(text, offset);
+                }
             } else if let Some(name) = named("unknown field `") {
                 if let Some(found) = find_key_within(text, span.clone(), &name)
                     .or_else(|| find_key_from(text, offset, &name))
@@ -103,7 +112,9 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(
         } else {
             message
         };
-        let message = if missing_value {
+        let message = if let Some(line) = unclosed_at {
+            format!("the array opened on line {line} is not closed with `]` ({message})")
+        } else if missing_value {
             format!("expected a value after `=` ({message})")
         } else {
             message
@@ -216,6 +227,99 @@ fn entry_with_value(text: &str, table_path: &str, message: &str) -> Option<(usiz
         return None;
     }
     Some((key.span().start, key.get_ref().to_string()))
+}
+
+/// Byte offset of the `[` of an array value that is still open at `offset` and was opened on
+/// an earlier line, if there is one (the outermost such array).
+///
+/// A small scanner over TOML's lexical rules: table headers and keys at line starts, basic
+/// and literal strings (single- and triple-quoted), comments, and the brackets and braces of
+/// values. It only has to be right up to the parser's error, which it is because everything
+/// before that point parsed.
+fn unclosed_array_before(text: &str, offset: usize) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let end = offset.min(bytes.len());
+    // Open `[` and `{` of values, innermost last.
+    let mut open: Vec<(u8, usize)> = Vec::new();
+    let mut at_line_start = true;
+    let mut in_value = false;
+    let mut i = 0;
+    while i < end {
+        let c = bytes[i];
+        match c {
+            b'\n' => {
+                at_line_start = open.is_empty();
+                if open.is_empty() {
+                    in_value = false;
+                }
+                i += 1;
+                continue;
+            }
+            b' ' | b'\t' | b'\r' => {
+                i += 1;
+                continue;
+            }
+            b'#' => {
+                i = text[i..].find('\n').map_or(end, |n| i + n);
+                continue;
+            }
+            b'"' | b'\'' => {
+                let triple = bytes
+                    .get(i..i + 3)
+                    .is_some_and(|t| t.iter().all(|&b| b == c));
+                let step = if triple { 3 } else { 1 };
+                let mut j = i + step;
+                loop {
+                    if j >= bytes.len() {
+                        return None;
+                    }
+                    if c == b'"' && bytes[j] == b'\\' {
+                        j += 2;
+                        continue;
+                    }
+                    if bytes[j] == c
+                        && (!triple
+                            || bytes
+                                .get(j..j + 3)
+                                .is_some_and(|t| t.iter().all(|&b| b == c)))
+                    {
+                        j += step;
+                        break;
+                    }
+                    if !triple && bytes[j] == b'\n' {
+                        break;
+                    }
+                    j += 1;
+                }
+                i = j;
+                at_line_start = false;
+                continue;
+            }
+            _ => {}
+        }
+        if at_line_start && c == b'[' && !in_value {
+            // A table header: skip to the end of its line.
+            i = text[i..].find('\n').map_or(end, |n| i + n);
+            continue;
+        }
+        at_line_start = false;
+        match c {
+            b'=' if open.is_empty() || open.last().is_some_and(|(b, _)| *b == b'{') => {
+                in_value = true;
+            }
+            b'[' | b'{' if in_value => open.push((c, i)),
+            b']' | b'}' if in_value => {
+                open.pop();
+            }
+            b',' if open.last().is_some_and(|(b, _)| *b == b'{') => in_value = false,
+            _ => {}
+        }
+        i += 1;
+    }
+    let error_line_start = text[..end].rfind('\n').map_or(0, |n| n + 1);
+    open.iter()
+        .find(|(b, at)| *b == b'[' && *at < error_line_start)
+        .map(|(_, at)| *at)
 }
 
 /// Whether the line holding `offset` is `key =` with nothing (or only a comment) after it.

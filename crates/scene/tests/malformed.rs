@@ -140,6 +140,35 @@ fn syntax_error_unterminated_table_header() {
 }
 
 #[test]
+fn syntax_error_unclosed_array_names_its_own_key() {
+    // The parser only notices on the next line; the array's key is the one to blame.
+    let text = edit(
+        "alpha_deg = [150.0, 270.0, 30.0]\n",
+        "alpha_deg = [150.0, 270.0, 30.0\n",
+    );
+    rejects(
+        &text,
+        "[150.0",
+        "machine.alpha_deg",
+        &["opened on line 5", "not closed"],
+    );
+    // Also at the end of a table, before the next header.
+    let text = edit("deflection_xi = [0.5]\n", "deflection_xi = [0.5\n");
+    rejects(&text, "[0.5", "output.deflection_xi", &["not closed"]);
+}
+
+#[test]
+fn syntax_error_in_a_closed_array_stays_on_its_line() {
+    let text = edit("centre = [-0.05, 0.0]\n", "centre = [-0.05 0.0]\n");
+    let err = Scene::from_text(FILE, "scene", &text).expect_err("a missing comma");
+    let ScenarioError::Input { key, .. } = &err else {
+        panic!("not bad input: {err}")
+    };
+    assert_eq!(key, "trajectory.centre", "{err}");
+    assert!(!err.to_string().contains("not closed"), "{err}");
+}
+
+#[test]
 fn syntax_error_missing_value() {
     let text = edit("half_travel = 0.2\n", "half_travel = \n");
     rejects(
