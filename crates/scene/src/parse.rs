@@ -416,7 +416,10 @@ fn plain_message(message: &str) -> String {
                 need at most a few levels"
             .to_string();
     }
-    let mut out = one_line;
+    let mut out = one_line.replace(
+        ", there are no fields",
+        ": this table takes no keys besides its kind",
+    );
     for (rust, plain) in [
         (
             "internally tagged enum TrajectoryConfig",

@@ -169,6 +169,20 @@ fn syntax_error_in_a_closed_array_stays_on_its_line() {
 }
 
 #[test]
+fn the_sine_basis_refuses_keys_of_other_bases() {
+    let text = edit(
+        "basis = { kind = \"sine\" }\n",
+        "basis = { kind = \"sine\", ends = \"clamped-free\" }\n",
+    );
+    rejects(
+        &text,
+        "ends =",
+        "links.basis.ends",
+        &["unknown field `ends`", "no keys besides its kind"],
+    );
+}
+
+#[test]
 fn syntax_error_missing_value() {
     let text = edit("half_travel = 0.2\n", "half_travel = \n");
     rejects(
