@@ -63,11 +63,17 @@ fn exponential_methods_refuse_the_coupled_model_at_the_method_key() {
 #[test]
 fn auto_resolves_to_the_exponential_method_for_ked_and_abm_for_coupled() {
     assert_eq!(scene("ked", "auto").expect("ked").method.name(), "magnus6");
-    assert_eq!(scene("coupled", "auto").expect("coupled").method.name(), "abm");
+    assert_eq!(
+        scene("coupled", "auto").expect("coupled").method.name(),
+        "abm"
+    );
     // The general methods are kept as given on both models.
     for method in ["abm", "rk45", "bdf"] {
         for coupling in ["ked", "coupled"] {
-            assert_eq!(scene(coupling, method).expect("valid").method.name(), method);
+            assert_eq!(
+                scene(coupling, method).expect("valid").method.name(),
+                method
+            );
         }
     }
 }

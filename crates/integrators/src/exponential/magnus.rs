@@ -38,7 +38,7 @@ const FAC_MAX: f64 = 5.0;
 /// A pair of modes of a coupled block is rotated apart when its coupling at the step midpoint,
 /// `|S_pq| min(h^2, 1 / max(|S_pp|, |S_qq|))`, is above this; the coupling left is iterated
 /// with contraction about this.
-const COUPLING_ROTATE: f64 = 1e-4;
+const COUPLING_ROTATE: f64 = 1e-6;
 /// Largest number of Jacobi sweeps per step (each stops early when no pair is rotated).
 const MAX_ROTATION_SWEEPS: usize = 10;
 /// Largest number of coupling iterations per step before the step is rejected.
@@ -202,7 +202,10 @@ impl Mode {
         let (a1, b1) = apply(phi[1], y, (0.0, f0));
         let (a2, b2) = apply(phi[2], y, (0.0, f1));
         let (a3, b3) = apply(phi[3], y, (0.0, f2));
-        (q_h + op.big_h * (a1 + a2 + a3), v_h + op.big_h * (b1 + b2 + b3))
+        (
+            q_h + op.big_h * (a1 + a2 + a3),
+            v_h + op.big_h * (b1 + b2 + b3),
+        )
     }
 
     /// The 4th-order step over `[0, theta h]` (see [`Magnus`], step 3).
