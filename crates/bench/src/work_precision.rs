@@ -62,7 +62,14 @@ impl Default for WorkPrecisionConfig {
     fn default() -> Self {
         Self {
             tolerances: DEFAULT_TOLERANCES.to_vec(),
-            methods: vec![Method::Abm, Method::Rk45, Method::Bdf],
+            methods: vec![
+                Method::Abm,
+                Method::Rk45,
+                Method::Bdf,
+                Method::Magnus4,
+                Method::Magnus6,
+                Method::Auto,
+            ],
             warmup: 2,
             repeats: 7,
             reference_rtol: 1e-14,

@@ -53,7 +53,9 @@ pub use abm::Abm;
 pub use bdf::Bdf;
 pub use common::{error_norm, initial_step, validate_start};
 pub use error::IntegratorError;
-pub use exponential::{BlockOperators, LinearSecondOrder, Magnus, MagnusOrder, MagnusStepper};
+pub use exponential::{
+    Auto, BlockOperators, LinearSecondOrder, Magnus, MagnusOrder, MagnusStepper,
+};
 pub use observe::{DynIntegrator, Flow, Interrupted, Interruption, Observer, OnStep};
 pub use options::{Options, Tolerance};
 pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};

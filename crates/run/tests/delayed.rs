@@ -8,7 +8,7 @@
 use flexprr_run::run;
 use flexprr_scene::Scene;
 
-const METHODS: [&str; 3] = ["abm", "rk45", "bdf"];
+const METHODS: [&str; 6] = ["abm", "rk45", "bdf", "magnus4", "magnus6", "auto"];
 
 fn scene(trajectory: &str, method: &str, max_step: Option<f64>) -> Scene {
     let max_step = max_step.map_or(String::new(), |h| format!("max_step = {h:e}"));

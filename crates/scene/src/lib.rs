@@ -28,7 +28,7 @@ pub use input::{
 pub use locate::{line_column, locate};
 pub use parse::{parse_scene, parse_toml};
 pub use registry::{
-    BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, ModeCount, Registry,
+    BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount, Registry,
 };
 pub use scene::Scene;
 pub use schema::{

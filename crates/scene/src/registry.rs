@@ -16,7 +16,8 @@ use flexprr_dynamics::{
     AxialForceModel, AxialModel, JointReactionAxialForce, NoAxialForce, PaperAxialForce,
 };
 use flexprr_integrators::{
-    Abm, Bdf, DynIntegrator, IntegratorError, Interruption, OdeSystem, Options, Rk45, Solution,
+    Abm, Auto, Bdf, DynIntegrator, IntegratorError, Interruption, Magnus, OdeSystem, Options, Rk45,
+    Solution,
 };
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
@@ -92,6 +93,26 @@ impl PartialEq for MethodHandle {
     fn eq(&self, other: &Self) -> bool {
         self.name == other.name
     }
+}
+
+/// What a registered integrator asks of the scene's model.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum MethodKind {
+    /// Integrates any model (`abm`, `rk45`, `bdf`).
+    #[default]
+    General,
+    /// Needs a model that is linear in its state ([`OdeSystem::linear_form`]: the KED modal
+    /// equations); `magnus4` and `magnus6`. A scene with another model is refused at load.
+    Linear,
+    /// Stands for one of two registered methods, chosen by the scene's model: `linear` for a
+    /// linear (KED) model, `general` otherwise (`auto`: `magnus6` or `abm`). The scene records
+    /// the method chosen, so runs and summaries name the method actually used.
+    Auto {
+        /// The method for linear models.
+        linear: String,
+        /// The method for every other model.
+        general: String,
+    },
 }
 
 /// How a basis gets its number of functions.
@@ -317,11 +338,12 @@ pub(crate) struct AxialEntry {
 }
 
 /// The named parts scenes can use. [`Registry::default`] holds the built-ins: integrators
-/// `abm`, `rk45`, `bdf`; bases `sine`, `classical`, `hermite`; axial force models `none`,
+/// `abm`, `rk45`, `bdf`, `magnus4`, `magnus6` (linear models only) and `auto`; bases `sine`, `classical`, `hermite`; axial force models `none`,
 /// `paper`, `joint-reaction`.
 #[derive(Clone)]
 pub struct Registry {
     integrators: BTreeMap<String, IntegratorConstructor>,
+    method_kinds: BTreeMap<String, MethodKind>,
     bases: BTreeMap<String, Arc<dyn BasisFactory>>,
     axial: BTreeMap<String, AxialEntry>,
 }
@@ -342,6 +364,24 @@ impl Default for Registry {
         r.register_integrator("abm", Arc::new(|o| Box::new(Abm::new(o))));
         r.register_integrator("rk45", Arc::new(|o| Box::new(Rk45::new(o))));
         r.register_integrator("bdf", Arc::new(|o| Box::new(Bdf::new(o))));
+        r.register_integrator_kind(
+            "magnus4",
+            Arc::new(|o| Box::new(Magnus::magnus4(o))),
+            MethodKind::Linear,
+        );
+        r.register_integrator_kind(
+            "magnus6",
+            Arc::new(|o| Box::new(Magnus::magnus6(o))),
+            MethodKind::Linear,
+        );
+        r.register_integrator_kind(
+            "auto",
+            Arc::new(|o| Box::new(Auto::new(o))),
+            MethodKind::Auto {
+                linear: "magnus6".to_string(),
+                general: "abm".to_string(),
+            },
+        );
         r.register_basis("sine", Arc::new(SineFactory));
         r.register_basis("classical", Arc::new(ClassicalFactory));
         r.register_basis("hermite", Arc::new(HermiteFactory));
@@ -375,14 +415,98 @@ impl Registry {
     pub fn empty() -> Self {
         Self {
             integrators: BTreeMap::new(),
+            method_kinds: BTreeMap::new(),
             bases: BTreeMap::new(),
             axial: BTreeMap::new(),
         }
     }
 
-    /// Registers (or replaces) the integrator `name` for `integrator.method`.
+    /// Registers (or replaces) the integrator `name` for `integrator.method`; it integrates
+    /// any model ([`MethodKind::General`]).
     pub fn register_integrator(&mut self, name: &str, constructor: IntegratorConstructor) {
+        self.register_integrator_kind(name, constructor, MethodKind::General);
+    }
+
+    /// Registers (or replaces) the integrator `name` with what it asks of the model. For a
+    /// [`MethodKind::Auto`], the constructor is used where no scene resolves the choice (it
+    /// should choose per system, like [`Auto`]).
+    pub fn register_integrator_kind(
+        &mut self,
+        name: &str,
+        constructor: IntegratorConstructor,
+        kind: MethodKind,
+    ) {
         self.integrators.insert(name.to_string(), constructor);
+        self.method_kinds.insert(name.to_string(), kind);
+    }
+
+    /// What the integrator `name` asks of the model.
+    pub fn method_kind(&self, name: &str) -> Option<&MethodKind> {
+        self.method_kinds.get(name)
+    }
+
+    /// The method a scene with the integrator `name` runs, given whether its model is linear
+    /// in the state (`model_name` names the model in the error): an `auto` name becomes its
+    /// choice for the model, a linear-only method on another model is refused.
+    ///
+    /// # Errors
+    /// One line saying which method needs what and what to use instead, or naming an
+    /// unregistered method.
+    pub fn resolve_method(
+        &self,
+        name: &str,
+        linear_model: bool,
+        model_name: &str,
+    ) -> Result<MethodHandle, String> {
+        let unknown = |n: &str| {
+            format!(
+                "unknown value \"{n}\", expected one of {}",
+                quoted_list(&self.integrator_names())
+            )
+        };
+        let chosen = match self.method_kind(name) {
+            Some(MethodKind::Auto { linear, general }) => {
+                if linear_model {
+                    linear.as_str()
+                } else {
+                    general.as_str()
+                }
+            }
+            Some(MethodKind::Linear) if !linear_model => {
+                // The methods `auto` falls back to, then the `auto` names themselves.
+                let mut alternatives: Vec<&str> = Vec::new();
+                for (n, kind) in &self.method_kinds {
+                    if let MethodKind::Auto { general, .. } = kind {
+                        for a in [general.as_str(), n.as_str()] {
+                            if !alternatives.contains(&a) {
+                                alternatives.push(a);
+                            }
+                        }
+                    }
+                }
+                if alternatives.is_empty() {
+                    alternatives = self
+                        .integrator_names()
+                        .into_iter()
+                        .filter(|n| self.method_kind(n) == Some(&MethodKind::General))
+                        .collect();
+                }
+                return Err(format!(
+                    "method {name} needs a linear (KED) model; this scene is {model_name}: use {}",
+                    alternatives.join(" or ")
+                ));
+            }
+            _ => name,
+        };
+        match self.method_kind(chosen) {
+            Some(MethodKind::Auto { .. }) if chosen != name => Err(format!(
+                "method {name} chooses {chosen}, which is itself a choice; register a concrete method"
+            )),
+            Some(MethodKind::Linear) if !linear_model => Err(format!(
+                "method {name} chooses {chosen}, which needs a linear (KED) model; this scene is {model_name}"
+            )),
+            _ => self.method(chosen).ok_or_else(|| unknown(chosen)),
+        }
     }
 
     /// Registers (or replaces) the basis `name` for `basis.kind`.

@@ -212,6 +212,14 @@ impl Scene {
         let trajectory = build_trajectory_checked(&c, &raw.trajectory, &machine, &output_times)?;
         let model = build_model_section(&c, registry, &raw.model, machine.links[0].modes())?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
+        // `auto` becomes its choice for the model; a linear-only method needs the KED model.
+        let method = registry
+            .resolve_method(
+                method.name(),
+                model.coupling == CouplingModel::Ked,
+                model.coupling.name(),
+            )
+            .map_err(|m| c.value_error("integrator.method", m))?;
         let outputs = build_outputs(&c, &raw)?;
         // Mean cross-section area from the mass: EA for the coupled model's stretch output.
         let links = &raw.links;

@@ -357,7 +357,9 @@ impl Default for ModelConfig {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct IntegratorConfig {
-    /// A registered integrator: `"abm"` (default, like the paper's ode113), `"rk45"`, `"bdf"`.
+    /// A registered integrator: `"abm"` (default, like the paper's ode113), `"rk45"`, `"bdf"`,
+    /// `"magnus4"` and `"magnus6"` (exponential, KED model only), or `"auto"` (`"magnus6"` for
+    /// the KED model, `"abm"` for the others).
     #[serde(default = "default_method")]
     pub method: String,
     /// Relative tolerance.
@@ -530,17 +532,28 @@ pub enum Method {
     Rk45,
     /// BDF.
     Bdf,
+    /// Magnus, 4th order (linear models only).
+    Magnus4,
+    /// Magnus, 6th order (linear models only).
+    Magnus6,
+    /// `magnus6` for linear models, `abm` otherwise.
+    Auto,
 }
 
 impl Method {
+    /// Every built-in method.
+    pub const ALL: [Method; 6] = [
+        Method::Abm,
+        Method::Rk45,
+        Method::Bdf,
+        Method::Magnus4,
+        Method::Magnus6,
+        Method::Auto,
+    ];
+
     /// Parses a method name.
     pub fn parse(name: &str) -> Option<Self> {
-        match name {
-            "abm" => Some(Method::Abm),
-            "rk45" => Some(Method::Rk45),
-            "bdf" => Some(Method::Bdf),
-            _ => None,
-        }
+        Self::ALL.into_iter().find(|m| m.name() == name)
     }
     /// Its name.
     pub fn name(self) -> &'static str {
@@ -548,6 +561,9 @@ impl Method {
             Method::Abm => "abm",
             Method::Rk45 => "rk45",
             Method::Bdf => "bdf",
+            Method::Magnus4 => "magnus4",
+            Method::Magnus6 => "magnus6",
+            Method::Auto => "auto",
         }
     }
 
@@ -569,7 +585,8 @@ impl Method {
     /// Integrates `system` from `y0` at `t_out[0]` with this method, output at `t_out`.
     ///
     /// # Errors
-    /// The integrator's error.
+    /// The integrator's error (a linear-only method on a system without a linear form is
+    /// [`flexprr_integrators::IntegratorError::InvalidInput`]).
     pub fn solve<S: flexprr_integrators::OdeSystem>(
         self,
         options: flexprr_integrators::Options,
@@ -577,12 +594,21 @@ impl Method {
         y0: &[f64],
         t_out: &[f64],
     ) -> Result<flexprr_integrators::Solution, flexprr_integrators::IntegratorError> {
-        use flexprr_integrators::{Abm, Bdf, Integrator, Rk45};
+        use flexprr_integrators::{Abm, Bdf, Integrator, Magnus, Rk45};
         let t0 = t_out[0];
         match self {
             Method::Abm => Abm::new(options).solve(system, t0, y0, t_out),
             Method::Rk45 => Rk45::new(options).solve(system, t0, y0, t_out),
             Method::Bdf => Bdf::new(options).solve(system, t0, y0, t_out),
+            Method::Magnus4 => Magnus::magnus4(options).solve(system, t0, y0, t_out),
+            Method::Magnus6 => Magnus::magnus6(options).solve(system, t0, y0, t_out),
+            Method::Auto => {
+                if system.linear_form().is_some() {
+                    Magnus::magnus6(options).solve(system, t0, y0, t_out)
+                } else {
+                    Abm::new(options).solve(system, t0, y0, t_out)
+                }
+            }
         }
     }
 }

@@ -2,11 +2,13 @@
 //! allocation (Golub & Van Loan, *Matrix Computations*, 4th ed., Algorithms 8.5.1-8.5.3).
 
 /// Largest number of sweeps; a warm-started matrix needs one or two.
+#[cfg(test)]
 const MAX_SWEEPS: usize = 30;
 
 /// Diagonalizes the symmetric `n x n` row-major `a` by plane rotations `J`: on return `a`
 /// holds `R^T a R` (diagonal up to `1e-15` of its norm) and `v` holds `v R` (its columns are
 /// rotated). Returns the number of sweeps used.
+#[cfg(test)]
 pub(crate) fn jacobi_diagonalize(a: &mut [f64], v: &mut [f64], n: usize) -> usize {
     let norm: f64 = a.iter().map(|x| x * x).sum::<f64>().sqrt();
     if norm <= 0.0 {
@@ -30,36 +32,47 @@ pub(crate) fn jacobi_diagonalize(a: &mut [f64], v: &mut [f64], n: usize) -> usiz
                 if apq.abs() <= 0.0 {
                     continue;
                 }
-                // Symmetric Schur decomposition (Golub & Van Loan, Algorithm 8.5.1).
-                let tau = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
-                // Smaller root of t^2 + 2 tau t - 1 = 0 (t = 1 when tau = 0).
-                let t =
-                    if tau >= 0.0 { 1.0 } else { -1.0 } / (tau.abs() + (1.0 + tau * tau).sqrt());
-                let c = 1.0 / (1.0 + t * t).sqrt();
-                let s = t * c;
-                // a <- J^T a J with J the rotation in the (p, q) plane.
-                for k in 0..n {
-                    let akp = a[k * n + p];
-                    let akq = a[k * n + q];
-                    a[k * n + p] = c * akp - s * akq;
-                    a[k * n + q] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let apk = a[p * n + k];
-                    let aqk = a[q * n + k];
-                    a[p * n + k] = c * apk - s * aqk;
-                    a[q * n + k] = s * apk + c * aqk;
-                }
-                for k in 0..n {
-                    let vkp = v[k * n + p];
-                    let vkq = v[k * n + q];
-                    v[k * n + p] = c * vkp - s * vkq;
-                    v[k * n + q] = s * vkp + c * vkq;
-                }
+                let (c, s) = schur_rotation(a[p * n + p], a[q * n + q], apq);
+                rotate_congruence(a, n, p, q, c, s);
+                rotate_columns(v, n, p, q, c, s);
             }
         }
     }
     MAX_SWEEPS
+}
+
+/// The rotation `(c, s)` of the symmetric Schur decomposition that zeroes the `(p, q)` entry
+/// of a symmetric matrix with diagonal entries `app`, `aqq` and off-diagonal `apq != 0`
+/// (Golub & Van Loan, Algorithm 8.5.1).
+#[inline]
+pub(crate) fn schur_rotation(app: f64, aqq: f64, apq: f64) -> (f64, f64) {
+    let tau = (aqq - app) / (2.0 * apq);
+    let t = if tau >= 0.0 { 1.0 } else { -1.0 } / (tau.abs() + (1.0 + tau * tau).sqrt());
+    let c = 1.0 / (1.0 + t * t).sqrt();
+    (c, t * c)
+}
+
+/// `a <- J^T a J` for the rotation `J` in the `(p, q)` plane (`O(n)`).
+#[inline]
+pub(crate) fn rotate_congruence(a: &mut [f64], n: usize, p: usize, q: usize, c: f64, s: f64) {
+    rotate_columns(a, n, p, q, c, s);
+    for k in 0..n {
+        let apk = a[p * n + k];
+        let aqk = a[q * n + k];
+        a[p * n + k] = c * apk - s * aqk;
+        a[q * n + k] = s * apk + c * aqk;
+    }
+}
+
+/// `v <- v J`: columns `p` and `q` of the row-major `n x n` `v` rotated.
+#[inline]
+pub(crate) fn rotate_columns(v: &mut [f64], n: usize, p: usize, q: usize, c: f64, s: f64) {
+    for k in 0..n {
+        let vkp = v[k * n + p];
+        let vkq = v[k * n + q];
+        v[k * n + p] = c * vkp - s * vkq;
+        v[k * n + q] = s * vkp + c * vkq;
+    }
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@
 use std::cell::RefCell;
 
 use super::functions::{PhiPairs, phi_pairs, split};
-use super::jacobi::jacobi_diagonalize;
+use super::jacobi::{rotate_columns, rotate_congruence, schur_rotation};
 use super::{BlockOperators, LinearSecondOrder};
 use crate::common::{error_norm, initial_step, validate_start};
 use crate::{Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper};
@@ -35,9 +35,12 @@ const SAFETY: f64 = 0.9;
 const FAC_MIN: f64 = 0.2;
 /// Largest step increase per step.
 const FAC_MAX: f64 = 5.0;
-/// Re-diagonalize a block when its frozen basis leaves `h^2 max |S_jk|` (`j != k`) above this
-/// at the step midpoint: the mode coupling is then iterated with contraction about this.
-const COUPLING_REFREEZE: f64 = 1e-4;
+/// A pair of modes of a coupled block is rotated apart when its coupling at the step midpoint,
+/// `|S_pq| min(h^2, 1 / max(|S_pp|, |S_qq|))`, is above this; the coupling left is iterated
+/// with contraction about this.
+const COUPLING_ROTATE: f64 = 1e-6;
+/// Largest number of Jacobi sweeps per step (each stops early when no pair is rotated).
+const MAX_ROTATION_SWEEPS: usize = 10;
 /// Largest number of coupling iterations per step before the step is rejected.
 const COUPLING_ITERATIONS: usize = 8;
 
@@ -59,9 +62,11 @@ pub enum MagnusOrder {
 ///
 /// 1. the coefficients at the three Gauss-Legendre nodes `t + c_i h` (three evaluations of
 ///    [`LinearSecondOrder::coefficients`], counted as right-hand-side evaluations);
-/// 2. a frozen orthonormal basis `V` in which `S(t + h/2)` is diagonal (cyclic Jacobi, warm
-///    started from the previous basis and only redone when the coupling `h^2 |S_jk|` left by
-///    the old basis exceeds `1e-4`); in it every mode `j` is a scalar oscillator
+/// 2. a frozen orthonormal basis `V` in which `S(t + h/2)` is nearly diagonal: the previous
+///    step's basis, with Jacobi rotations (Golub & Van Loan, Algorithm 8.5.2) of only those
+///    pairs of modes whose coupling `|S_pq| min(h^2, 1 / max(|S_pp|, |S_qq|))` exceeds `1e-4`,
+///    each updating the basis and the operators in it in `O(r)`; in it every mode `j` is a
+///    scalar oscillator
 ///    `w'' + d_j w' + k_j(t) w = f_j(t)`, the off-diagonal stiffness and damping entering
 ///    `f_j` as coupling forces from the other modes, iterated to convergence (Picard) on the
 ///    states at the Gauss nodes;
@@ -82,9 +87,9 @@ pub enum MagnusOrder {
 ///    solution is propagated (the 6th-order one is local extrapolation).
 ///
 /// All exponentials and `phi`-functions are closed forms of 2 x 2 matrices (cos/sin, or
-/// cosh/sinh inside buckling intervals where `k_j < 0`), so a step costs `O(r)` per block
-/// plus `O(r^2)` for the coupling and basis changes, and `O(r^3)` when the basis is
-/// refrozen. **Dense output** repeats step 3's 4th-order formula over `[t, t + theta h]`
+/// cosh/sinh inside buckling intervals where `k_j < 0`), computed once per mode and node
+/// and reused by every coupling iteration, so a step costs `O(r)` per block plus `O(r^2)`
+/// for the coupling and basis changes and `O(r)` per rotated pair. **Dense output** repeats step 3's 4th-order formula over `[t, t + theta h]`
 /// with the coefficients and forcing interpolated from the step's nodes: exact for the
 /// frozen oscillation, not a polynomial across the step.
 ///
@@ -143,13 +148,26 @@ fn apply(pq: (f64, f64), y: (f64, f64, f64), v: (f64, f64)) -> (f64, f64) {
     )
 }
 
+/// The part of a 4th-order sub-step that does not depend on the forcing or the starting
+/// state: the `phi`-functions of the sub-step's generator (reused by every coupling
+/// iteration of a step).
+#[derive(Debug, Clone, Copy, Default)]
+struct SubOp {
+    phi: PhiPairs,
+    /// The traceless part `Y = [[p, q], [r, -p]]` of the generator.
+    y: (f64, f64, f64),
+    /// `theta h`.
+    big_h: f64,
+    theta: f64,
+}
+
 impl Mode {
-    /// The 4th-order step over `[0, theta h]` (see [`Magnus`], step 3).
+    /// The generator's `phi`-functions for the 4th-order step over `[0, theta h]` (see
+    /// [`Magnus`], step 3).
     #[inline]
-    fn sub_step(&self, theta: f64, h: f64) -> (f64, f64) {
+    fn sub_op(&self, theta: f64, h: f64) -> SubOp {
         let big_h = theta * h;
         let kq = quadratic(self.k);
-        let fq = quadratic(self.f);
         let eval = |c: [f64; 3], tau: f64| c[0] + tau * (c[1] + tau * c[2]);
         let k1 = eval(kq, theta * (0.5 - GAUSS2_HALF_SPREAD));
         let k2 = eval(kq, theta * (0.5 + GAUSS2_HALF_SPREAD));
@@ -163,8 +181,20 @@ impl Mode {
             -big_h * kbar - self.d * delta,
             -big_h * self.d - delta,
         );
-        let phi: PhiPairs = phi_pairs(m, t2);
-        let y = (p, q, r);
+        SubOp {
+            phi: phi_pairs(m, t2),
+            y: (p, q, r),
+            big_h,
+            theta,
+        }
+    }
+
+    /// The 4th-order step with the generator data `op`, this mode's starting state and its
+    /// current forcing at the nodes.
+    #[inline]
+    fn apply_sub(&self, op: &SubOp) -> (f64, f64) {
+        let (phi, y, theta) = (&op.phi, op.y, op.theta);
+        let fq = quadratic(self.f);
         let (q_h, v_h) = apply(phi[0], y, (self.q0, self.v0));
         let f0 = fq[0];
         let f1 = fq[1] * theta;
@@ -172,7 +202,16 @@ impl Mode {
         let (a1, b1) = apply(phi[1], y, (0.0, f0));
         let (a2, b2) = apply(phi[2], y, (0.0, f1));
         let (a3, b3) = apply(phi[3], y, (0.0, f2));
-        (q_h + big_h * (a1 + a2 + a3), v_h + big_h * (b1 + b2 + b3))
+        (
+            q_h + op.big_h * (a1 + a2 + a3),
+            v_h + op.big_h * (b1 + b2 + b3),
+        )
+    }
+
+    /// The 4th-order step over `[0, theta h]` (see [`Magnus`], step 3).
+    #[inline]
+    fn sub_step(&self, theta: f64, h: f64) -> (f64, f64) {
+        self.apply_sub(&self.sub_op(theta, h))
     }
 
     /// The 6th-order step over `[0, h]`: the 6th-order Magnus step of the augmented system
@@ -299,8 +338,6 @@ struct Block {
     diagonal: bool,
     /// Frozen orthonormal basis `V` (row-major, columns are the modes).
     v: Vec<f64>,
-    /// Whether the basis has been frozen at least once.
-    frozen: bool,
     /// The stiffness terms, damping and forcing terms in the frozen basis.
     s_terms: Vec<f64>,
     damping: Vec<f64>,
@@ -314,32 +351,11 @@ struct Block {
     /// States at the three nodes (`3 * 2 r`: positions then velocities per node).
     node_states: Vec<f64>,
     modes: Vec<Mode>,
+    /// Sub-step generators of every mode to the three nodes (`3 r`, coupled blocks only).
+    node_ops: Vec<SubOp>,
     /// Scratch `r x r` matrices.
     scratch: Vec<f64>,
     scratch2: Vec<f64>,
-}
-
-/// `out = V^T a V` for row-major `n x n` matrices (`tmp` is scratch).
-fn congruence(v: &[f64], a: &[f64], out: &mut [f64], tmp: &mut [f64], n: usize) {
-    // tmp = a V
-    for i in 0..n {
-        for j in 0..n {
-            let mut s = 0.0;
-            for k in 0..n {
-                s += a[i * n + k] * v[k * n + j];
-            }
-            tmp[i * n + j] = s;
-        }
-    }
-    for i in 0..n {
-        for j in 0..n {
-            let mut s = 0.0;
-            for k in 0..n {
-                s += v[k * n + i] * tmp[k * n + j];
-            }
-            out[i * n + j] = s;
-        }
-    }
 }
 
 /// `out = M x` (`transpose`: `M^T x`) for a row-major `n x n` matrix.
@@ -391,14 +407,13 @@ impl Block {
         }
         let ns = ops.stiffness.len();
         let nf = ops.forcing.len();
-        let mut block = Self {
+        let block = Self {
             r,
             offset,
             s_offset,
             f_offset,
             diagonal,
             v,
-            frozen: false,
             s_terms: ops.stiffness.concat(),
             damping: ops.damping.clone().unwrap_or_else(|| vec![0.0; r * r]),
             g_terms: ops.forcing.concat(),
@@ -407,36 +422,14 @@ impl Block {
             coupling: vec![0.0; 3 * r],
             node_states: vec![0.0; 6 * r],
             modes: vec![Mode::default(); r],
+            node_ops: vec![SubOp::default(); if diagonal { 0 } else { 3 * r }],
             scratch: vec![0.0; r * r],
             scratch2: vec![0.0; r * r],
             ops,
         };
         debug_assert_eq!(block.s_terms.len(), ns * r * r);
         debug_assert_eq!(block.g_terms.len(), nf * r);
-        if diagonal {
-            block.frozen = true;
-        }
         block
-    }
-
-    /// Re-expresses the operators in the basis `self.v`.
-    fn rotate_operators(&mut self) {
-        let r = self.r;
-        for (n, s) in self.ops.stiffness.iter().enumerate() {
-            congruence(
-                &self.v,
-                s,
-                &mut self.s_terms[n * r * r..(n + 1) * r * r],
-                &mut self.scratch,
-                r,
-            );
-        }
-        if let Some(d) = &self.ops.damping {
-            congruence(&self.v, d, &mut self.damping, &mut self.scratch, r);
-        }
-        for (m, g) in self.ops.forcing.iter().enumerate() {
-            mat_vec(&self.v, g, &mut self.g_terms[m * r..(m + 1) * r], r, true);
-        }
     }
 
     /// Stiffness in the current basis for coefficients `s` into `out` (`r x r`).
@@ -451,26 +444,53 @@ impl Block {
     }
 
     /// Freezes the basis for a step of size `h` whose midpoint stiffness coefficients are
-    /// `s_mid`: keeps the old basis while it leaves little coupling.
+    /// `s_mid`: Jacobi rotations (warm started from the previous basis) of the pairs of
+    /// modes whose coupling at the midpoint is significant,
+    /// `|S_pq| min(h^2, 1 / max(|S_pp|, |S_qq|)) > COUPLING_ROTATE` (the response of one mode
+    /// to the other over the step: `h^2` for slow modes, `1 / omega^2` for modes that
+    /// oscillate within the step). Each rotation updates the basis and the operators in it
+    /// in `O(r)`, so a step costs `O(r^2)` plus `O(r)` per significant pair, instead of a
+    /// full diagonalization and re-projection (`O(r^3)`); the coupling left is iterated in
+    /// [`MagnusStepper::couple`], with contraction about `COUPLING_ROTATE`.
     fn freeze(&mut self, s_mid: &[f64], h: f64) {
         if self.diagonal {
             return;
         }
         let r = self.r;
+        let rr = r * r;
         let mut mid = std::mem::take(&mut self.scratch2);
         self.stiffness_at(s_mid, &mut mid);
-        let mut off: f64 = 0.0;
-        for i in 0..r {
-            for j in 0..r {
-                if i != j {
-                    off = off.max(mid[i * r + j].abs());
+        let inv_h2 = 1.0 / (h * h);
+        for _ in 0..MAX_ROTATION_SWEEPS {
+            let mut rotated = false;
+            for p in 0..r {
+                for q in p + 1..r {
+                    let apq = mid[p * r + q];
+                    let (app, aqq) = (mid[p * r + p], mid[q * r + q]);
+                    let scale = inv_h2.max(app.abs()).max(aqq.abs());
+                    if apq.abs() <= COUPLING_ROTATE * scale {
+                        continue;
+                    }
+                    let (c, s) = schur_rotation(app, aqq, apq);
+                    rotate_congruence(&mut mid, r, p, q, c, s);
+                    rotate_columns(&mut self.v, r, p, q, c, s);
+                    for n in 0..self.ops.stiffness.len() {
+                        rotate_congruence(&mut self.s_terms[n * rr..(n + 1) * rr], r, p, q, c, s);
+                    }
+                    if self.ops.damping.is_some() {
+                        rotate_congruence(&mut self.damping, r, p, q, c, s);
+                    }
+                    for g in self.g_terms.chunks_exact_mut(r) {
+                        let (gp, gq) = (g[p], g[q]);
+                        g[p] = c * gp - s * gq;
+                        g[q] = s * gp + c * gq;
+                    }
+                    rotated = true;
                 }
             }
-        }
-        if !self.frozen || h * h * off > COUPLING_REFREEZE {
-            jacobi_diagonalize(&mut mid, &mut self.v, r);
-            self.rotate_operators();
-            self.frozen = true;
+            if !rotated {
+                break;
+            }
         }
         self.scratch2 = mid;
     }
@@ -802,11 +822,16 @@ impl MagnusStepper {
     fn couple(b: &mut Block, h: f64, options: &Options) -> bool {
         let r = b.r;
         b.coupling.fill(0.0);
+        for (i, c) in GAUSS3.iter().enumerate() {
+            for j in 0..r {
+                b.node_ops[i * r + j] = b.modes[j].sub_op(*c, h);
+            }
+        }
         for _ in 0..COUPLING_ITERATIONS {
             // States at the nodes with the current forces.
-            for (i, c) in GAUSS3.iter().enumerate() {
+            for i in 0..3 {
                 for j in 0..r {
-                    let (q, v) = b.modes[j].sub_step(*c, h);
+                    let (q, v) = b.modes[j].apply_sub(&b.node_ops[i * r + j]);
                     b.node_states[i * 2 * r + j] = q;
                     b.node_states[i * 2 * r + r + j] = v;
                 }

@@ -19,10 +19,12 @@
 //! every mode with the closed-form exponential of its 2 x 2 Magnus generator, the forcing
 //! integrated exactly for a quadratic in time (see [`Magnus`] for the method and sources).
 
+mod auto;
 mod functions;
 mod jacobi;
 mod magnus;
 
+pub use auto::Auto;
 pub use magnus::{Magnus, MagnusOrder, MagnusStepper};
 
 /// The constant operators of one block of a [`LinearSecondOrder`] system.
