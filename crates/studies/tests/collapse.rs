@@ -108,7 +108,10 @@ fn the_speed_search_brackets_the_threshold_found_by_direct_runs() {
     let outcome = summary.search.expect("a search study");
     assert_eq!(outcome.status, "bracketed");
     let (below, above) = (outcome.below.unwrap(), outcome.at_or_above.unwrap());
-    assert!(below < above && above - below <= tolerance, "{below} {above}");
+    assert!(
+        below < above && above - below <= tolerance,
+        "{below} {above}"
+    );
     // Bisection: the two ends, then ceil(log2(12 / 0.2)) = 6 halvings.
     assert_eq!(outcome.probes.len(), 2 + 6);
     // Independent check: direct runs on either side of the bracket agree with it, and so
@@ -116,7 +119,12 @@ fn the_speed_search_brackets_the_threshold_found_by_direct_runs() {
     assert_eq!(direct(below, window), None, "{below} Hz");
     assert!(direct(above, window).is_some(), "{above} Hz");
     for p in &outcome.probes {
-        assert_eq!(p.collapses, direct(p.value, window).is_some(), "{}", p.value);
+        assert_eq!(
+            p.collapses,
+            direct(p.value, window).is_some(),
+            "{}",
+            p.value
+        );
         assert_eq!(p.collapses, p.value >= above, "{} vs {above}", p.value);
     }
     // The files: search.json with the bracket, results.csv with a row per probe.
@@ -132,8 +140,14 @@ fn the_speed_search_brackets_the_threshold_found_by_direct_runs() {
 #[test]
 fn search_settings_are_checked_where_they_are_written() {
     let bad = [
-        ("low = 30.0\nhigh = 20.0\ntolerance = 0.1\ntime = 0.1", "search.high"),
-        ("low = 20.0\nhigh = 30.0\ntolerance = 0.0\ntime = 0.1", "search.tolerance"),
+        (
+            "low = 30.0\nhigh = 20.0\ntolerance = 0.1\ntime = 0.1",
+            "search.high",
+        ),
+        (
+            "low = 20.0\nhigh = 30.0\ntolerance = 0.0\ntime = 0.1",
+            "search.tolerance",
+        ),
         ("low = 20.0\nhigh = 30.0\ntolerance = 0.1", "search"),
         (
             "low = 20.0\nhigh = 30.0\ntolerance = 0.1\ntime = 0.1\nrevolutions = 3.0",
@@ -144,7 +158,10 @@ fn search_settings_are_checked_where_they_are_written() {
         let text = format!("{COUPLED}\n[search]\nkey = \"trajectory.frequency\"\n{body}\n");
         let err = Study::from_text("s.toml", "s", &text, &configs()).unwrap_err();
         let message = err.to_string();
-        assert!(message.contains(&format!("{key}:")) || message.contains(key), "{message}");
+        assert!(
+            message.contains(&format!("{key}:")) || message.contains(key),
+            "{message}"
+        );
     }
     // Revolutions need the frequency key.
     let text = format!(
