@@ -156,7 +156,7 @@ impl Quantity {
             Q::DeviationPhiWithStretch => sp("dphi", Some("with_stretch"), "rad", "Δφ", "rad"),
             Q::MaxChordShortening => sp("max_chord_shortening", None, "m", "δ_max", "m"),
             Q::KineticEnergy => sp("kinetic", None, "J", "T", "J"),
-            Q::TypeIIMeasure => sp("type_ii_measure", None, "1", "μ_II", "1"),
+            Q::TypeIIMeasure => sp("type_ii", None, "measure", "μ_II", "1"),
         }
     }
 
