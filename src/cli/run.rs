@@ -115,6 +115,9 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
         Err(f) => (f.partial.as_ref(), Some(&f.error)),
     };
     let written = write_outputs_with(&scene, result, error, &out, options).map_err(failure)?;
+    for w in &result.warnings {
+        eprintln!("warning: {w}");
+    }
     if let Some(e) = error {
         let rows = result.tables.first().map_or(0, |t| t.rows());
         return Err(Failure::run(format!(

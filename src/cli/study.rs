@@ -230,6 +230,16 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
         p.failed,
         summary.results.display()
     );
+    if let Some(search) = &summary.search {
+        let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
+        println!(
+            "search: {} (no collapse at {}, collapse at {}); probes in {}",
+            search.status,
+            show(search.below),
+            show(search.at_or_above),
+            search.file.display()
+        );
+    }
     Ok(())
 }
 

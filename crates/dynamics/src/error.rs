@@ -27,12 +27,15 @@ pub enum DynamicsError {
         /// Threshold it fell below.
         threshold: f64,
     },
-    /// The mechanism collapsed: the links' deflection drove the platform into (or near) a
-    /// type-II singular pose, or a link's deflection passed the run's limit. A physical
-    /// outcome, not a numerical failure: the history up to `t` is valid.
+    /// The mechanism collapsed: a link's mid-point deflection passed the model's collapse
+    /// limit (a fraction of the link length), or the deflection drove the platform into (or
+    /// near) a type-II singular pose. A physical outcome, not a numerical failure: the
+    /// history up to `t` is valid.
     #[error(
-        "the mechanism collapsed at t = {t} s: link {link} mid-point deflection {:.3} mm, type-II measure {type_ii_measure:.3e}",
-        .deflection * 1e3
+        "the mechanism collapsed at t = {:.1} ms: link {link} deflection {:.1} mm ({:.1} % of its length), type-II measure {type_ii_measure:.1e}",
+        .t * 1e3,
+        .deflection.abs() * 1e3,
+        100.0 * .deflection.abs() / .length
     )]
     Collapse {
         /// Time (s).
@@ -41,6 +44,8 @@ pub enum DynamicsError {
         link: usize,
         /// Its mid-point deflection from the chord (m).
         deflection: f64,
+        /// Its length (m).
+        length: f64,
         /// Type-II measure of the (deflected) chords at `t`.
         type_ii_measure: f64,
     },

@@ -5,7 +5,7 @@
 
 use flexprr_integrators::OdeSystem;
 
-use crate::{CoupledSystem, DynamicsError, Machine, ModalSystem};
+use crate::{CoupledSystem, DynamicsError, Machine, ModalSystem, NonlinearSystem};
 
 /// Work counters every scene model reports.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -97,6 +97,16 @@ pub trait SceneModel: OdeSystem + Send {
     /// The coupled system, when this is one (platform deviation and coupled forces).
     fn as_coupled(&mut self) -> Option<&mut CoupledSystem> {
         None
+    }
+    /// The geometrically nonlinear system, when this is one (its outputs need the time).
+    fn as_nonlinear(&mut self) -> Option<&mut NonlinearSystem> {
+        None
+    }
+    /// Whether [`SceneModel::deflection`] is linear in the coordinates and needs no time
+    /// (true for modal models). When false, the divergence guard, which tabulates the
+    /// deflection once per coordinate, does not apply; such a model checks its own limits.
+    fn linear_deflection(&self) -> bool {
+        true
     }
 }
 

@@ -297,6 +297,7 @@ fn collapse_is_a_named_outcome() {
             link,
             deflection,
             type_ii_measure,
+            ..
         } => {
             assert!((0.04..0.2).contains(&t), "{t}");
             assert!((1..=3).contains(&link));

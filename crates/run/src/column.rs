@@ -82,6 +82,10 @@ pub enum Quantity {
     DeviationPhiWithStretch,
     /// Largest chord shortening over the links (m).
     MaxChordShortening,
+    /// Kinetic energy of the whole moving machine model (links and platform, J).
+    KineticEnergy,
+    /// Type-II measure of the (deflected) chords (dimensionless).
+    TypeIIMeasure,
 }
 
 /// How a quantity is written: header stem, optional suffix after the indices, unit, and the
@@ -151,6 +155,8 @@ impl Quantity {
             Q::DeviationYWithStretch => sp("dy", Some("with_stretch"), "m", "Δy", "m"),
             Q::DeviationPhiWithStretch => sp("dphi", Some("with_stretch"), "rad", "Δφ", "rad"),
             Q::MaxChordShortening => sp("max_chord_shortening", None, "m", "δ_max", "m"),
+            Q::KineticEnergy => sp("kinetic", None, "J", "T", "J"),
+            Q::TypeIIMeasure => sp("type_ii", None, "measure", "μ_II", "1"),
         }
     }
 

@@ -64,11 +64,12 @@ pub enum RunError {
 }
 
 impl RunError {
-    /// A one-word kind for `summary.json` and study records: `diverged`, `singular-pose`,
-    /// `kinematics`, `step-size-collapse`, `too-many-steps`, `non-finite`, `integrator`,
-    /// `model`, `io`.
+    /// A one-word kind for `summary.json` and study records: `collapse` (the mechanism
+    /// collapsed: a physical outcome), `diverged`, `singular-pose`, `kinematics`,
+    /// `step-size-collapse`, `too-many-steps`, `non-finite`, `integrator`, `model`, `io`.
     pub fn kind(&self) -> &'static str {
         match self {
+            RunError::Model(DynamicsError::Collapse { .. }) => "collapse",
             RunError::Diverged { .. } => "diverged",
             RunError::NonFinite { .. } => "non-finite",
             RunError::Model(DynamicsError::SingularInverseDynamics { .. }) => "singular-pose",
@@ -91,7 +92,8 @@ impl RunError {
         match self {
             RunError::Diverged { t, .. } | RunError::NonFinite { t, .. } => Some(*t),
             RunError::Model(DynamicsError::SingularInverseDynamics { t, .. })
-            | RunError::Model(DynamicsError::Kinematics { t, .. }) => Some(*t),
+            | RunError::Model(DynamicsError::Kinematics { t, .. })
+            | RunError::Model(DynamicsError::Collapse { t, .. }) => Some(*t),
             RunError::Integrator { source, .. } => source.time(),
             _ => None,
         }
@@ -102,9 +104,46 @@ impl RunError {
         match self {
             RunError::Diverged { link, .. } => Some(*link),
             RunError::NonFinite { link, .. } => *link,
+            RunError::Model(DynamicsError::Collapse { link, .. }) => Some(link.saturating_sub(1)),
             _ => None,
         }
     }
+
+    /// The collapse, when the run ended with one: time (s), link (0-based), its mid-point
+    /// deflection (m) and length (m), and the chords' type-II measure.
+    pub fn collapse(&self) -> Option<Collapse> {
+        match self {
+            RunError::Model(DynamicsError::Collapse {
+                t,
+                link,
+                deflection,
+                length,
+                type_ii_measure,
+            }) => Some(Collapse {
+                t: *t,
+                link: link.saturating_sub(1),
+                deflection: *deflection,
+                length: *length,
+                type_ii_measure: *type_ii_measure,
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// A collapse of the mechanism, as [`RunError::collapse`] reports it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Collapse {
+    /// Time (s).
+    pub t: f64,
+    /// Link (0-based).
+    pub link: usize,
+    /// Its mid-point deflection from the chord (m).
+    pub deflection: f64,
+    /// Its length (m).
+    pub length: f64,
+    /// Type-II measure of the chords at `t`.
+    pub type_ii_measure: f64,
 }
 
 /// A run that stopped early: why, and everything computed up to the last accepted time.

@@ -34,10 +34,14 @@ pub struct DeflectionModel {
 }
 
 impl DeflectionModel {
-    /// Tabulates the shape values of every link of `model` at `points`.
+    /// Tabulates the shape values of every link of `model` at `points`; none for a model
+    /// whose deflection is not linear in its coordinates ([`SceneModel::linear_deflection`]:
+    /// the nonlinear model, which checks its own collapse limit), so [`DeflectionModel::links`]
+    /// is 0 and nothing is checked.
     pub fn new(model: &dyn SceneModel, points: &[f64]) -> Self {
         let mut unit = vec![0.0; model.dim()];
-        let links = (0..3)
+        let tabulated = if model.linear_deflection() { 3 } else { 0 };
+        let links = (0..tabulated)
             .map(|i| {
                 let range = model.link_range(i);
                 let table = points
@@ -73,6 +77,11 @@ impl DeflectionModel {
             .zip(&y[range.clone()])
             .map(|(psi, eta)| psi * eta)
             .sum()
+    }
+
+    /// Number of links tabulated (3, or 0 for a model with a nonlinear deflection).
+    pub fn links(&self) -> usize {
+        self.links.len()
     }
 
     /// Number of points per link.
@@ -121,7 +130,7 @@ impl DivergenceGuard {
 
     /// The first point of `(t, y)` beyond the limit.
     fn check(&mut self, t: f64, y: &[f64]) -> Option<RunError> {
-        for i in 0..3 {
+        for i in 0..self.shapes.links() {
             let limit = DIVERGENCE_FRACTION * self.shapes.length(i);
             for (p, &xi) in GUARD_POINTS.iter().enumerate() {
                 let w = self.shapes.deflection(i, p, y);
@@ -169,7 +178,7 @@ pub fn deflection_error(
     let (mut worst, mut scale) = (0.0_f64, 0.0_f64);
     for k in 0..solution.len() {
         let (y, y_ref) = (solution.y(k), reference.y(k));
-        for i in 0..3 {
+        for i in 0..model.links() {
             for p in 0..model.points() {
                 let w_ref = model.deflection(i, p, y_ref);
                 worst = worst.max((model.deflection(i, p, y) - w_ref).abs());

@@ -13,6 +13,7 @@ pub mod column;
 mod error;
 pub mod guard;
 mod integrate;
+mod nonlinear;
 mod output;
 mod outputs;
 pub mod plot;
@@ -21,10 +22,10 @@ mod samples;
 mod table;
 
 pub use column::{Column, Quantity};
-pub use error::{RunError, RunFailure};
+pub use error::{Collapse, RunError, RunFailure};
 pub use integrate::{Integration, integrate_model, stop_times};
 pub use output::{
     WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs, write_outputs_with,
 };
-pub use run::{integrate, run, scene_integrator};
+pub use run::{NONLINEAR_ADVICE_FRACTION, integrate, run, scene_integrator};
 pub use table::{RunResult, RunStats, Table};

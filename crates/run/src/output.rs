@@ -48,15 +48,23 @@ fn finite(v: f64) -> Value {
 fn status_json(failure: Option<&RunError>) -> (Value, Value) {
     match failure {
         None => (json!("ok"), Value::Null),
-        Some(e) => (
-            json!("failed"),
-            json!({
+        Some(e) => {
+            let mut failure = json!({
                 "kind": e.kind(),
                 "time_s": e.time().map_or(Value::Null, finite),
                 "link": e.link().map(|l| l + 1),
                 "message": e.to_string(),
-            }),
-        ),
+            });
+            if let (Some(c), Some(object)) = (e.collapse(), failure.as_object_mut()) {
+                object.insert("deflection_m".into(), finite(c.deflection));
+                object.insert(
+                    "deflection_fraction".into(),
+                    finite(c.deflection.abs() / c.length),
+                );
+                object.insert("type_ii_measure".into(), finite(c.type_ii_measure));
+            }
+            (json!("failed"), failure)
+        }
     }
 }
 
@@ -122,6 +130,7 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
     json!({
         "status": status,
         "failure": failure,
+        "warnings": result.warnings,
         "scene": scene.name,
         "flexprr_version": env!("CARGO_PKG_VERSION"),
         "formulation": {

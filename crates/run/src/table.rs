@@ -84,6 +84,9 @@ pub struct RunResult {
     pub frequencies: Option<FrequencyHistory>,
     /// Work statistics.
     pub stats: RunStats,
+    /// Warnings about the run's validity (e.g. a small-deflection model near the edge of
+    /// its range): written to `summary.json`, printed by the command line.
+    pub warnings: Vec<String>,
 }
 
 impl RunResult {

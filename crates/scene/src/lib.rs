@@ -30,7 +30,7 @@ pub use parse::{parse_scene, parse_toml};
 pub use registry::{
     BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount, Registry,
 };
-pub use scene::Scene;
+pub use scene::{DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, Scene};
 pub use schema::{
     BasisTable, BranchChoice, CouplingChoice, FormulationChoice, IntegratorConfig, Layout,
     LegConfig, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig, OutputKind,

@@ -4,23 +4,50 @@
 
 use flexprr_dynamics::{
     AxialModel, CoupledOptions, CoupledSystem, CouplingModel, DynamicsError, ModalSystem,
-    SceneModel,
+    NonlinearOptions, NonlinearSystem, SceneModel,
 };
 
 use crate::Scene;
 
 impl Scene {
     /// Builds the dynamical system the scene integrates: the KED [`ModalSystem`] with the
-    /// scene's formulation and axial force model, or the [`CoupledSystem`] when
-    /// `model.coupling = "coupled"`.
+    /// scene's formulation and axial force model, the [`CoupledSystem`] when
+    /// `model.coupling = "coupled"`, or the [`NonlinearSystem`] when `"nonlinear"`.
     ///
     /// # Errors
-    /// A modal mass matrix that is not positive definite, or inconsistent damping.
+    /// A modal mass matrix that is not positive definite, inconsistent damping, or (nonlinear)
+    /// a kinematic failure at the start time.
     pub fn build_model(&self) -> Result<Box<dyn SceneModel>, DynamicsError> {
         match self.coupling {
             CouplingModel::Ked => Ok(Box::new(self.build_ked(false)?)),
             CouplingModel::Coupled => Ok(Box::new(self.build_coupled()?)),
+            CouplingModel::Nonlinear => Ok(Box::new(self.build_nonlinear()?)),
         }
+    }
+
+    /// The geometrically nonlinear system of the scene: `model.elements` co-rotational
+    /// elements per link with the links' `EA` and `EI`, the collapse limit, the axial
+    /// damping, started in the rigid state at the first output time.
+    ///
+    /// # Errors
+    /// A tapered or stepped section (no single `EI`), bad options, or a kinematic failure at
+    /// the start time.
+    pub fn build_nonlinear(&self) -> Result<NonlinearSystem, DynamicsError> {
+        let settings = self.large_deflection;
+        let bending = settings.bending_stiffness.ok_or_else(|| {
+            DynamicsError::Inconsistent(
+                "the nonlinear model needs uniform links (one bending stiffness)".into(),
+            )
+        })?;
+        let options = NonlinearOptions {
+            axial_damping_time: settings.axial_damping_time,
+            collapse_deflection: Some(settings.collapse_deflection),
+            ..NonlinearOptions::uniform(settings.elements, self.axial_stiffness, bending)
+        };
+        let mut system =
+            NonlinearSystem::new(self.machine.clone(), self.trajectory.clone(), options)?;
+        system.start_at(self.output_times[0])?;
+        Ok(system)
     }
 
     /// The KED modal system of the scene with the axial force switched off (the paper's
@@ -60,6 +87,7 @@ impl Scene {
     fn build_coupled(&self) -> Result<CoupledSystem, DynamicsError> {
         let options = CoupledOptions {
             axial_stiffness: Some([self.axial_stiffness; 3]),
+            collapse_deflection: Some(self.large_deflection.collapse_deflection),
             ..CoupledOptions::full()
         };
         CoupledSystem::new(

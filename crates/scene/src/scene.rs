@@ -65,6 +65,25 @@ pub struct Scene {
     pub coupling: CouplingModel,
     /// Mean axial stiffness `EA` of the links (N), for the coupled model's stretch output.
     pub axial_stiffness: f64,
+    /// The nonlinear model's settings (`model.elements`, `model.collapse_deflection`,
+    /// `model.axial_damping_time`; see docs/scenes.md).
+    pub large_deflection: LargeDeflection,
+}
+
+/// Settings of the models that follow a collapse: the coupled one's collapse limit and the
+/// nonlinear one's mesh, section and damping.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LargeDeflection {
+    /// Co-rotational elements per link (nonlinear model).
+    pub elements: usize,
+    /// Collapse limit: mid-point deflection as a fraction of the link length (coupled and
+    /// nonlinear models).
+    pub collapse_deflection: f64,
+    /// Kelvin-Voigt time of the axial damping (s, nonlinear model).
+    pub axial_damping_time: f64,
+    /// Bending stiffness `EI` of the (uniform) links (N m^2); `None` for tapered or stepped
+    /// sections, which the nonlinear model refuses.
+    pub bending_stiffness: Option<f64>,
 }
 
 impl std::fmt::Debug for Scene {
@@ -211,6 +230,7 @@ impl Scene {
         let stop_times = build_stops(&c, &raw.time, &output_times)?;
         let trajectory = build_trajectory_checked(&c, &raw.trajectory, &machine, &output_times)?;
         let model = build_model_section(&c, registry, &raw.model, machine.links[0].modes())?;
+        let large_deflection = build_large_deflection(&c, &raw.model, &raw.links)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
         // `auto` becomes its choice for the model; a linear-only method needs the KED model.
         let method = registry
@@ -240,6 +260,7 @@ impl Scene {
             outputs,
             coupling: model.coupling,
             axial_stiffness,
+            large_deflection,
         })
     }
 
@@ -552,14 +573,20 @@ fn build_model_section(
     let coupling = match mo.coupling {
         CouplingChoice::Ked => CouplingModel::Ked,
         CouplingChoice::Coupled => CouplingModel::Coupled,
+        CouplingChoice::Nonlinear => CouplingModel::Nonlinear,
     };
-    if coupling == CouplingModel::Coupled
-        && (formulation != Formulation::consistent() || custom_axial)
+    if coupling != CouplingModel::Ked && (formulation != Formulation::consistent() || custom_axial)
     {
         return Err(c.error(
             "model.coupling",
-            "the coupled model is built on the consistent equations (actual chord tension, full Kp, \
+            "the coupled and nonlinear models are built on the consistent equations (actual chord tension, full Kp, \
              softening, no F_fg): set model.formulation = \"consistent\" without overrides",
+        ));
+    }
+    if coupling == CouplingModel::Nonlinear && !mo.damping.is_empty() {
+        return Err(c.error(
+            "model.damping",
+            "the nonlinear model has no modes to damp: remove model.damping (model.axial_damping_time damps its axial strain rate)",
         ));
     }
     Ok(ModelParts {
@@ -569,6 +596,83 @@ fn build_model_section(
             ratios: mo.damping.clone(),
         },
         coupling,
+    })
+}
+
+/// Default elements per link of the nonlinear model (docs/coupled.md: 32 elements put the
+/// 20 Hz mid-point deflections 0.46 % from the external ANCF model, 16 elements 1.6 %).
+pub const DEFAULT_ELEMENTS: usize = 32;
+
+/// Default collapse limit: 10 % of the link length, the external model's criterion
+/// (validation/data/collapse_speeds.json) and where the coupled model is still within 2 % of it.
+pub const DEFAULT_COLLAPSE_DEFLECTION: f64 = 0.1;
+
+/// `model.elements`, `model.collapse_deflection`, `model.axial_damping_time`: checked, and
+/// refused where the scene's model does not use them.
+fn build_large_deflection(
+    c: &Checker<'_>,
+    mo: &ModelConfig,
+    links: &crate::schema::LinksConfig,
+) -> Result<LargeDeflection, ScenarioError> {
+    let nonlinear = mo.coupling == CouplingChoice::Nonlinear;
+    let elements = mo.elements.unwrap_or(DEFAULT_ELEMENTS);
+    if mo.elements.is_some() && !nonlinear {
+        return Err(c.error(
+            "model.elements",
+            "elements per link are a setting of the nonlinear model: set model.coupling = \"nonlinear\" or remove the key",
+        ));
+    }
+    if !(2..=512).contains(&elements) || elements % 2 == 1 {
+        return Err(c.value_error(
+            "model.elements",
+            format!("{elements} elements per link: expected an even number from 2 to 512 (the mid-point is a node)"),
+        ));
+    }
+    if mo.axial_damping_time.is_some() && !nonlinear {
+        return Err(c.error(
+            "model.axial_damping_time",
+            "the axial damping time is a setting of the nonlinear model: set model.coupling = \"nonlinear\" or remove the key",
+        ));
+    }
+    let axial_damping_time = mo.axial_damping_time.unwrap_or(0.0);
+    c.non_negative(
+        "model.axial_damping_time",
+        axial_damping_time,
+        "time in seconds",
+    )?;
+    if mo.collapse_deflection.is_some() && mo.coupling == CouplingChoice::Ked {
+        return Err(c.error(
+            "model.collapse_deflection",
+            "the KED model prescribes the rigid platform motion and cannot collapse: set model.coupling = \"coupled\" or \"nonlinear\", or remove the key",
+        ));
+    }
+    let collapse_deflection = mo
+        .collapse_deflection
+        .unwrap_or(DEFAULT_COLLAPSE_DEFLECTION);
+    if !(collapse_deflection.is_finite() && collapse_deflection > 0.0 && collapse_deflection <= 1.0)
+    {
+        return Err(c.value_error(
+            "model.collapse_deflection",
+            format!("{collapse_deflection}: expected a fraction of the link length in (0, 1]"),
+        ));
+    }
+    let bending_stiffness = match links.section {
+        crate::link::SectionConfig::Uniform { thickness, height } => {
+            Some(links.material.youngs_modulus * height * thickness.powi(3) / 12.0)
+        }
+        _ => None,
+    };
+    if nonlinear && bending_stiffness.is_none() {
+        return Err(c.error(
+            "links.section",
+            "the nonlinear model has uniform links only: use section.kind = \"uniform\" or model.coupling = \"coupled\"",
+        ));
+    }
+    Ok(LargeDeflection {
+        elements,
+        collapse_deflection,
+        axial_damping_time,
+        bending_stiffness,
     })
 }
 
@@ -639,6 +743,24 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
                 &format!("output.deflection_xi.{k}"),
                 format!("expected a position xi in [0, 1] along the link, got {xi}"),
             ));
+        }
+    }
+    if raw.model.coupling == CouplingChoice::Nonlinear {
+        let modal = [
+            (OutputKind::Modes, "modes"),
+            (OutputKind::ModalForces, "modal_forces"),
+        ];
+        for (k, request) in raw.output.requests.iter().enumerate() {
+            if let Some((_, name)) = modal.iter().find(|(kind, _)| kind == request) {
+                return Err(c.value_error(
+                    &format!("output.requests.{k}"),
+                    format!(
+                        "\"{name}\" is a modal output; the nonlinear model has nodal coordinates, \
+                         not modes (it gives deflections, platform_deviation, nonlinear_forces and \
+                         energies): remove it or use model.coupling = \"coupled\""
+                    ),
+                ));
+            }
         }
     }
     Ok(raw.output.requests.iter().copied().collect())

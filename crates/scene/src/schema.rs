@@ -301,7 +301,7 @@ pub enum StiffnessChoice {
     Full,
 }
 
-/// KED or coupled model.
+/// KED, coupled or geometrically nonlinear model.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum CouplingChoice {
@@ -310,6 +310,8 @@ pub enum CouplingChoice {
     Ked,
     /// Platform moved by the links' foreshortening.
     Coupled,
+    /// Co-rotational beam-element links and a free platform (large deflection).
+    Nonlinear,
 }
 
 /// Formulation (named preset plus optional overrides) and damping.
@@ -334,9 +336,20 @@ pub struct ModelConfig {
     /// Modal damping ratios: one for all modes or one per mode.
     #[serde(default)]
     pub damping: Vec<f64>,
-    /// `"ked"` (prescribed rigid motion) or `"coupled"`.
+    /// `"ked"` (prescribed rigid motion), `"coupled"` or `"nonlinear"`.
     #[serde(default)]
     pub coupling: CouplingChoice,
+    /// Nonlinear model only: co-rotational elements per link (even, at least 2; default 32).
+    #[serde(default)]
+    pub elements: Option<usize>,
+    /// Coupled and nonlinear models: the run stops as collapsed when a link's mid-point
+    /// deflection passes this fraction of its length (default 0.1, the external model's
+    /// collapse criterion; a type-II pose of the chords always stops them).
+    #[serde(default)]
+    pub collapse_deflection: Option<f64>,
+    /// Nonlinear model only: Kelvin-Voigt time of the axial strain-rate damping (s, default 0).
+    #[serde(default)]
+    pub axial_damping_time: Option<f64>,
 }
 
 impl Default for ModelConfig {
@@ -349,6 +362,9 @@ impl Default for ModelConfig {
             centrifugal_softening: None,
             damping: Vec::new(),
             coupling: CouplingChoice::Ked,
+            elements: None,
+            collapse_deflection: None,
+            axial_damping_time: None,
         }
     }
 }

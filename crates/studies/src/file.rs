@@ -37,6 +37,10 @@ pub struct StudyFile {
     /// Plots of the results table written next to `results.csv`.
     #[serde(default)]
     pub plot: Vec<PlotConfig>,
+    /// A speed search instead of a sweep (`crate::search`): bisection over one key for the
+    /// smallest value that collapses.
+    #[serde(default)]
+    pub search: Option<crate::search::SearchConfig>,
 }
 
 /// How sweep axes combine into cases.

@@ -12,6 +12,7 @@ mod plot;
 mod quantity;
 mod record;
 mod runner;
+pub mod search;
 pub mod study;
 
 pub use study::{Study, StudyError, StudyOptions, merge_studies, run_study};

@@ -1,7 +1,7 @@
 //! Derived quantities of one case and the typed columns they fill in `results.csv`
 //! (`docs/studies.md`, "Derived quantities").
 
-use flexprr_run::{Quantity as RunQuantity, RunResult};
+use flexprr_run::{Collapse, Quantity as RunQuantity, RunResult};
 use serde::{Deserialize, Serialize};
 
 use crate::record::format_value;
@@ -44,6 +44,13 @@ pub enum Quantity {
         /// Link (1-3).
         link: usize,
     },
+    /// Whether the mechanism collapses (a coupled or nonlinear run stopped with the collapse
+    /// outcome: a link's mid-point deflection passed `model.collapse_deflection` of its
+    /// length, or the chords reached a type-II pose) and when, which link and how far it
+    /// was deflected: columns `collapses` (`yes`/`no`), `collapse_time_s`, `collapse_link`,
+    /// `collapse_deflection_m` (empty without a collapse). A collapsed case is `ok`: the
+    /// collapse is its result, and the other quantities cover the run up to it.
+    Collapse,
 }
 
 /// What a quantity column holds.
@@ -176,6 +183,32 @@ impl Quantity {
                 "m",
                 Number,
             )],
+            Quantity::Collapse => vec![
+                Column::new(
+                    "collapses".into(),
+                    "the mechanism collapses".into(),
+                    "",
+                    Flag,
+                ),
+                Column::new(
+                    "collapse_time_s".into(),
+                    "time of collapse".into(),
+                    "s",
+                    OptionalNumber,
+                ),
+                Column::new(
+                    "collapse_link".into(),
+                    "most deflected link at collapse".into(),
+                    "",
+                    OptionalNumber,
+                ),
+                Column::new(
+                    "collapse_deflection_m".into(),
+                    "its mid-point deflection at collapse".into(),
+                    "m",
+                    OptionalNumber,
+                ),
+            ],
             Quantity::Buckling { link } => vec![
                 Column::new(
                     format!("buckles_{link}"),
@@ -193,14 +226,15 @@ impl Quantity {
         }
     }
 
-    /// Link (1-based).
-    pub fn link(&self) -> usize {
+    /// Link (1-based), for the quantities of one link.
+    pub fn link(&self) -> Option<usize> {
         match *self {
             Quantity::FrequencyRange { link, .. }
             | Quantity::StiffnessRatio { link, .. }
             | Quantity::PeakAxialForce { link }
             | Quantity::PeakDeflection { link }
-            | Quantity::Buckling { link } => link,
+            | Quantity::Buckling { link } => Some(link),
+            Quantity::Collapse => None,
         }
     }
 
@@ -219,7 +253,31 @@ impl Quantity {
     /// # Errors
     /// A message when the run lacks the output the quantity needs or the mode does not exist.
     pub fn derive(&self, result: &RunResult) -> Result<Vec<String>, String> {
-        let i = self.link() - 1;
+        self.derive_outcome(result, None)
+    }
+
+    /// The quantity's values for a run that finished, or (`collapse`) stopped with the
+    /// collapse outcome; `result` is then the run up to the collapse.
+    ///
+    /// # Errors
+    /// As [`Quantity::derive`].
+    pub fn derive_outcome(
+        &self,
+        result: &RunResult,
+        collapse: Option<&Collapse>,
+    ) -> Result<Vec<String>, String> {
+        if *self == Quantity::Collapse {
+            return Ok(match collapse {
+                Some(c) => vec![
+                    "yes".into(),
+                    format_value(c.t),
+                    format_value((c.link + 1) as f64),
+                    format_value(c.deflection),
+                ],
+                None => vec!["no".into(), String::new(), String::new(), String::new()],
+            });
+        }
+        let i = self.link().unwrap_or(1) - 1;
         let needs = |output: &str| {
             format!(
                 "quantity {} needs the output \"{output}\"",
@@ -291,6 +349,7 @@ impl Quantity {
                     None => vec!["no".into(), String::new()],
                 })
             }
+            Quantity::Collapse => Err("the collapse is derived above".into()),
         }
     }
 }

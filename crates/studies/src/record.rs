@@ -73,6 +73,9 @@ pub enum FailureKind {
     Stiff,
     /// The deflection left the range of the small-deflection model (typically buckling).
     Diverged,
+    /// The mechanism collapsed (a study without the `collapse` quantity, for which that
+    /// is a failure).
+    Collapse,
     /// A quantity could not be derived (an output not requested, a mode that does not exist).
     Quantity,
     /// The run panicked (a bug: please report it).
@@ -92,6 +95,7 @@ impl FailureKind {
             FailureKind::Newton => "newton",
             FailureKind::Stiff => "stiff",
             FailureKind::Diverged => "diverged",
+            FailureKind::Collapse => "collapse",
             FailureKind::Quantity => "quantity",
             FailureKind::Panic => "panic",
             FailureKind::Run => "run",
@@ -137,6 +141,7 @@ impl CaseFailure {
 pub fn classify_run_failure(e: &RunError) -> (FailureKind, Option<f64>) {
     let kind = match e.kind() {
         "diverged" => FailureKind::Diverged,
+        "collapse" => FailureKind::Collapse,
         "step-size-collapse" => FailureKind::StepSize,
         "too-many-steps" => FailureKind::StepBudget,
         "non-finite" => FailureKind::NonFinite,

@@ -89,6 +89,8 @@ pub struct StudySummary {
     pub ran: usize,
     /// `results.csv`.
     pub results: PathBuf,
+    /// The search's outcome, when the study is a speed search.
+    pub search: Option<crate::search::SearchOutcome>,
 }
 
 /// Contents of `study.json`: identifies the study an output directory belongs to.
@@ -192,6 +194,9 @@ pub fn run_study(
     options: &StudyOptions,
     on_case: &(dyn Fn(&StudyProgress, &CaseRecord) + Sync),
 ) -> Result<StudySummary, StudyError> {
+    if let Some(search) = &study.search {
+        return run_search_study(study, search, out, options);
+    }
     let cases_dir = out.join("cases");
     std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
     let existing = existing_records(study, out, options.resume)?;
@@ -246,6 +251,38 @@ pub fn run_study(
         progress,
         ran: pending.len(),
         results,
+        search: None,
+    })
+}
+
+/// A speed search ([`crate::search`]): probes in order, no shards and no resume.
+fn run_search_study(
+    study: &Study,
+    search: &crate::search::Search,
+    out: &Path,
+    options: &StudyOptions,
+) -> Result<StudySummary, StudyError> {
+    if options.shard.is_some() || options.resume {
+        return Err(StudyError::Directory {
+            dir: out.display().to_string(),
+            message: "a speed search runs its probes one after the other, each depending on the \
+                      last: it cannot be sharded or resumed"
+                .into(),
+        });
+    }
+    let outcome = crate::search::run_search(study, search, out, &|_| {})?;
+    let n = outcome.probes.len();
+    let failed = outcome.probes.iter().filter(|p| p.error.is_some()).count();
+    Ok(StudySummary {
+        progress: StudyProgress {
+            total: n,
+            done: n,
+            failed,
+            resumed: 0,
+        },
+        ran: n,
+        results: out.join("results.csv"),
+        search: Some(outcome),
     })
 }
 

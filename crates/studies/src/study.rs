@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
 
-use flexprr_run::{RunResult, run};
+use flexprr_run::{Collapse, RunResult, run};
 use flexprr_scene::{ScenarioError, Scene, locate, parse_toml};
 
 pub use crate::error::{MAX_INPUT_BYTES, StudyError, read_input_file};
@@ -78,6 +78,8 @@ pub struct Study {
     pub plots: Vec<PlotConfig>,
     /// FNV-1a hash of everything that determines the table (base scene, axes, quantities).
     pub fingerprint: String,
+    /// The speed search, when the study is one (`[search]`) instead of a sweep.
+    pub search: Option<crate::search::Search>,
 }
 
 /// Deep merge: tables merge key by key, anything else replaces.
@@ -238,6 +240,21 @@ impl Study {
         let axes = expand_axes(&raw.axis, &base, &at)?;
         let cases = combine_cases(raw.combine, &axes, &at)?;
         check_quantities(&raw.quantities, &at)?;
+        let search = match &raw.search {
+            None => None,
+            Some(config) => {
+                if !raw.axis.is_empty() {
+                    return Err(at.input(
+                        "search",
+                        "a search varies its own key: remove the [[axis]] tables or the [search] table",
+                    ));
+                }
+                Some(
+                    crate::search::Search::from_config(config)
+                        .map_err(|(key, message)| at.input(key, message))?,
+                )
+            }
+        };
         let study = Study {
             name: raw.name.clone().unwrap_or_else(|| default_name.to_string()),
             file: file.to_string(),
@@ -247,6 +264,7 @@ impl Study {
             quantities: raw.quantities.clone(),
             plots: raw.plot.clone(),
             fingerprint: String::new(),
+            search,
         };
         study.check_plots(&at)?;
         let fingerprint = study.compute_fingerprint(raw.combine);
@@ -413,8 +431,12 @@ impl Study {
             .case_scene(case)
             .map_err(|e| CaseFailure::new(FailureKind::InvalidInput, None, &e.to_string()))?;
         let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| run(&scene, &mut |_| {})));
-        let result = match outcome {
-            Ok(Ok(r)) => r,
+        let wants_collapse = self.quantities.contains(&Quantity::Collapse);
+        let (result, collapse) = match outcome {
+            Ok(Ok(r)) => (r, None),
+            Ok(Err(failure)) if wants_collapse && failure.error.collapse().is_some() => {
+                (*failure.partial, failure.error.collapse())
+            }
             Ok(Err(failure)) => {
                 let (kind, time) = classify_run_failure(&failure.error);
                 return Err(CaseFailure::new(kind, time, &failure.error.to_string()));
@@ -435,17 +457,21 @@ impl Study {
         if let Some((time, message)) = divergence(&result) {
             return Err(CaseFailure::new(FailureKind::Diverged, time, &message));
         }
-        let values = self.derive_quantities(&result)?;
+        let values = self.derive_quantities(&result, collapse.as_ref())?;
         Ok((values, scene, result))
     }
 
     /// The quantity values of a finished run, each checked against its column (a non-finite
     /// value fails the case instead of reaching the table).
-    fn derive_quantities(&self, result: &RunResult) -> Result<Vec<String>, CaseFailure> {
+    fn derive_quantities(
+        &self,
+        result: &RunResult,
+        collapse: Option<&Collapse>,
+    ) -> Result<Vec<String>, CaseFailure> {
         let mut values = Vec::with_capacity(self.quantity_columns());
         for q in &self.quantities {
             let derived = q
-                .derive(result)
+                .derive_outcome(result, collapse)
                 .map_err(|m| CaseFailure::new(FailureKind::Quantity, None, &m))?;
             for (value, column) in derived.into_iter().zip(q.column_specs()) {
                 if !column.accepts(&value) {
@@ -611,10 +637,10 @@ fn combine_cases(
 /// Links are 1-3 and modes start at 1.
 fn check_quantities(quantities: &[Quantity], at: &Locator<'_>) -> Result<(), StudyError> {
     for (k, q) in quantities.iter().enumerate() {
-        if !(1..=3).contains(&q.link()) {
+        if let Some(link) = q.link().filter(|l| !(1..=3).contains(l)) {
             return Err(at.input(
                 &format!("quantities.{k}.link"),
-                format!("link must be 1, 2 or 3, got {}", q.link()),
+                format!("link must be 1, 2 or 3, got {link}"),
             ));
         }
         if q.mode() == Some(0) {

@@ -34,7 +34,7 @@ use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 use super::element::{CorotationalElement, wrap_angle};
-use crate::{DynamicsError, Machine};
+use crate::{DynamicsError, Machine, ModelCounters, SceneModel};
 
 /// Model switches of a [`NonlinearSystem`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -179,6 +179,8 @@ pub struct NonlinearSystem {
     platform_acceleration: Vector3<f64>,
     counters: NonlinearCounters,
     failure: Option<DynamicsError>,
+    /// The initial state set by [`NonlinearSystem::start_at`].
+    initial: Vec<f64>,
 }
 
 impl std::fmt::Debug for NonlinearSystem {
@@ -282,6 +284,7 @@ impl NonlinearSystem {
             platform_acceleration: Vector3::zeros(),
             counters: NonlinearCounters::default(),
             failure: None,
+            initial: Vec::new(),
         })
     }
 
@@ -349,6 +352,60 @@ impl NonlinearSystem {
             zd[off + 3 * ne - 2] = leg.beta_dot;
         }
         Ok(y)
+    }
+
+    /// Sets the initial state of the integration to the rigid state at `t0`
+    /// ([`NonlinearSystem::initial_state`]); [`SceneModel::initial_state`] returns it.
+    ///
+    /// # Errors
+    /// The rigid inverse kinematics fails at `t0`.
+    pub fn start_at(&mut self, t0: f64) -> Result<(), DynamicsError> {
+        self.initial = self.initial_state(t0)?;
+        Ok(())
+    }
+
+    /// Transverse deflection (m) of link `link` (0-based) at `xi` (0..1 of the undeformed
+    /// length) from its chord `B_i -> C_i`, along the chord normal, at `(t, y)`. Between
+    /// nodes the element's centre line is the cubic Hermite curve through its end positions
+    /// and tangents `(cos psi, sin psi)` (the co-rotational element's own interpolation of
+    /// the transverse displacement, Crisfield 1991, section 7.3, to the order of the local
+    /// rotations).
+    ///
+    /// # Errors
+    /// A wrong state length or a kinematic failure.
+    pub fn deflection_at(
+        &self,
+        t: f64,
+        link: usize,
+        xi: f64,
+        y: &[f64],
+    ) -> Result<f64, DynamicsError> {
+        self.check_state(y)?;
+        let frame = self.frame(t, y)?;
+        Ok(self.deflection_in(&frame, y, link.min(2), xi))
+    }
+
+    /// [`NonlinearSystem::deflection_at`] in a computed frame.
+    fn deflection_in(&self, frame: &Frame, y: &[f64], i: usize, xi: f64) -> f64 {
+        let ne = self.options.elements;
+        let s = xi.clamp(0.0, 1.0) * ne as f64;
+        let e = (s.floor() as usize).min(ne - 1);
+        let a = s - e as f64;
+        let (q1, _) = self.node(y, frame, i, e);
+        let (q2, _) = self.node(y, frame, i, e + 1);
+        let le = self.links[i].element.length;
+        let (h00, h10) = (
+            2.0 * a * a * a - 3.0 * a * a + 1.0,
+            a * a * a - 2.0 * a * a + a,
+        );
+        let (h01, h11) = (-2.0 * a * a * a + 3.0 * a * a, a * a * a - a * a);
+        let point = Vector2::new(q1[0], q1[1]) * h00
+            + Vector2::new(q1[2].cos(), q1[2].sin()) * (le * h10)
+            + Vector2::new(q2[0], q2[1]) * h01
+            + Vector2::new(q2[2].cos(), q2[2].sin()) * (le * h11);
+        let b = frame.b[i][0];
+        let chord = (frame.c[i][0] - b).normalize();
+        (point - b).dot(&perp(&chord))
     }
 
     /// Sliders from the rigid inverse kinematics of the nominal motion, platform points from
@@ -504,6 +561,7 @@ impl NonlinearSystem {
                 t,
                 link: link + 1,
                 deflection,
+                length: self.machine.links[link].length(),
                 type_ii_measure: measure,
             });
         }
@@ -700,5 +758,51 @@ impl OdeSystem for NonlinearSystem {
         if let Err(e) = self.accelerations(t, y, &frame, dzd) {
             self.fail(e, dy);
         }
+    }
+}
+
+impl SceneModel for NonlinearSystem {
+    fn kind(&self) -> &'static str {
+        "nonlinear"
+    }
+    fn machine(&self) -> &Machine {
+        &self.machine
+    }
+    /// The generalized coordinates (platform pose and every link's nodal coordinates).
+    fn modes(&self) -> usize {
+        self.coordinates()
+    }
+    /// Link `link`'s nodal coordinates (the platform's three come first).
+    fn link_range(&self, link: usize) -> std::ops::Range<usize> {
+        let start = 3 + link * self.per_link;
+        start..start + self.per_link
+    }
+    fn take_failure(&mut self) -> Option<DynamicsError> {
+        NonlinearSystem::take_failure(self)
+    }
+    fn counters(&self) -> ModelCounters {
+        ModelCounters {
+            rhs_evaluations: self.counters.rhs_evaluations,
+            inverse_dynamics_solves: 0,
+        }
+    }
+    /// The rigid state set by [`NonlinearSystem::start_at`] (at `t = 0` when it was not
+    /// called; NaN, which every integrator refuses, when the kinematics fails there).
+    fn initial_state(&self) -> Vec<f64> {
+        if self.initial.len() == self.dim() {
+            return self.initial.clone();
+        }
+        NonlinearSystem::initial_state(self, 0.0).unwrap_or_else(|_| vec![f64::NAN; self.dim()])
+    }
+    /// Not defined without the time (the chord starts at the slider, which is prescribed,
+    /// not in the state): NaN. Use [`NonlinearSystem::deflection_at`].
+    fn deflection(&self, _link: usize, _xi: f64, _y: &[f64]) -> f64 {
+        f64::NAN
+    }
+    fn as_nonlinear(&mut self) -> Option<&mut NonlinearSystem> {
+        Some(self)
+    }
+    fn linear_deflection(&self) -> bool {
+        false
     }
 }
