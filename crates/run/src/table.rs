@@ -84,6 +84,9 @@ pub struct RunResult {
     pub frequencies: Option<FrequencyHistory>,
     /// Work statistics.
     pub stats: RunStats,
+    /// Finished text files `(name, contents)` written as they are: `viewer.html`,
+    /// `snapshots.svg`, `machine.svg` when requested.
+    pub documents: Vec<(String, String)>,
 }
 
 impl RunResult {
