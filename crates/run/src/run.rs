@@ -243,6 +243,7 @@ fn produce(
                 &result.tables,
             )?;
             result.documents.extend(viewer::viewer_files(scene, &data)?);
+            result.viewer = Some(data);
         }
     }
     Ok(())
