@@ -264,7 +264,7 @@ pub(crate) fn machine_file(scene: &Scene, samples: &Samples) -> Result<(String, 
             [p.x, p.y, p.phi]
         })
         .collect();
-    let title = format!("{}: machine, workspace and path", scene.name);
+    let title = format!("{}: machine and path", scene.name);
     let svg = flexprr_viewer::machine_svg(&scene.machine.geometry, &path, &title, MACHINE_GRID)
         .map_err(|e| figure_error("machine.svg", e))?;
     Ok(("machine.svg".to_string(), svg))
