@@ -50,10 +50,11 @@ fn strings(prefix: &str, value: &toml::Value, out: &mut Vec<(String, String)>) {
 }
 
 fn at<'a>(json: &'a Value, path: &str) -> Option<&'a Value> {
-    path.split('.').try_fold(json, |v, key| match key.parse::<usize>() {
-        Ok(i) if v.is_array() => v.get(i),
-        _ => v.get(key),
-    })
+    path.split('.')
+        .try_fold(json, |v, key| match key.parse::<usize>() {
+            Ok(i) if v.is_array() => v.get(i),
+            _ => v.get(key),
+        })
 }
 
 #[test]
