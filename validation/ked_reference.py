@@ -123,7 +123,7 @@ class KedModel:
 
 
 def check_reference_state(path, modes=3):
-    """Paper formulation at f = 20 Hz vs the shared reference state at t = 0.2 s."""
+    """Paper formulation at f = 20 Hz vs the reference state at t = 0.2 s (tests/data)."""
     with open(path) as fh:
         ref = json.load(fh)
     scene = Scene(frequency=20.0)
@@ -192,7 +192,7 @@ def main(argv=None):
     parser.add_argument("--modes", type=int, default=3)
     parser.add_argument(
         "--reference",
-        default=os.path.join(HERE, "..", "..", "shared", "reference", "paper_f20_state_t0.2.json"),
+        default=os.path.join(HERE, "..", "tests", "data", "paper_f20_state_t0.2.json"),
         help="reference modal state of the paper formulation at f = 20 Hz, t = 0.2 s",
     )
     parser.add_argument("--data", default=os.path.join(HERE, "data"))
@@ -203,12 +203,12 @@ def main(argv=None):
         rel_eta, rel_deta = check_reference_state(args.reference, 3)
         print(f"reference state check (paper, f=20, r=3): rel err eta {rel_eta:.3e}, eta' {rel_deta:.3e}")
         report["reference_state_check"] = {
-            "file": "shared/reference/paper_f20_state_t0.2.json",
+            "file": "tests/data/paper_f20_state_t0.2.json",
             "rel_error_eta": rel_eta,
             "rel_error_eta_dot": rel_deta,
         }
     else:
-        print(f"reference state {args.reference} not found: check skipped", file=sys.stderr)
+        sys.exit(f"reference state {args.reference} not found (pass --reference PATH)")
     for freq in (10.0, 20.0):
         res = compare(freq, args.modes, args.data)
         report[f"f{int(freq)}"] = res

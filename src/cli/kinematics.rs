@@ -34,12 +34,12 @@ pub fn run(args: KinematicsArgs) -> Result<(), Failure> {
             .inverse_kinematics(&motion)
             .map_err(|e| Failure::run(format!("at t = {t} s: {e}")))?;
         text.push_str(&format!(
-            "{t:.9e},{:.12e},{:.12e},{:.12e}",
+            "{t:.10e},{:.10e},{:.10e},{:.10e}",
             motion.pose.x, motion.pose.y, motion.pose.phi
         ));
         for leg in &state.legs {
             text.push_str(&format!(
-                ",{:.12e},{:.12e},{:.12e},{:.12e},{:.12e},{:.12e}",
+                ",{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e}",
                 leg.rho, leg.rho_dot, leg.rho_ddot, leg.beta, leg.beta_dot, leg.beta_ddot
             ));
         }

@@ -9,6 +9,8 @@ use flexprr_run::{
 };
 use flexprr_scene::{InputKind, ScenarioError, Scene};
 
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
 use super::Failure;
 
 /// Arguments of `flexprr run`.
@@ -19,7 +21,8 @@ pub struct RunArgs {
     /// Output directory (default `out/<scene name>`).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// No progress display.
+    /// No progress: neither the bar (on a terminal) nor the lines at every tenth of the
+    /// time span (off a terminal). Both appear only once a run takes more than a second.
     #[arg(long)]
     pub quiet: bool,
     /// Replace the output directory even if it is not a flexprr output directory.
@@ -42,58 +45,76 @@ pub fn failure(e: ScenarioError) -> Failure {
     }
 }
 
-/// Progress on stderr, shown only once a run has taken more than a second.
-pub struct ProgressLine {
+/// Progress of a run on stderr, shown only once the run has taken more than a second: a bar
+/// on a terminal (like `flexprr study`); off a terminal (a log file, a batch job) one line
+/// each time another tenth of the time span is integrated, so at most ten lines; nothing
+/// with `--quiet`.
+pub struct RunProgress {
+    name: String,
     start: Instant,
-    last: Instant,
-    enabled: bool,
-    shown: bool,
+    quiet: bool,
+    terminal: bool,
+    bar: Option<ProgressBar>,
+    last_tenth: usize,
 }
 
-impl ProgressLine {
-    /// A progress line (disabled when `quiet`).
-    pub fn new(quiet: bool) -> Self {
-        let now = Instant::now();
+impl RunProgress {
+    /// Progress of the scene `name` (silent when `quiet`).
+    pub fn new(name: &str, quiet: bool) -> Self {
         Self {
-            start: now,
-            last: now,
-            enabled: !quiet,
-            shown: false,
+            name: name.to_string(),
+            start: Instant::now(),
+            quiet,
+            terminal: std::io::stderr().is_terminal(),
+            bar: None,
+            last_tenth: 0,
         }
     }
-    /// Reports the fraction done.
+
+    /// Reports the fraction of the time span integrated.
     pub fn update(&mut self, fraction: f64) {
-        if !self.enabled {
+        let elapsed = self.start.elapsed();
+        if self.quiet || elapsed < Duration::from_secs(1) || !fraction.is_finite() {
             return;
         }
-        let now = Instant::now();
-        let elapsed = now - self.start;
-        if elapsed < Duration::from_secs(1) || now - self.last < Duration::from_millis(200) {
+        let fraction = fraction.clamp(0.0, 1.0);
+        if self.terminal {
+            let bar = self.bar.get_or_insert_with(|| {
+                let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr())
+                    .with_elapsed(elapsed);
+                bar.set_style(
+                    ProgressStyle::with_template(
+                        "{spinner} [{elapsed_precise}] {bar:30} {percent:>3} % integrated, ~{eta} left",
+                    )
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+                );
+                bar.enable_steady_tick(Duration::from_millis(250));
+                bar
+            });
+            bar.set_position((1000.0 * fraction) as u64);
             return;
         }
-        self.last = now;
-        let eta = if fraction > 0.0 {
-            elapsed.as_secs_f64() * (1.0 - fraction) / fraction
-        } else {
-            0.0
-        };
-        let line = format!(
-            "integrating: {:5.1} %  elapsed {:.1} s  left ~{:.1} s",
-            100.0 * fraction,
-            elapsed.as_secs_f64(),
-            eta
-        );
-        if std::io::stderr().is_terminal() {
-            eprint!("\r{line}");
-        } else {
-            eprintln!("{line}");
+        let tenth = (10.0 * fraction).floor() as usize;
+        if tenth > self.last_tenth {
+            self.last_tenth = tenth;
+            let seconds = elapsed.as_secs_f64();
+            let left = if fraction > 0.0 {
+                seconds * (1.0 - fraction) / fraction
+            } else {
+                0.0
+            };
+            eprintln!(
+                "{}: {} % integrated, {seconds:.1} s, ~{left:.1} s left",
+                self.name,
+                10 * tenth
+            );
         }
-        self.shown = true;
     }
-    /// Ends the line.
+
+    /// Removes the bar.
     pub fn finish(&self) {
-        if self.shown && std::io::stderr().is_terminal() {
-            eprintln!();
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
         }
     }
 }
@@ -106,7 +127,7 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
-    let mut progress = ProgressLine::new(args.quiet);
+    let mut progress = RunProgress::new(&scene.name, args.quiet);
     let outcome = run_scene(&scene, &mut |f| progress.update(f));
     progress.finish();
     let options = WriteOptions { force: args.force };

@@ -78,7 +78,7 @@ pub struct AxialInput<'a> {
 /// assert!((loaded.modes[0].frequency_hz - expected).abs() <= 1e-10 * expected);
 /// ```
 pub trait AxialForceModel: std::fmt::Debug + Send + Sync {
-    /// Name used in outputs (`"none"`, `"paper"`, `"joint_reaction"`).
+    /// Name used in outputs (`"none"`, `"paper"`, `"joint-reaction"`, the scene-file spelling).
     fn name(&self) -> &'static str;
     /// Whether [`AxialForceModel::load`] needs the rigid joint reactions.
     fn needs_inverse_dynamics(&self) -> bool;
@@ -148,7 +148,7 @@ impl AxialForceModel for PaperAxialForce {
 
 impl AxialForceModel for JointReactionAxialForce {
     fn name(&self) -> &'static str {
-        "joint_reaction"
+        "joint-reaction"
     }
     fn needs_inverse_dynamics(&self) -> bool {
         true

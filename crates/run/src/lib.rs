@@ -20,6 +20,7 @@ pub mod plot;
 mod run;
 mod samples;
 mod table;
+mod viewer;
 
 pub use column::{Column, Quantity};
 pub use error::{Collapse, RunError, RunFailure};

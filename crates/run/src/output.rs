@@ -344,6 +344,9 @@ fn write_files(
             written.push(file);
         }
     }
+    for (name, text) in &result.documents {
+        write(&mut written, name.clone(), text.as_bytes())?;
+    }
     let summary = summary_json(scene, result, failure);
     let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
     write(&mut written, "summary.json".into(), text.as_bytes())?;

@@ -16,6 +16,7 @@ use crate::integrate::{Integration, integrate_model};
 use crate::outputs;
 use crate::samples::Samples;
 use crate::table::{RunResult, RunStats};
+use crate::viewer;
 
 /// The integrator the scene names, with the scene's options.
 pub fn scene_integrator(scene: &Scene) -> Box<dyn DynIntegrator> {
@@ -201,6 +202,9 @@ fn produce(
         OutputKind::AxialForces,
         OutputKind::ModalForces,
         OutputKind::Energies,
+        OutputKind::Viewer,
+        OutputKind::Snapshots,
+        OutputKind::Machine,
     ];
     let mut samples = if rigid_outputs.iter().any(|k| wants(scene, *k)) {
         Some(Samples::new(scene, times)?)
@@ -226,6 +230,9 @@ fn produce(
         }
         if wants(scene, OutputKind::AxialForces) {
             tables.push(outputs::axial_forces(scene, s)?);
+        }
+        if wants(scene, OutputKind::Machine) {
+            result.documents.push(viewer::machine_file(scene, s)?);
         }
     }
     if wants(scene, OutputKind::Frequencies) {
@@ -262,6 +269,19 @@ fn produce(
         }
         if wants(scene, OutputKind::Energies) {
             tables.push(outputs::energies(scene, model, s, solution));
+        }
+        if wants(scene, OutputKind::Viewer) || wants(scene, OutputKind::Snapshots) {
+            let data = viewer::viewer_data(
+                scene,
+                s,
+                model,
+                solution,
+                ked,
+                result.frequencies.as_ref(),
+                &result.tables,
+            )?;
+            result.documents.extend(viewer::viewer_files(scene, &data)?);
+            result.viewer = Some(data);
         }
     }
     Ok(())

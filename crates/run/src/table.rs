@@ -87,6 +87,12 @@ pub struct RunResult {
     /// Warnings about the run's validity (e.g. a small-deflection model near the edge of
     /// its range): written to `summary.json`, printed by the command line.
     pub warnings: Vec<String>,
+    /// Finished text files `(name, contents)` written as they are: `viewer.html`,
+    /// `snapshots.svg`, `machine.svg` when requested.
+    pub documents: Vec<(String, String)>,
+    /// What `viewer.html` and `snapshots.svg` draw, when either was requested: the run's
+    /// frames mapped to [`flexprr_viewer::ViewerData`] (see docs/viewer.md).
+    pub viewer: Option<flexprr_viewer::ViewerData>,
 }
 
 impl RunResult {

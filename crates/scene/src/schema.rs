@@ -501,11 +501,17 @@ pub enum OutputKind {
     Deflections,
     /// Elastic and kinetic energies.
     Energies,
+    /// The self-contained animated page `viewer.html` (docs/viewer.md).
+    Viewer,
+    /// `snapshots.svg`: the deformed links at a few instants, amplified.
+    Snapshots,
+    /// `machine.svg`: geometry, reachable workspace, type-II singularity locus and path.
+    Machine,
 }
 
 impl OutputKind {
     /// All kinds with their file-stem names.
-    pub const ALL: [(OutputKind, &'static str); 9] = [
+    pub const ALL: [(OutputKind, &'static str); 12] = [
         (OutputKind::Kinematics, "kinematics"),
         (OutputKind::DrivingForces, "driving_forces"),
         (OutputKind::JointReactions, "joint_reactions"),
@@ -515,6 +521,9 @@ impl OutputKind {
         (OutputKind::ModalForces, "modal_forces"),
         (OutputKind::Deflections, "deflections"),
         (OutputKind::Energies, "energies"),
+        (OutputKind::Viewer, "viewer"),
+        (OutputKind::Snapshots, "snapshots"),
+        (OutputKind::Machine, "machine"),
     ];
 
     /// The name used in scene files and output file names.
@@ -534,6 +543,8 @@ impl OutputKind {
                 | OutputKind::Deflections
                 | OutputKind::Energies
                 | OutputKind::ModalForces
+                | OutputKind::Viewer
+                | OutputKind::Snapshots
         )
     }
 }

@@ -1,163 +1,30 @@
 //! The viewer page of the paper scene in a real browser (headless Chromium).
 //!
-//! Needs the `chromium` binary (Debian: `apt-get install -y chromium`; `.ci/run` installs it
-//! when missing). Without it the test fails, unless `FLEXPRR_SKIP_BROWSER=1` is set.
-//! `FLEXPRR_VIEWER_SCREENSHOT=<path.png>` also saves the screenshot used in the README:
-//!
-//! ```text
-//! FLEXPRR_VIEWER_SCREENSHOT=$PWD/docs/img/viewer.png \
-//!     cargo test --release -p flexprr-viewer --test browser
-//! ```
+//! SYNTHETIC link series on the real machine and path (see `common/mod.rs`): they exercise
+//! what the real paper scene does not have (a buckling interval, a platform deviation).
+//! The viewer of the real paper run is tested in the workspace's `tests/viewer_browser.rs`.
+//! Needs the `chromium` binary (see `chromium/mod.rs`); `FLEXPRR_SKIP_BROWSER=1` skips.
 
+mod chromium;
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use chromium::{Screenshot, chromium, console_lines, expected_transform, f, report, run_chromium};
 
 use flexprr_kinematics::Trajectory;
 use flexprr_viewer::{ViewerOptions, frame_indices, viewer_html};
 use serde_json::Value;
 
-const WINDOW: (u32, u32) = (1280, 900);
-
-/// The browser to drive, or `None` when the test is to be skipped.
-fn chromium() -> Option<PathBuf> {
-    let found = std::env::var_os("PATH").and_then(|paths| {
-        std::env::split_paths(&paths)
-            .map(|dir| dir.join("chromium"))
-            .find(|p| p.is_file())
-    });
-    match found {
-        Some(path) => Some(path),
-        None if std::env::var("FLEXPRR_SKIP_BROWSER").as_deref() == Ok("1") => {
-            eprintln!("browser test skipped: no chromium on PATH and FLEXPRR_SKIP_BROWSER=1");
-            None
-        }
-        None => panic!(
-            "the viewer's browser tests need headless Chromium: install it with \
-             `apt-get update && apt-get install -y chromium` (Debian), or set \
-             FLEXPRR_SKIP_BROWSER=1 to skip them"
-        ),
-    }
-}
-
-/// Runs headless Chromium on `url` with `extra` arguments; returns stdout and stderr.
-fn run_chromium(browser: &Path, profile: &Path, url: &str, extra: &[String]) -> (String, String) {
-    let mut command = Command::new(browser);
-    command.args([
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--hide-scrollbars",
-        "--force-device-scale-factor=1",
-        "--enable-logging=stderr",
-        "--v=0",
-        "--virtual-time-budget=5000",
-    ]);
-    command.arg(format!("--user-data-dir={}", profile.display()));
-    command.arg(format!("--window-size={},{}", WINDOW.0, WINDOW.1));
-    command.args(extra);
-    command.arg(url);
-    let output = command.output().expect("start chromium");
-    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(
-        output.status.success(),
-        "chromium failed on {url}: {}\n{stderr}",
-        output.status
-    );
-    (stdout, stderr)
-}
-
-/// Console lines Chromium logs to stderr (`...:CONSOLE...] "message", source: ...`).
-fn console_lines(stderr: &str) -> Vec<&str> {
-    stderr.lines().filter(|l| l.contains(":CONSOLE")).collect()
-}
-
-/// The page's JSON report from a `--dump-dom` of it.
-fn report(dom: &str) -> Value {
-    let start = dom
-        .find("<pre id=\"flexprr-report\">")
-        .expect("report element in the DOM")
-        + "<pre id=\"flexprr-report\">".len();
-    let end = start + dom[start..].find("</pre>").expect("end of report");
-    let text = dom[start..end]
-        .replace("&lt;", "<")
-        .replace("&gt;", ">")
-        .replace("&amp;", "&");
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("report is not JSON ({e}): {text}"))
-}
-
-struct Screenshot {
-    width: usize,
-    rgb: Vec<[u8; 3]>,
-}
-
-impl Screenshot {
-    fn load(path: &Path) -> Self {
-        let decoder = png::Decoder::new(std::io::BufReader::new(
-            std::fs::File::open(path).expect("screenshot written"),
-        ));
-        let mut reader = decoder.read_info().expect("PNG header");
-        let mut buffer = vec![0; reader.output_buffer_size().expect("PNG size")];
-        let info = reader.next_frame(&mut buffer).expect("PNG data");
-        let channels = info.color_type.samples();
-        assert_eq!(info.bit_depth, png::BitDepth::Eight);
-        assert!(channels >= 3, "colour screenshot");
-        let rgb = buffer[..info.buffer_size()]
-            .chunks(channels)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
-        Self {
-            width: info.width as usize,
-            rgb,
-        }
-    }
-
-    fn at(&self, x: f64, y: f64) -> [u8; 3] {
-        self.rgb[y.floor() as usize * self.width + x.floor() as usize]
-    }
-}
-
-fn f(v: &Value) -> f64 {
-    v.as_f64()
-        .unwrap_or_else(|| panic!("number expected, got {v}"))
-}
-
-/// The page maps the world to canvas pixels with equal scales and y up, fitting the
-/// bounding box of the guides' travel ends and the platform path into a 640 px square
-/// canvas with a 46 px margin, centred. Recomputed here from the geometry alone.
-fn expected_transform(data: &flexprr_viewer::ViewerData) -> (f64, f64, f64) {
-    let (size, margin) = (640.0, 46.0);
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    let mut include = |x: f64, y: f64| {
-        x0 = x0.min(x);
-        x1 = x1.max(x);
-        y0 = y0.min(y);
-        y1 = y1.max(y);
-    };
-    for g in &data.guides {
-        for r in [g.travel.0, g.travel.1] {
-            include(
+/// The page transform of `data`: its guides' travel ends and platform path.
+fn data_transform(data: &flexprr_viewer::ViewerData) -> (f64, f64, f64) {
+    let ends = data.guides.iter().flat_map(|g| {
+        [g.travel.0, g.travel.1].map(|r| {
+            [
                 g.anchor[0] + r * g.direction[0],
                 g.anchor[1] + r * g.direction[1],
-            );
-        }
-    }
-    for p in &data.pose {
-        include(p[0], p[1]);
-    }
-    let scale = ((size - 2.0 * margin) / (x1 - x0)).min((size - 2.0 * margin) / (y1 - y0));
-    (
-        scale,
-        (size - scale * (x0 + x1)) / 2.0,
-        (size + scale * (y0 + y1)) / 2.0,
-    )
+            ]
+        })
+    });
+    expected_transform(ends.chain(data.pose.iter().map(|p| [p[0], p[1]])))
 }
 
 /// Loads the paper scene's viewer in headless Chromium and checks: no console errors; the
@@ -186,7 +53,7 @@ fn paper_scene_viewer_in_headless_chromium() {
 
     let geometry = common::paper_geometry();
     let circle = common::paper_circle();
-    let (scale, ox, oy) = expected_transform(&data);
+    let (scale, ox, oy) = data_transform(&data);
     let mut shots = Vec::new();
     for (run, t) in [0.0, 0.0125].into_iter().enumerate() {
         let profile = dir.path().join(format!("profile-{run}"));
@@ -281,17 +148,6 @@ fn paper_scene_viewer_in_headless_chromium() {
     let report = report(&dom);
     assert!((f(&report["time"]) - 0.125).abs() < 1e-6);
     assert_eq!(report["buckling"], serde_json::json!([2]), "{report}");
-
-    if let Some(path) = std::env::var_os("FLEXPRR_VIEWER_SCREENSHOT") {
-        let (_, stderr) = run_chromium(
-            &browser,
-            &dir.path().join("profile-readme"),
-            &url(0.125),
-            &[format!("--screenshot={}", PathBuf::from(&path).display())],
-        );
-        assert!(console_lines(&stderr).is_empty(), "{stderr}");
-        eprintln!("screenshot saved to {}", PathBuf::from(path).display());
-    }
 }
 
 /// With a (SYNTHETIC) coupled-model platform deviation the page shows the deviation plot
