@@ -765,7 +765,7 @@ pub fn markdown_rows(rows: &[WorkPrecisionRow]) -> String {
 pub fn write_svg(rows: &[WorkPrecisionRow], path: &Path, title: &str) -> Result<(), ScenarioError> {
     use flexprr_run::plot::{Axis, Dash, Figure, Marker, Panel, Series, Style};
     let positive = |v: &f64| v.is_finite() && *v > 0.0;
-    let mut panel = Panel::new(Axis::log("max relative error over the output times", ""));
+    let mut panel = Panel::new(Axis::log("max relative error", ""));
     for (k, (package, method)) in series(rows).iter().enumerate() {
         let mut line: Vec<&WorkPrecisionRow> = rows
             .iter()

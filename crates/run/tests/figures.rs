@@ -193,7 +193,7 @@ fn a_long_run_is_decimated_to_a_small_file_with_its_extremes() {
         let b: Vec<f64> = t.iter().map(|t| 0.8e-4 * (37.0 * t).cos()).collect();
         a[77_777] = 3e-4;
         figure = figure.panel(
-            Panel::new(Axis::new(format!("w_{}", i + 1), "m"))
+            Panel::new(Axis::new(format!("w_{{{}}}", i + 1), "m"))
                 .series(Series::new("a", &t, &a, Style::nth(0)))
                 .series(Series::new("b", &t, &b, Style::nth(1))),
         );

@@ -48,7 +48,9 @@ pub fn write_plots(
                 continue;
             };
             let lines = plot_lines(study, plot, c, records);
-            figure = figure.panel(panel(&columns[c], &lines));
+            // The legend once, on the top panel: lines and failed cases are drawn alike below.
+            let legend = figure.panels.is_empty();
+            figure = figure.panel(panel(&columns[c], &lines, legend));
         }
         let path = out.join(&plot.file);
         figure
@@ -62,14 +64,16 @@ pub fn write_plots(
 }
 
 /// The panel of column `column`: a line with markers per series value, then the failed
-/// cases of all lines as one series.
-fn panel(column: &Column, lines: &[Line]) -> Panel {
+/// cases of all lines as one series; with legend labels if `legend`.
+fn panel(column: &Column, lines: &[Line], legend: bool) -> Panel {
     let mut panel = Panel::new(Axis::new(column.label.as_str(), column.unit));
     let mut failed = Vec::new();
     for (k, line) in lines.iter().enumerate() {
         let (x, y): (Vec<f64>, Vec<f64>) = line.points.iter().copied().unzip();
         let style = Style::nth(k).marker(Marker::CYCLE[k % Marker::CYCLE.len()]);
-        let label = if line.label.is_empty() && lines.len() == 1 {
+        let label = if !legend {
+            ""
+        } else if line.label.is_empty() && lines.len() == 1 {
             "cases"
         } else {
             line.label.as_str()
@@ -79,7 +83,9 @@ fn panel(column: &Column, lines: &[Line]) -> Panel {
     }
     if !failed.is_empty() {
         let n = failed.len();
-        let label = if n == 1 {
+        let label = if !legend {
+            String::new()
+        } else if n == 1 {
             "failed case".to_string()
         } else {
             format!("failed cases ({n})")

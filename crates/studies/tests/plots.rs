@@ -57,8 +57,8 @@ series = "links.section.thickness"
         !svg.contains("f_min_1_1_Hz"),
         "raw column name used as a label"
     );
-    // Each failed case is a hollow red circle (white fill, red stroke) on the lower edge:
-    // three of them, at the three frequencies.
+    // Each failed case is a hollow red circle (white fill, red stroke) in the strip along
+    // the lower edge: three of them, at the three frequencies.
     let hollow_red = svg.matches("fill=\"white\" stroke=\"#dc0000\"").count();
     assert_eq!(hollow_red, 3 + 1, "three cases and the legend sample");
 }

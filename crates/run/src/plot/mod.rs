@@ -10,15 +10,17 @@
 //! * ticks are multiples of `1, 2, 5 x 10^k`, labelled with exactly the decimals the step
 //!   needs, no trailing zeros and no `−0` ([`ticks::tick_label`]); logarithmic axes are
 //!   labelled `10⁻⁶`;
-//! * labels take `_x` and `_{xy}` for subscripts, written as Unicode subscripts where they
-//!   exist (`F_a` -> `Fₐ`) and as lowered smaller text where they do not (`P_B`);
+//! * labels take `_{xy}` for subscripts, written as Unicode subscripts where they exist
+//!   (`F_{a1}` -> `Fₐ₁`) and as lowered smaller text where they do not (`P_{B}`); a bare `_`
+//!   stays an underscore;
 //! * the legend goes into the corner of the plot area that no line or marker touches, or
 //!   above the plot area when every corner is taken, so it never covers data; its samples
 //!   are drawn with the series' own colour, dash and marker;
 //! * long series are decimated to the first, lowest, highest and last point of every half
 //!   pixel ([`decimate::decimate`]), which draws the same and keeps each series' extremes;
-//! * failed cases ([`Series::failed`]) are hollow red circles on the lower edge of the plot
-//!   area at their x, with a legend entry.
+//! * failed cases ([`Series::failed`]) are hollow red circles in a strip along the lower
+//!   edge of the plot area, below all data, at their x (one circle per x, with the count
+//!   `×n` beside it where several cases failed there), with a legend entry.
 //!
 //! ```
 //! use flexprr_run::plot::{Axis, Figure, Panel, Series, Style};
@@ -26,7 +28,7 @@
 //! let w = [0.0, 1.5e-4, -0.5e-4];
 //! let figure = Figure::new(Axis::new("t", "s"))
 //!     .title("Deflection at ξ = 0.5")
-//!     .panel(Panel::new(Axis::new("w_1", "m")).series(Series::new(
+//!     .panel(Panel::new(Axis::new("w_{1}", "m")).series(Series::new(
 //!         "with axial force",
 //!         &t,
 //!         &w,
@@ -90,16 +92,19 @@ pub enum Marker {
     Triangle,
     /// Filled diamond.
     Diamond,
+    /// Filled triangle, apex down.
+    TriangleDown,
 }
 
 impl Marker {
-    /// Markers in turn, one per line, so lines drawn on top of each other stay apart.
+    /// Markers in turn, one per line, so lines drawn on top of each other stay apart (the
+    /// hollow [`Marker::Ring`] is kept for failed cases).
     pub const CYCLE: [Marker; 5] = [
         Marker::Disc,
         Marker::Square,
         Marker::Triangle,
         Marker::Diamond,
-        Marker::Ring,
+        Marker::TriangleDown,
     ];
 }
 
@@ -150,7 +155,7 @@ pub enum Scale {
 /// An axis: what it shows (with `_` subscripts) and the SI unit of the data.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
-    /// Symbol or words, e.g. `w_1(ξ = 0.5)`, `platform mass`.
+    /// Symbol or words, `_{..}` for subscripts, e.g. `w_{1}`, `platform mass`.
     pub label: String,
     /// SI unit of the data (`m`, `N`, `rad/s²`; empty for ratios).
     pub unit: String,
@@ -181,7 +186,8 @@ impl Axis {
 pub enum Placement {
     /// At their values.
     Data,
-    /// On the lower edge of the plot area at their x (failed cases: they have no y).
+    /// In a strip along the lower edge of the plot area, below the data, at their x (failed
+    /// cases: they have no y).
     LowerEdge,
 }
 
@@ -211,7 +217,8 @@ impl Series {
             placement: Placement::Data,
         }
     }
-    /// Failed cases at abscissae `x`: hollow red circles on the lower edge, no line.
+    /// Failed cases at abscissae `x`: hollow red circles in the strip along the lower edge,
+    /// no line.
     pub fn failed(label: impl Into<String>, x: Vec<f64>) -> Self {
         Self {
             label: label.into(),

@@ -47,7 +47,7 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
                     ("", "")
                 };
                 f = f.panel(panel(
-                    Axis::new(format!("w_{i}"), "m"),
+                    Axis::new(format!("w_{{{i}}}"), "m"),
                     [
                         series(t, &format!("w_{i}_xi{xi}_m"), with, solid(0)),
                         series(t, &format!("w_{i}_xi{xi}_no_axial_m"), without, dashed(1)),
@@ -70,9 +70,9 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
     }
     if let Some(t) = result.table("modal_forces") {
         let s = [
-            ("F_rho_1_1_N", "F_1 = −M_ρ ρ̈"),
-            ("F_beta_1_1_N", "F_2 = −M_β β̈"),
-            ("F_fg_1_1_N", "F_3 = F_{fg}"),
+            ("F_rho_1_1_N", "F₁ = −M_{ρ} ρ̈"),
+            ("F_beta_1_1_N", "F₂ = −M_{β} β̈"),
+            ("F_fg_1_1_N", "F₃ = F_{fg}"),
         ]
         .iter()
         .enumerate()
@@ -85,14 +85,14 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
     }
     if let Some(t) = result.table("driving_forces") {
         let mut f = figure("Driving force of slider 1").panel(panel(
-            Axis::new("F_a₁", "N"),
+            Axis::new("F_{a1}", "N"),
             [
                 series(t, "F_a_1_flexible_N", "flexible links", solid(0)),
                 series(t, "F_a_1_rigid_N", "rigid links", dashed(1)),
             ],
         ));
         if let Some(s) = series(t, "F_a_1_difference_N", "", solid(2)) {
-            f = f.panel(Panel::new(Axis::new("ΔF_a₁", "N")).series(s));
+            f = f.panel(Panel::new(Axis::new("ΔF_{a1}", "N")).series(s));
         }
         out.push(("driving_forces.svg".to_string(), f));
     }
@@ -120,7 +120,7 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
         out.push((
             "axial_forces.svg".to_string(),
             figure("Axial forces at the sliders (tension positive)")
-                .panel(panel(Axis::new("P_B", "N"), s)),
+                .panel(panel(Axis::new("P_{B}", "N"), s)),
         ));
     }
     if let Some(t) = result.table("platform_deviation") {
@@ -139,10 +139,22 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
         out.push(("platform_deviation.svg".to_string(), f));
     }
     if let Some(t) = result.table("kinematics") {
-        let rho =
-            (1..=3).map(|i| series(t, &format!("rho_{i}_m"), &format!("ρ_{i}"), solid(i - 1)));
-        let beta =
-            (1..=3).map(|i| series(t, &format!("beta_{i}_rad"), &format!("β_{i}"), solid(i - 1)));
+        let rho = (1..=3).map(|i| {
+            series(
+                t,
+                &format!("rho_{i}_m"),
+                &format!("ρ_{{{i}}}"),
+                solid(i - 1),
+            )
+        });
+        let beta = (1..=3).map(|i| {
+            series(
+                t,
+                &format!("beta_{i}_rad"),
+                &format!("β_{{{i}}}"),
+                solid(i - 1),
+            )
+        });
         let f = figure("Slider positions and link angles")
             .panel(panel(Axis::new("ρ", "m"), rho))
             .panel(panel(Axis::new("β", "rad"), beta));

@@ -97,51 +97,39 @@ fn segment_meets(p: (f64, f64), q: (f64, f64), r: &Rect) -> bool {
     true
 }
 
-/// Text with `_x`/`_{xy}` subscripts as SVG content: Unicode subscripts where every
-/// character has one, otherwise a lowered smaller `tspan`; XML special characters escaped.
+/// Text with `_{xy}` subscripts as SVG content: Unicode subscripts where every character
+/// has one, otherwise a lowered smaller `tspan`; XML special characters escaped. A `_`
+/// without `{` is an underscore (scene names such as `paper_f20`).
 pub(crate) fn markup(text: &str, font: f64) -> String {
     let mut out = String::new();
-    let mut chars = text.chars().peekable();
-    while let Some(c) = chars.next() {
-        if c != '_' {
+    let mut rest = text;
+    while let Some(at) = rest.find("_{") {
+        let Some(close) = rest[at..].find('}') else {
+            break;
+        };
+        for c in rest[..at].chars() {
             push_escaped(&mut out, c);
-            continue;
         }
-        let mut sub = String::new();
-        if chars.peek() == Some(&'{') {
-            chars.next();
-            for c in chars.by_ref() {
-                if c == '}' {
-                    break;
-                }
-                sub.push(c);
-            }
-        } else {
-            while let Some(&c) = chars.peek() {
-                if c.is_alphanumeric() || unsubscript(c).is_some() {
-                    sub.push(c);
-                    chars.next();
-                } else {
-                    break;
-                }
-            }
-        }
+        let sub = &rest[at + 2..at + close];
+        rest = &rest[at + close + 1..];
         match sub.chars().map(subscript).collect::<Option<String>>() {
             Some(unicode) => out.push_str(&unicode),
             None => {
-                let plain: String = sub.chars().map(|c| unsubscript(c).unwrap_or(c)).collect();
                 let shift = 0.3 * font;
                 let _ = write!(
                     out,
                     "<tspan dy=\"{shift:.1}\" font-size=\"{:.1}\">",
                     0.72 * font
                 );
-                for c in plain.chars() {
-                    push_escaped(&mut out, c);
+                for c in sub.chars() {
+                    push_escaped(&mut out, unsubscript(c).unwrap_or(c));
                 }
                 let _ = write!(out, "</tspan><tspan dy=\"{:.1}\"></tspan>", -shift);
             }
         }
+    }
+    for c in rest.chars() {
+        push_escaped(&mut out, c);
     }
     out
 }
@@ -253,8 +241,9 @@ fn coordinates(s: &Series, fx: &Frame, fy: &Frame) -> Vec<Option<(f64, f64)>> {
 }
 
 /// The frame of an axis over the values `values` (SI), with `pad` of the span added on
-/// each side and about `target` ticks.
-fn frame(axis: &Axis, values: &[f64], pad: f64, target: usize) -> Frame {
+/// each side, `strip` px of the plot height below the data kept free (for failed cases),
+/// and about `target` ticks.
+fn frame(axis: &Axis, values: &[f64], pad: f64, strip: f64, target: usize) -> Frame {
     let log = axis.scale == Scale::Log;
     let (factor, unit) = if log {
         (1.0, axis.unit.clone())
@@ -297,6 +286,10 @@ fn frame(axis: &Axis, values: &[f64], pad: f64, target: usize) -> Frame {
         let p = pad * (hi - lo);
         (lo, hi) = (lo - p, hi + p);
     }
+    let data_lo = lo;
+    if strip > 0.0 {
+        lo -= (hi - lo) * strip / (PLOT_HEIGHT - strip);
+    }
     f.lo = lo;
     f.hi = hi;
     if log {
@@ -307,14 +300,20 @@ fn frame(axis: &Axis, values: &[f64], pad: f64, target: usize) -> Frame {
             .collect();
         f.minor = minor.into_iter().map(f64::log10).collect();
     } else {
-        let (ticks, step) = linear_ticks(lo, hi, target);
+        let (ticks, step) = linear_ticks(data_lo, hi, target);
         f.ticks = ticks
             .into_iter()
             .map(|v| (v, tick_label(v, step)))
             .collect();
     }
+    // No ticks in the strip for failed cases.
+    f.ticks.retain(|t| t.0 >= data_lo - 1e-9 * (hi - lo));
+    f.minor.retain(|&t| t >= data_lo);
     f
 }
+
+/// Height of the strip for failed cases (px).
+const STRIP: f64 = 16.0;
 
 /// Where a panel's legend goes.
 enum LegendPlace {
@@ -375,6 +374,16 @@ fn marker_svg(out: &mut String, m: Marker, c: Color, (x, y): (f64, f64)) {
             x - r,
             y + 0.75 * r
         ),
+        Marker::TriangleDown => writeln!(
+            out,
+            "<path d=\"M{:.1} {:.1}L{:.1} {:.1}L{:.1} {:.1}Z\" fill=\"{c}\"/>",
+            x,
+            y + 1.15 * r,
+            x + r,
+            y - 0.75 * r,
+            x - r,
+            y - 0.75 * r
+        ),
         Marker::Diamond => writeln!(
             out,
             "<path d=\"M{:.1} {:.1}L{:.1} {:.1}L{:.1} {:.1}L{:.1} {:.1}Z\" fill=\"{c}\"/>",
@@ -420,6 +429,8 @@ struct Laid<'a> {
     fy: Frame,
     /// Pixel polylines (runs without gaps) and marker points per series.
     pixels: Vec<(Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>)>,
+    /// Failed-case circles standing for more than one case, and how many.
+    counts: Vec<((f64, f64), usize)>,
     entries: Vec<Entry<'a>>,
     legend: LegendPlace,
 }
@@ -454,7 +465,7 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
         .flat_map(|p| p.series.iter().flat_map(|s| s.x.iter().copied()))
         .collect();
     // Time series run edge to edge; points with markers get room.
-    let fx = frame(&figure.x, &xs, if markers { 0.05 } else { 0.0 }, 6);
+    let fx = frame(&figure.x, &xs, if markers { 0.05 } else { 0.0 }, 0.0, 6);
     let frames: Vec<Frame> = figure
         .panels
         .iter()
@@ -465,7 +476,11 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
                 .filter(|s| s.placement == Placement::Data)
                 .flat_map(|s| s.y.iter().copied())
                 .collect();
-            frame(&p.y, &ys, 0.06, 5)
+            let edge = p
+                .series
+                .iter()
+                .any(|s| s.placement == Placement::LowerEdge && !s.x.is_empty());
+            frame(&p.y, &ys, 0.06, if edge { STRIP } else { 0.0 }, 5)
         })
         .collect();
     // Horizontal layout, common to all panels so the plot areas align.
@@ -473,7 +488,13 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
         .iter()
         .flat_map(|f| f.ticks.iter().map(|t| text_width(&t.1, FONT_TICK)))
         .fold(0.0, f64::max);
-    let left = (6.0 + FONT_LABEL + 8.0 + tick_width + 6.0).ceil();
+    let y_labels: Vec<Vec<String>> = frames
+        .iter()
+        .map(|f| wrap(&f.label, PLOT_HEIGHT - 6.0, FONT_LABEL))
+        .collect();
+    let label_lines = y_labels.iter().map(Vec::len).max().unwrap_or(1).max(1);
+    let label_w = 1.2 * FONT_LABEL * label_lines as f64;
+    let left = (4.0 + label_w + 6.0 + tick_width + 6.0).ceil();
     let last_x_tick = fx.ticks.last().map_or(0.0, |t| text_width(&t.1, FONT_TICK));
     let right = (0.5 * last_x_tick + 4.0).max(12.0).ceil();
     let plot_w = WIDTH - left - right;
@@ -484,7 +505,7 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
     for (panel, fy) in figure.panels.iter().zip(frames) {
         let py = |c: f64| PLOT_HEIGHT - (c - fy.lo) / (fy.hi - fy.lo) * PLOT_HEIGHT;
         let mut pixels = Vec::new();
-        let mut edge: Vec<(f64, usize)> = Vec::new();
+        let mut edge: Vec<((f64, f64), usize)> = Vec::new();
         for s in &panel.series {
             let (dx, dy) = if s.style.marker.is_none() {
                 decimate(&s.x, &s.y, buckets)
@@ -500,13 +521,16 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
             let mut points = Vec::new();
             for c in coordinates(&short, &fx, &fy) {
                 match c {
-                    Some((x, y)) if s.placement == Placement::LowerEdge => {
-                        // Stacked upwards where several failed cases share an x.
-                        let p = px(x);
-                        let n = edge.iter().filter(|e| (e.0 - p).abs() < 1.0).count();
-                        edge.push((p, n));
-                        let _ = y;
-                        points.push((p, PLOT_HEIGHT - 2.0 * MARKER - 2.0 * MARKER * n as f64));
+                    Some((x, _)) if s.placement == Placement::LowerEdge => {
+                        // One circle per x, counted.
+                        let p = (px(x), PLOT_HEIGHT - 0.5 * STRIP);
+                        match edge.iter_mut().find(|e| (e.0.0 - p.0).abs() < 1.0) {
+                            Some(e) => e.1 += 1,
+                            None => {
+                                edge.push((p, 1));
+                                points.push(p);
+                            }
+                        }
                     }
                     Some((x, y)) => {
                         let p = (px(x), py(y));
@@ -544,6 +568,7 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
         laid.push(Laid {
             fy,
             pixels,
+            counts: edge.into_iter().filter(|e| e.1 > 1).collect(),
             entries,
             legend,
         });
@@ -652,14 +677,18 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
             out,
             "<path d=\"{marks}\" stroke=\"black\" stroke-width=\"1\" fill=\"none\"/>"
         );
-        // y label, rotated, centred on the plot area.
+        // y label, rotated, centred on the plot area, in lines if it is long.
         let cy = top + PLOT_HEIGHT / 2.0;
-        let _ = writeln!(
-            out,
-            "<text transform=\"translate({:.1} {cy:.1}) rotate(-90)\" font-size=\"{FONT_LABEL}\" text-anchor=\"middle\">{}</text>",
-            6.0 + FONT_LABEL * 0.8,
-            markup(&l.fy.label, FONT_LABEL)
-        );
+        let lines = &y_labels[k];
+        for (i, line) in lines.iter().enumerate() {
+            let x =
+                4.0 + FONT_LABEL * 0.85 + 1.2 * FONT_LABEL * (i + label_lines - lines.len()) as f64;
+            let _ = writeln!(
+                out,
+                "<text transform=\"translate({x:.1} {cy:.1}) rotate(-90)\" font-size=\"{FONT_LABEL}\" text-anchor=\"middle\">{}</text>",
+                markup(line, FONT_LABEL)
+            );
+        }
         // Series, clipped to the plot area.
         let _ = writeln!(out, "<g clip-path=\"url(#p{k})\">");
         for ((runs, points), s) in l.pixels.iter().zip(&figure.panels[k].series) {
@@ -672,6 +701,15 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
                     marker_svg(&mut out, m, s.style.color, (x, y + top));
                 }
             }
+        }
+        for ((x, y), n) in &l.counts {
+            let _ = writeln!(
+                out,
+                "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\" fill=\"{}\">×{n}</text>",
+                x + MARKER + 2.0,
+                y + top + 3.5,
+                color(super::FAILED_COLOR)
+            );
         }
         let _ = writeln!(out, "</g>");
         let _ = writeln!(
@@ -798,10 +836,11 @@ mod tests {
 
     #[test]
     fn subscripts() {
-        assert_eq!(markup("F_a₁", 14.0), "Fₐ₁");
-        assert_eq!(markup("δ_max", 14.0), "δₘₐₓ");
-        assert_eq!(markup("M_ρ ρ̈", 14.0), "Mᵨ ρ̈");
-        let p = markup("P_B₁ (N)", 10.0);
+        assert_eq!(markup("F_{a1}", 14.0), "Fₐ₁");
+        assert_eq!(markup("δ_{max}", 14.0), "δₘₐₓ");
+        assert_eq!(markup("M_{ρ} ρ̈", 14.0), "Mᵨ ρ̈");
+        assert_eq!(markup("paper_f20", 14.0), "paper_f20");
+        let p = markup("P_{B1} (N)", 10.0);
         assert!(
             p.starts_with("P<tspan dy=\"3.0\" font-size=\"7.2\">B1</tspan>"),
             "{p}"
