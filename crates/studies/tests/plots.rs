@@ -42,6 +42,14 @@ series = "links.section.thickness"
     };
     run_study(&study, tmp.path(), &options, &|_, _| {}).unwrap();
     let svg = std::fs::read_to_string(tmp.path().join("range.svg")).unwrap();
+    // The drawn words, one text element after the other (a long axis label is drawn in
+    // lines).
+    let words = svg
+        .split("<text ")
+        .skip(1)
+        .map(|t| &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()])
+        .collect::<Vec<_>>()
+        .join(" ");
     for text in [
         "circle frequency f (Hz)",
         "lowest frequency of link 1, mode 1 (Hz)",
@@ -51,7 +59,7 @@ series = "links.section.thickness"
         // The three invalid cases (negative thickness) are drawn and counted.
         "failed cases (3)",
     ] {
-        assert!(svg.contains(text), "{text} missing");
+        assert!(words.contains(text), "{text} missing from {words}");
     }
     assert!(
         !svg.contains("f_min_1_1_Hz"),
