@@ -112,27 +112,27 @@ fn run_paper_f20_writes_tables_summary_and_plots() {
         assert!(table.contains(&format!("| mode {mode} |")), "{table}");
     }
 
-    // SVG plots with axis labels carrying units and a legend.
+    // SVG plots with axis labels carrying SI-prefixed units, Unicode symbols and a legend.
     let plots = [
         (
             "deflections_xi0.5.svg",
             &[
-                "t (s)",
-                "w(xi = 0.5) (m)",
+                "t (ms)",
+                "w₁ (mm)",
                 "with axial force",
                 "without axial force",
             ][..],
         ),
         (
             "driving_forces.svg",
-            &["t (s)", "F_a1 (N)", "rigid links"][..],
+            &["t (ms)", "Fₐ₁ (N)", "rigid links"][..],
         ),
         (
             "axial_force_frequency_mode1.svg",
-            &["t (s)", "(N)", "mode 1 frequency (Hz)", "at B (slider)"][..],
+            &["t (ms)", "(N)", "f₁,₁ (Hz)", "at B (slider)"][..],
         ),
-        ("modes.svg", &["t (s)", "eta_11 (m)", "link 1 mode 1"][..]),
-        ("kinematics.svg", &["rho (m)", "beta (rad)", "slider 1"][..]),
+        ("modes.svg", &["t (ms)", "η₁,₁ (", "η₁,₃ ("][..]),
+        ("kinematics.svg", &["ρ (mm)", "β (rad)", "ρ₁"][..]),
     ];
     for (file, phrases) in plots {
         let svg = std::fs::read_to_string(dir.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));

@@ -26,7 +26,6 @@ use std::time::Instant as Clock;
 
 use flexprr_dynamics::SceneModel;
 use flexprr_integrators::{Options, Solution};
-use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use flexprr_scene::ScenarioError;
@@ -763,98 +762,47 @@ pub fn markdown_rows(rows: &[WorkPrecisionRow]) -> String {
     md
 }
 
-const COLORS: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(255, 127, 14),
-    RGBColor(23, 190, 207),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-];
-
 /// Writes the work-precision diagram: maximum relative error against median wall time,
-/// log-log, one line per `(package, method)`; flexprr solid, peers dashed.
+/// log-log, one line with markers per `(package, method)`; flexprr solid, peers dashed.
+/// Points with a time or error that is not positive cannot be drawn on log axes and are
+/// left out; the diagram is an error if no point is left.
 ///
 /// # Errors
 /// [`ScenarioError::Run`] if there is nothing to draw or the file cannot be written.
 pub fn write_svg(rows: &[WorkPrecisionRow], path: &Path, title: &str) -> Result<(), ScenarioError> {
-    let err =
-        |e: &dyn std::fmt::Display| ScenarioError::Run(format!("plot {}: {e}", path.display()));
+    use flexprr_run::plot::{Axis, Dash, Figure, Marker, Panel, Series, Style};
     let positive = |v: &f64| v.is_finite() && *v > 0.0;
-    let xs: Vec<f64> = rows
-        .iter()
-        .map(|r| r.time_median_s)
-        .filter(positive)
-        .collect();
-    let ys: Vec<f64> = rows.iter().map(|r| r.max_error).filter(positive).collect();
-    if xs.is_empty() || ys.is_empty() {
-        return Err(err(&"no positive times and errors to draw"));
-    }
-    let span = |v: &[f64]| {
-        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = v.iter().copied().fold(0.0, f64::max);
-        (lo / 1.5, hi * 1.5)
-    };
-    let ((x0, x1), (y0, y1)) = (span(&xs), span(&ys));
-    let root = SVGBackend::new(path, (960, 680)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
-        .margin(16)
-        .x_label_area_size(50)
-        .y_label_area_size(90)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("median wall time (s)")
-        .y_desc("max relative error over output times")
-        .x_label_formatter(&|v| format!("{v:.0e}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .draw()
-        .map_err(|e| err(&e))?;
+    let mut panel = Panel::new(Axis::log("max relative error", ""));
     for (k, (package, method)) in series(rows).iter().enumerate() {
-        let color = COLORS[k % COLORS.len()];
         let mut line: Vec<&WorkPrecisionRow> = rows
             .iter()
             .filter(|r| &r.package == package && &r.method == method)
             .filter(|r| positive(&r.time_median_s) && positive(&r.max_error))
             .collect();
         line.sort_by(|a, b| b.rtol.total_cmp(&a.rtol));
-        let points: Vec<(f64, f64)> = line
-            .iter()
-            .map(|r| (r.time_median_s, r.max_error))
-            .collect();
-        let style = color.stroke_width(2);
-        let anno = if package == PACKAGE {
-            chart
-                .draw_series(LineSeries::new(points.iter().copied(), style))
-                .map_err(|e| err(&e))?
-        } else {
-            chart
-                .draw_series(DashedLineSeries::new(points.iter().copied(), 6, 4, style))
-                .map_err(|e| err(&e))?
-        };
-        anno.label(format!("{package} {method}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
-        chart
-            .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(|e| err(&e))?;
+        let time: Vec<f64> = line.iter().map(|r| r.time_median_s).collect();
+        let error: Vec<f64> = line.iter().map(|r| r.max_error).collect();
+        let mut style = Style::nth(k).marker(Marker::CYCLE[k % Marker::CYCLE.len()]);
+        if package != PACKAGE {
+            style = style.dash(Dash::Dashed);
+        }
+        panel = panel.series(Series::new(
+            format!("{package} {method}"),
+            &time,
+            &error,
+            style,
+        ));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    if panel.series.iter().all(|s| s.x.is_empty()) {
+        return Err(ScenarioError::Run(format!(
+            "plot {}: no positive times and errors to draw",
+            path.display()
+        )));
+    }
+    Figure::new(Axis::log("median wall time", "s"))
+        .title(title)
+        .description("flexprr work-precision diagram")
+        .panel(panel)
+        .write_svg(path)
+        .map_err(ScenarioError::Run)
 }

@@ -1,61 +1,22 @@
 //! Study plots: result columns against a swept parameter, one line per value of another
-//! parameter. Axis labels and units come from the quantity columns and the scene-key table,
-//! legends read `platform mass = 0.2 kg`, every case is a marker, and failed cases are
-//! drawn as crosses on the lower edge at their parameter value instead of being dropped.
+//! parameter, drawn with the one plot module of `flexprr_run::plot`. Axis labels and units
+//! come from the quantity columns and the scene-key table, legends read
+//! `platform mass = 0.2 kg` (values with an SI prefix, `link thickness = 2 mm`), every case
+//! is a marker, and failed cases are hollow red circles on the lower edge at their
+//! parameter value, with a legend entry, instead of being dropped.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use plotters::prelude::*;
+use flexprr_run::plot::ticks::value_label;
+use flexprr_run::plot::{Axis, Figure, Marker, Panel, Series, Style};
 
 use crate::error::StudyError;
 use crate::file::PlotConfig;
-use crate::keys::{key_label, key_value_label};
+use crate::keys::key_words;
 use crate::quantity::Column;
 use crate::record::{CaseRecord, CaseStatus};
 use crate::study::Study;
-
-const COLORS: [RGBColor; 7] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(255, 127, 14),
-    RGBColor(23, 190, 207),
-    RGBColor(140, 86, 75),
-];
-
-/// Point markers, one per line in turn, so that lines drawn on top of each other stay
-/// distinguishable.
-#[derive(Debug, Clone, Copy)]
-enum Marker {
-    Disc,
-    Ring,
-    Triangle,
-}
-
-impl Marker {
-    fn of(line: usize) -> Self {
-        [Marker::Disc, Marker::Ring, Marker::Triangle][line % 3]
-    }
-
-    /// The marker at `p`, as one element type for every shape.
-    fn at<C: Copy + 'static, DB: DrawingBackend>(
-        self,
-        p: C,
-        color: RGBColor,
-    ) -> DynElement<'static, DB, C> {
-        match self {
-            Marker::Disc => Circle::new(p, 3, color.filled()).into_dyn(),
-            Marker::Ring => Circle::new(p, 5, color.stroke_width(2)).into_dyn(),
-            Marker::Triangle => TriangleMarker::new(p, 5, color.filled()).into_dyn(),
-        }
-    }
-}
-
-const WIDTH: u32 = 1100;
-const LEGEND_WIDTH: u32 = 290;
-const PANEL_HEIGHT: u32 = 320;
 
 /// One line of one panel: its legend, the ok points sorted by x, and the parameter values of
 /// the cases that failed.
@@ -63,12 +24,6 @@ struct Line {
     label: String,
     points: Vec<(f64, f64)>,
     failed: Vec<f64>,
-}
-
-/// One panel: the column drawn and its lines.
-struct PanelData<'a> {
-    column: &'a Column,
-    lines: Vec<Line>,
 }
 
 /// Writes the study's `[[plot]]`s from the case records.
@@ -82,33 +37,78 @@ pub fn write_plots(
 ) -> Result<(), StudyError> {
     let columns = study.quantity_column_specs();
     for plot in &study.plots {
-        let panels: Vec<PanelData<'_>> = plot
-            .y
-            .iter()
-            .filter_map(|y| {
-                let c = columns.iter().position(|c| &c.name == y)?;
-                Some(PanelData {
-                    column: &columns[c],
-                    lines: plot_lines(study, plot, c, records),
-                })
-            })
-            .collect();
-        let title = plot.title.clone().unwrap_or_else(|| study.name.clone());
+        let (words, unit) = key_words(&plot.x);
+        let mut figure = Figure::new(Axis::new(words, unit))
+            .description(format!("flexprr study {}", study.name));
+        if let Some(title) = &plot.title {
+            figure = figure.title(title.as_str());
+        }
+        for y in &plot.y {
+            let Some(c) = columns.iter().position(|c| &c.name == y) else {
+                continue;
+            };
+            let lines = plot_lines(study, plot, c, records);
+            // The legend once, on the top panel: lines and failed cases are drawn alike below.
+            let legend = figure.panels.is_empty();
+            figure = figure.panel(panel(&columns[c], &lines, legend));
+        }
         let path = out.join(&plot.file);
-        draw(&path, &title, &key_label(&plot.x), &panels).map_err(|message| {
-            StudyError::Directory {
+        figure
+            .write_svg(&path)
+            .map_err(|message| StudyError::Directory {
                 dir: out.display().to_string(),
                 message,
-            }
-        })?;
+            })?;
     }
     Ok(())
+}
+
+/// The panel of column `column`: a line with markers per series value, then the failed
+/// cases of all lines as one series; with legend labels if `legend`.
+fn panel(column: &Column, lines: &[Line], legend: bool) -> Panel {
+    let mut panel = Panel::new(Axis::new(column.label.as_str(), column.unit));
+    let mut failed = Vec::new();
+    for (k, line) in lines.iter().enumerate() {
+        let (x, y): (Vec<f64>, Vec<f64>) = line.points.iter().copied().unzip();
+        let style = Style::nth(k).marker(Marker::CYCLE[k % Marker::CYCLE.len()]);
+        let label = if !legend {
+            ""
+        } else if line.label.is_empty() && lines.len() == 1 {
+            "cases"
+        } else {
+            line.label.as_str()
+        };
+        panel = panel.series(Series::new(label, &x, &y, style));
+        failed.extend(line.failed.iter().copied());
+    }
+    if !failed.is_empty() {
+        let n = failed.len();
+        let label = if !legend {
+            String::new()
+        } else if n == 1 {
+            "failed case".to_string()
+        } else {
+            format!("failed cases ({n})")
+        };
+        panel = panel.series(Series::failed(label, failed));
+    }
+    panel
 }
 
 /// The value of the parameter `key` in a record, if `key` is an axis.
 fn parameter<'r>(study: &Study, record: &'r CaseRecord, key: &str) -> Option<&'r str> {
     let k = study.axes.iter().position(|a| a.key == key)?;
     record.parameters.get(k).map(String::as_str)
+}
+
+/// Legend entry for one value of a key: `platform mass = 0.2 kg`, `link thickness = 2 mm`,
+/// `formulation = paper`.
+fn legend(key: &str, value: &str) -> String {
+    let (words, unit) = key_words(key);
+    match value.parse::<f64>() {
+        Ok(v) if v.is_finite() => format!("{words} = {}", value_label(v, unit)),
+        _ => format!("{words} = {value}"),
+    }
 }
 
 /// The lines of quantity column `c`: one per distinct value of the plot's `series` parameter
@@ -134,7 +134,7 @@ fn plot_lines(
             Some(i) => i,
             None => {
                 let label = match &plot.series {
-                    Some(key) => key_value_label(key, &value),
+                    Some(key) => legend(key, &value),
                     None => String::new(),
                 };
                 lines.push((
@@ -165,149 +165,4 @@ fn plot_lines(
             line
         })
         .collect()
-}
-
-/// `[lo, hi]` of the finite values with 5 % padding; `[-1, 1]` without values.
-fn bounds(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in values.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if !lo.is_finite() {
-        return (-1.0, 1.0);
-    }
-    let pad = if hi > lo {
-        0.05 * (hi - lo)
-    } else {
-        lo.abs().max(1e-12) * 0.1
-    };
-    (lo - pad, hi + pad)
-}
-
-/// A tick label with at most four significant digits (`0.0015`, `120`, `1e-5`); a value
-/// within rounding of zero on an axis spanning `span` is written `0`.
-fn tick(v: f64, span: f64) -> String {
-    if v.abs() <= 1e-9 * span.abs() || v.abs() < 1e-300 {
-        return "0".into();
-    }
-    let rounded: f64 = format!("{v:.3e}").parse().unwrap_or(v);
-    let plain = format!("{rounded}");
-    if plain.len() > 9 {
-        format!("{rounded:e}")
-    } else {
-        plain
-    }
-}
-
-fn draw(path: &Path, title: &str, x_label: &str, panels: &[PanelData<'_>]) -> Result<(), String> {
-    let height = 70 + PANEL_HEIGHT * panels.len().max(1) as u32;
-    let root = SVGBackend::new(path, (WIDTH, height)).into_drawing_area();
-    let err = |e: &dyn std::fmt::Display| format!("plot {}: {e}", path.display());
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let root = root
-        .titled(title, ("sans-serif", 22))
-        .map_err(|e| err(&e))?;
-    let areas = root.split_evenly((panels.len().max(1), 1));
-    for (panel, area) in panels.iter().zip(areas.iter()) {
-        let (chart_area, legend_area) = area.split_horizontally(WIDTH - LEGEND_WIDTH);
-        let xs = panel
-            .lines
-            .iter()
-            .flat_map(|l| l.points.iter().map(|p| p.0).chain(l.failed.iter().copied()));
-        let (x0, x1) = bounds(xs);
-        let ys = panel
-            .lines
-            .iter()
-            .flat_map(|l| l.points.iter().map(|p| p.1));
-        let (y0, y1) = bounds(ys);
-        let mut chart = ChartBuilder::on(&chart_area)
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(85)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| err(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(panel.column.axis_label())
-            .x_label_formatter(&|v| tick(*v, x1 - x0))
-            .y_label_formatter(&|v| tick(*v, y1 - y0))
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 16))
-            .draw()
-            .map_err(|e| err(&e))?;
-        // Failed cases: crosses on the lower edge, stacked where several lines fail at the
-        // same parameter value.
-        let mut crosses: Vec<(f64, f64, RGBColor)> = Vec::new();
-        for (k, line) in panel.lines.iter().enumerate() {
-            let color = COLORS[k % COLORS.len()];
-            for &x in &line.failed {
-                let below = crosses.iter().filter(|c| c.0.total_cmp(&x).is_eq()).count();
-                let y = y0 + (0.025 + 0.04 * below as f64) * (y1 - y0);
-                crosses.push((x, y, color));
-            }
-            chart
-                .draw_series(LineSeries::new(
-                    line.points.iter().copied(),
-                    color.stroke_width(2),
-                ))
-                .map_err(|e| err(&e))?;
-            let marker = Marker::of(k);
-            chart
-                .draw_series(line.points.iter().map(|&p| marker.at(p, color)))
-                .map_err(|e| err(&e))?;
-        }
-        chart
-            .draw_series(
-                crosses
-                    .iter()
-                    .map(|&(x, y, color)| Cross::new((x, y), 5, color.stroke_width(2))),
-            )
-            .map_err(|e| err(&e))?;
-        draw_legend(&legend_area, &panel.lines).map_err(|e| err(&e))?;
-    }
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
-}
-
-/// The legend beside a panel: one entry per line (its marker and label), then the failed
-/// cases' cross and how many there are.
-fn draw_legend<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    lines: &[Line],
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    let font = ("sans-serif", 14).into_font();
-    let mut y = 30;
-    for (k, line) in lines.iter().enumerate() {
-        let color = COLORS[k % COLORS.len()];
-        let label = if line.label.is_empty() {
-            "cases"
-        } else {
-            line.label.as_str()
-        };
-        area.draw(&PathElement::new(
-            vec![(8, y), (36, y)],
-            color.stroke_width(2),
-        ))?;
-        area.draw(&Marker::of(k).at((22, y), color))?;
-        area.draw(&Text::new(label.to_string(), (44, y - 8), font.clone()))?;
-        y += 22;
-    }
-    let failed: usize = lines.iter().map(|l| l.failed.len()).sum();
-    if failed > 0 {
-        y += 6;
-        area.draw(&Cross::new((22, y), 5, BLACK.stroke_width(2)))?;
-        area.draw(&Text::new(
-            format!("failed case ({failed}), drawn"),
-            (44, y - 8),
-            font.clone(),
-        ))?;
-        area.draw(&Text::new(
-            "on the lower edge at its x".to_string(),
-            (44, y + 10),
-            font,
-        ))?;
-    }
-    Ok(())
 }

@@ -42,20 +42,33 @@ series = "links.section.thickness"
     };
     run_study(&study, tmp.path(), &options, &|_, _| {}).unwrap();
     let svg = std::fs::read_to_string(tmp.path().join("range.svg")).unwrap();
+    // The drawn words, one text element after the other (a long axis label is drawn in
+    // lines).
+    let words = svg
+        .split("<text ")
+        .skip(1)
+        .map(|t| &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()])
+        .collect::<Vec<_>>()
+        .join(" ");
     for text in [
         "circle frequency f (Hz)",
         "lowest frequency of link 1, mode 1 (Hz)",
-        "link thickness = 0.002 m",
-        "link thickness = -0.001 m",
+        // Legend values with an SI prefix chosen from the value.
+        "link thickness = 2 mm",
+        "link thickness = −1 mm",
         // The three invalid cases (negative thickness) are drawn and counted.
-        "failed case (3)",
+        "failed cases (3)",
     ] {
-        assert!(svg.contains(text), "{text} missing");
+        assert!(words.contains(text), "{text} missing from {words}");
     }
     assert!(
         !svg.contains("f_min_1_1_Hz"),
         "raw column name used as a label"
     );
+    // Each failed case is a hollow red circle (white fill, red stroke) in the strip along
+    // the lower edge: three of them, at the three frequencies.
+    let hollow_red = svg.matches("fill=\"white\" stroke=\"#dc0000\"").count();
+    assert_eq!(hollow_red, 3 + 1, "three cases and the legend sample");
 }
 
 /// The units of the key table agree with the unit column of the scene-file reference.

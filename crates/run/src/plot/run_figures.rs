@@ -1,0 +1,179 @@
+//! The figures of a run: the paper's figures 6-15 that the run's tables can draw, and the
+//! kinematics, energies and platform deviation (Zhang, Mills & Cleghorn 2007; the figure
+//! numbers are in `docs/scenes.md`).
+
+use flexprr_scene::Scene;
+
+use super::{Axis, Dash, Figure, Panel, Series, Style};
+use crate::table::{RunResult, Table};
+
+/// A series of column `header` of `table` against its time, if the table has the column.
+fn series(table: &Table, header: &str, label: &str, style: Style) -> Option<Series> {
+    Some(Series::new(
+        label,
+        table.time(),
+        table.column(header)?,
+        style,
+    ))
+}
+
+/// A panel from a y axis and the series found.
+fn panel(y: Axis, series: impl IntoIterator<Item = Option<Series>>) -> Panel {
+    Panel {
+        y,
+        series: series.into_iter().flatten().collect(),
+    }
+}
+
+fn time() -> Axis {
+    Axis::new("t", "s")
+}
+
+/// The run's figures as (file name, figure), for the tables `result` holds.
+pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
+    let about = format!("flexprr run of scene {}", scene.name);
+    let figure = |title: &str| Figure::new(time()).title(title).description(&about);
+    let solid = Style::nth;
+    let dashed = |k| Style::nth(k).dash(Dash::Dashed);
+    let mut out = Vec::new();
+    if let Some(t) = result.table("deflections") {
+        for &xi in &scene.file.output.deflection_xi {
+            let mut f = figure(&format!("Deflection of the links at ξ = {xi}"));
+            for i in 1..=3 {
+                // The legend once, on the top panel: the styles are the same below.
+                let (with, without) = if i == 1 {
+                    ("with axial force", "without axial force")
+                } else {
+                    ("", "")
+                };
+                f = f.panel(panel(
+                    Axis::new(format!("w_{{{i}}}"), "m"),
+                    [
+                        series(t, &format!("w_{i}_xi{xi}_m"), with, solid(0)),
+                        series(t, &format!("w_{i}_xi{xi}_no_axial_m"), without, dashed(1)),
+                    ],
+                ));
+            }
+            out.push((format!("deflections_xi{xi}.svg"), f));
+        }
+    }
+    if let Some(t) = result.table("modes") {
+        let r = scene.machine.links[0].modes();
+        let mut f = figure("Modal coordinates of link 1");
+        for j in 1..=r.min(3) {
+            f = f.panel(panel(
+                Axis::new(format!("η_{{1,{j}}}"), "m"),
+                [series(t, &format!("eta_1_{j}_m"), "", solid(0))],
+            ));
+        }
+        out.push(("modes.svg".to_string(), f));
+    }
+    if let Some(t) = result.table("modal_forces") {
+        let s = [
+            ("F_rho_1_1_N", "F₁ = −M_{ρ} ρ̈"),
+            ("F_beta_1_1_N", "F₂ = −M_{β} β̈"),
+            ("F_fg_1_1_N", "F₃ = F_{fg}"),
+        ]
+        .iter()
+        .enumerate()
+        .map(|(k, (c, l))| series(t, c, l, solid(k)));
+        out.push((
+            "modal_forces.svg".to_string(),
+            figure("Modal forces on mode 1 of link 1")
+                .panel(panel(Axis::new("modal force", "N"), s)),
+        ));
+    }
+    if let Some(t) = result.table("driving_forces") {
+        let mut f = figure("Driving force of slider 1").panel(panel(
+            Axis::new("F_{a1}", "N"),
+            [
+                series(t, "F_a_1_flexible_N", "flexible links", solid(0)),
+                series(t, "F_a_1_rigid_N", "rigid links", dashed(1)),
+            ],
+        ));
+        if let Some(s) = series(t, "F_a_1_difference_N", "", solid(2)) {
+            f = f.panel(Panel::new(Axis::new("ΔF_{a1}", "N")).series(s));
+        }
+        out.push(("driving_forces.svg".to_string(), f));
+    }
+    if let Some(t) = result.table("frequencies") {
+        let r = scene.machine.links[0].modes();
+        for j in 1..=r.min(3) {
+            let f = figure(&format!("Axial force and mode {j} frequency of link 1"))
+                .panel(panel(
+                    Axis::new("P₁", "N"),
+                    [
+                        series(t, "P_B_1_N", "at B (slider)", solid(0)),
+                        series(t, "P_C_1_N", "at C (platform)", dashed(1)),
+                    ],
+                ))
+                .panel(panel(
+                    Axis::new(format!("f_{{1,{j}}}"), "Hz"),
+                    [series(t, &format!("f_1_{j}_Hz"), "", solid(2))],
+                ));
+            out.push((format!("axial_force_frequency_mode{j}.svg"), f));
+        }
+    }
+    if let Some(t) = result.table("axial_forces") {
+        let s =
+            (1..=3).map(|i| series(t, &format!("P_B_{i}_N"), &format!("link {i}"), solid(i - 1)));
+        out.push((
+            "axial_forces.svg".to_string(),
+            figure("Axial forces at the sliders (tension positive)")
+                .panel(panel(Axis::new("P_{B}", "N"), s)),
+        ));
+    }
+    if let Some(t) = result.table("platform_deviation") {
+        let f = figure("Platform deviation from the nominal path")
+            .panel(panel(
+                Axis::new("Δx, Δy", "m"),
+                [
+                    series(t, "dx_m", "Δx", solid(0)),
+                    series(t, "dy_m", "Δy", dashed(1)),
+                ],
+            ))
+            .panel(panel(
+                Axis::new("Δφ", "rad"),
+                [series(t, "dphi_rad", "", solid(2))],
+            ));
+        out.push(("platform_deviation.svg".to_string(), f));
+    }
+    if let Some(t) = result.table("kinematics") {
+        let rho = (1..=3).map(|i| {
+            series(
+                t,
+                &format!("rho_{i}_m"),
+                &format!("ρ_{{{i}}}"),
+                solid(i - 1),
+            )
+        });
+        let beta = (1..=3).map(|i| {
+            series(
+                t,
+                &format!("beta_{i}_rad"),
+                &format!("β_{{{i}}}"),
+                solid(i - 1),
+            )
+        });
+        let f = figure("Slider positions and link angles")
+            .panel(panel(Axis::new("ρ", "m"), rho))
+            .panel(panel(Axis::new("β", "rad"), beta));
+        out.push(("kinematics.svg".to_string(), f));
+    }
+    if let Some(t) = result.table("energies") {
+        let s = (1..=3).map(|i| {
+            series(
+                t,
+                &format!("strain_{i}_J"),
+                &format!("link {i}"),
+                solid(i - 1),
+            )
+        });
+        out.push((
+            "energies.svg".to_string(),
+            figure("Strain energy of the links").panel(panel(Axis::new("U", "J"), s)),
+        ));
+    }
+    out.retain(|(_, f)| f.panels.iter().any(|p| !p.series.is_empty()));
+    out
+}
