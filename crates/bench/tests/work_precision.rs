@@ -61,7 +61,10 @@ fn errors_fall_as_the_tolerance_tightens_and_the_reference_is_confirmed() {
     let config = config();
     let result = work_precision(&scene, &config, &mut |_| {}).expect("measurement runs");
     assert!(result.failures.is_empty(), "{:?}", result.failures);
-    assert_eq!(result.rows.len(), 3 * config.tolerances.len());
+    assert_eq!(
+        result.rows.len(),
+        config.methods.len() * config.tolerances.len()
+    );
 
     // The reference and its check (a different method family) agree far below the ladder.
     let reference = &result.reference;
@@ -111,6 +114,33 @@ fn errors_fall_as_the_tolerance_tightens_and_the_reference_is_confirmed() {
             assert!(row.time_median_s > 0.0 && row.time_min_s <= row.time_median_s);
             // Tolerance proportionality: the global error stays within a few hundred
             // times the local tolerance on this short, smooth scene.
+            assert!(row.max_error < 300.0 * row.rtol, "{row:?}");
+        }
+    }
+
+    // The exponential methods: errors fall with the tolerance until the reference's own
+    // accuracy (about 1e-10 here), and stay proportional to it.
+    for method in [Method::Magnus4, Method::Magnus6, Method::Auto] {
+        let rows: Vec<&WorkPrecisionRow> = result
+            .rows
+            .iter()
+            .filter(|r| r.method == method.name())
+            .collect();
+        assert_eq!(rows.len(), 3, "{}", method.name());
+        for pair in rows.windows(2) {
+            let (loose, tight) = (pair[0], pair[1]);
+            assert!(
+                tight.max_error < 0.1 * loose.max_error || tight.max_error < 1e-9,
+                "{}: {:e} at rtol {:e} vs {:e} at rtol {:e}",
+                method.name(),
+                tight.max_error,
+                tight.rtol,
+                loose.max_error,
+                loose.rtol
+            );
+        }
+        for row in &rows {
+            assert!(row.end_error <= row.max_error);
             assert!(row.max_error < 300.0 * row.rtol, "{row:?}");
         }
     }

@@ -478,7 +478,10 @@ fn unknown_integrator_method() {
         &text,
         "\"ode45\"",
         "integrator.method",
-        &["unknown value \"ode45\"", "\"abm\", \"bdf\", \"rk45\""],
+        &[
+            "unknown value \"ode45\"",
+            "\"abm\", \"auto\", \"bdf\", \"magnus4\", \"magnus6\", \"rk45\"",
+        ],
     );
 }
 
