@@ -42,8 +42,10 @@ pub(crate) fn tables(
     let want_deflections = scene.outputs.contains(&OutputKind::Deflections);
     let want_energies = scene.outputs.contains(&OutputKind::Energies);
     let mut deviation: [Vec<f64>; 3] = Default::default();
-    let mut forces: Vec<Vec<f64>> = vec![Vec::with_capacity(n_out); 10];
-    let mut deflections: Vec<Vec<f64>> = vec![Vec::with_capacity(n_out); 3 * xis.len()];
+    let mut forces: Vec<Vec<f64>> = (0..10).map(|_| Vec::with_capacity(n_out)).collect();
+    let mut deflections: Vec<Vec<f64>> = (0..3 * xis.len())
+        .map(|_| Vec::with_capacity(n_out))
+        .collect();
     let (mut kinetic, mut strain) = (Vec::new(), Vec::new());
     let mut max_mid = 0.0_f64;
     for k in 0..n_out {
