@@ -301,10 +301,12 @@ fn kinematics_prints_csv_with_a_header() {
         .collect();
     assert_eq!(rows.len(), 2001);
     // The scene's circle: x = 0.05 cos(2 pi 20 t) - 0.05, y = 0.05 sin(2 pi 20 t), phi = 45 deg.
+    // Values carry 11 significant digits (docs/scenes.md): t to 1e-11 s, which moves the
+    // platform (6.3 m/s) by 7e-11 m, and x, y to 5e-12 m.
     for row in &rows {
         let angle = std::f64::consts::TAU * 20.0 * row[0];
-        assert!((row[1] - (0.05 * angle.cos() - 0.05)).abs() < 1e-12);
-        assert!((row[2] - 0.05 * angle.sin()).abs() < 1e-12);
-        assert!((row[3] - 45f64.to_radians()).abs() < 1e-12);
+        assert!((row[1] - (0.05 * angle.cos() - 0.05)).abs() < 1e-10);
+        assert!((row[2] - 0.05 * angle.sin()).abs() < 1e-10);
+        assert!((row[3] - 45f64.to_radians()).abs() < 1e-11);
     }
 }

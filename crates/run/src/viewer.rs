@@ -61,7 +61,7 @@ fn basis_name(name: &str) -> String {
 }
 
 /// The coupled model's tables, when the run has them and they cover `n` frames.
-fn coupled_tables<'a>(tables: &'a [Table], n: usize) -> Option<(&'a Table, &'a Table)> {
+fn coupled_tables(tables: &[Table], n: usize) -> Option<(&Table, &Table)> {
     let find = |name: &str| tables.iter().find(|t| t.name == name && t.rows() >= n);
     Some((find("platform_deviation")?, find("coupled_forces")?))
 }

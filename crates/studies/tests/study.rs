@@ -394,7 +394,7 @@ values = [35.0]
         .replace("output_step = 1e-4", "output_step = 1e-3")
         .replace("compare_without_axial_force = true", "")
         .replace(
-            r#"requests = ["kinematics", "driving_forces", "joint_reactions", "axial_forces", "frequencies", "modes", "modal_forces", "deflections", "energies"]"#,
+            r#"requests = ["kinematics", "driving_forces", "joint_reactions", "axial_forces", "frequencies", "modes", "modal_forces", "deflections", "energies", "viewer", "snapshots", "machine"]"#,
             r#"requests = ["frequencies"]"#,
         );
     let scene = Scene::from_text("hand.toml", "hand", &text).unwrap();
