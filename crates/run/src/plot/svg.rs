@@ -20,8 +20,8 @@ const CHAR_WIDTH: f64 = 0.6;
 const LINE_WIDTH: f64 = 1.6;
 const LEGEND_ROW: f64 = 16.0;
 const LEGEND_SAMPLE: f64 = 26.0;
-/// Buckets per pixel of plot width for decimation.
-const BUCKETS_PER_PX: f64 = 2.0;
+/// Buckets per pixel of plot width for decimation (M4 keeps four points a pixel column).
+const BUCKETS_PER_PX: f64 = 1.0;
 
 /// An axis after scaling: the shown unit and factor, the range and ticks (in shown units,
 /// or log10 of the values on a log axis).
