@@ -96,9 +96,7 @@ pub fn scale_for(max_abs: f64, unit: &str) -> Scaled {
 
 /// The first unit symbol and the rest: `m/s²` -> (`m`, `/s²`), `kg m²` -> (`kg`, ` m²`).
 fn split_first_unit(unit: &str) -> (&str, &str) {
-    let end = unit
-        .find(|c: char| c == '/' || c == ' ' || c == '²' || c == '³' || c == '·')
-        .unwrap_or(unit.len());
+    let end = unit.find(['/', ' ', '²', '³', '·']).unwrap_or(unit.len());
     unit.split_at(end)
 }
 
