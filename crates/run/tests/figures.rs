@@ -10,7 +10,7 @@ use flexprr_run::run;
 use flexprr_scene::Scene;
 
 /// The texts of `<text>` elements whose opening tag contains `attr`, tags inside removed.
-fn texts<'a>(svg: &'a str, attr: &str) -> Vec<String> {
+fn texts(svg: &str, attr: &str) -> Vec<String> {
     let mut out = Vec::new();
     let mut rest = svg;
     while let Some(start) = rest.find("<text ") {

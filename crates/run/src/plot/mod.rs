@@ -16,8 +16,9 @@
 //! * the legend goes into the corner of the plot area that no line or marker touches, or
 //!   above the plot area when every corner is taken, so it never covers data; its samples
 //!   are drawn with the series' own colour, dash and marker;
-//! * long series are decimated to the first, lowest, highest and last point of every half
-//!   pixel ([`decimate::decimate`]), which draws the same and keeps each series' extremes;
+//! * series longer than four points a pixel column are decimated to the first, lowest,
+//!   highest and last point of every pixel column ([`decimate::decimate`]), which draws the
+//!   same at the figure's size and keeps each series' extremes;
 //! * failed cases ([`Series::failed`]) are hollow red circles in a strip along the lower
 //!   edge of the plot area, below all data, at their x (one circle per x, with the count
 //!   `×n` beside it where several cases failed there), with a legend entry.

@@ -25,6 +25,18 @@ fn panel(y: Axis, series: impl IntoIterator<Item = Option<Series>>) -> Panel {
     }
 }
 
+/// One series per link, `header(i)` and `label(i)` for links `i = 1..=3`, in the palette's
+/// first three colours.
+fn per_link(
+    table: &Table,
+    header: impl Fn(usize) -> String,
+    label: impl Fn(usize) -> String,
+) -> Vec<Option<Series>> {
+    (1..=3)
+        .map(|i| series(table, &header(i), &label(i), Style::nth(i - 1)))
+        .collect()
+}
+
 fn time() -> Axis {
     Axis::new("t", "s")
 }
@@ -115,8 +127,7 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
         }
     }
     if let Some(t) = result.table("axial_forces") {
-        let s =
-            (1..=3).map(|i| series(t, &format!("P_B_{i}_N"), &format!("link {i}"), solid(i - 1)));
+        let s = per_link(t, |i| format!("P_B_{i}_N"), |i| format!("link {i}"));
         out.push((
             "axial_forces.svg".to_string(),
             figure("Axial forces at the sliders (tension positive)")
@@ -139,36 +150,15 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
         out.push(("platform_deviation.svg".to_string(), f));
     }
     if let Some(t) = result.table("kinematics") {
-        let rho = (1..=3).map(|i| {
-            series(
-                t,
-                &format!("rho_{i}_m"),
-                &format!("ρ_{{{i}}}"),
-                solid(i - 1),
-            )
-        });
-        let beta = (1..=3).map(|i| {
-            series(
-                t,
-                &format!("beta_{i}_rad"),
-                &format!("β_{{{i}}}"),
-                solid(i - 1),
-            )
-        });
+        let rho = per_link(t, |i| format!("rho_{i}_m"), |i| format!("ρ_{{{i}}}"));
+        let beta = per_link(t, |i| format!("beta_{i}_rad"), |i| format!("β_{{{i}}}"));
         let f = figure("Slider positions and link angles")
             .panel(panel(Axis::new("ρ", "m"), rho))
             .panel(panel(Axis::new("β", "rad"), beta));
         out.push(("kinematics.svg".to_string(), f));
     }
     if let Some(t) = result.table("energies") {
-        let s = (1..=3).map(|i| {
-            series(
-                t,
-                &format!("strain_{i}_J"),
-                &format!("link {i}"),
-                solid(i - 1),
-            )
-        });
+        let s = per_link(t, |i| format!("strain_{i}_J"), |i| format!("link {i}"));
         out.push((
             "energies.svg".to_string(),
             figure("Strain energy of the links").panel(panel(Axis::new("U", "J"), s)),

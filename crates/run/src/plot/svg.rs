@@ -20,8 +20,8 @@ const CHAR_WIDTH: f64 = 0.6;
 const LINE_WIDTH: f64 = 1.6;
 const LEGEND_ROW: f64 = 16.0;
 const LEGEND_SAMPLE: f64 = 26.0;
-/// Buckets per pixel of plot width for decimation.
-const BUCKETS_PER_PX: f64 = 2.0;
+/// Buckets per pixel of plot width for decimation (M4 keeps four points a pixel column).
+const BUCKETS_PER_PX: f64 = 1.0;
 
 /// An axis after scaling: the shown unit and factor, the range and ticks (in shown units,
 /// or log10 of the values on a log axis).
@@ -424,11 +424,14 @@ fn text_svg(out: &mut String, (x, y): (f64, f64), font: f64, anchor: &str, text:
     );
 }
 
+/// A series in pixels: its polylines (runs without gaps) and its marker points.
+type Drawn = (Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>);
+
 /// One laid-out panel: its frame, the series in pixels and the legend place.
 struct Laid<'a> {
     fy: Frame,
     /// Pixel polylines (runs without gaps) and marker points per series.
-    pixels: Vec<(Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>)>,
+    pixels: Vec<Drawn>,
     /// Failed-case circles standing for more than one case, and how many.
     counts: Vec<((f64, f64), usize)>,
     entries: Vec<Entry<'a>>,
@@ -732,12 +735,7 @@ pub(crate) fn render(figure: &Figure) -> Result<String, String> {
 /// The legend's place: none for fewer than two entries; the first corner of the plot area
 /// (upper right, upper left, lower right, lower left) that no line or marker touches;
 /// otherwise rows above the plot area.
-fn place_legend(
-    entries: &[Entry<'_>],
-    pixels: &[(Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>)],
-    left: f64,
-    plot_w: f64,
-) -> LegendPlace {
+fn place_legend(entries: &[Entry<'_>], pixels: &[Drawn], left: f64, plot_w: f64) -> LegendPlace {
     if entries.len() < 2 {
         return LegendPlace::None;
     }

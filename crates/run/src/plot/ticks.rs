@@ -56,8 +56,9 @@ pub fn prefix_symbol(exponent: i32) -> Option<&'static str> {
 }
 
 /// How to show values of magnitude up to `max_abs` in `unit`: a prefixed unit where the unit
-/// takes one (`2e-4 m` -> `µm`, `1500 N` -> `kN`), a power-of-ten factor where it does not
-/// (`×10⁻³ kg`; dimensionless `×10⁻⁶`), and the unit unchanged for magnitudes in `[1, 1000)`.
+/// takes one (`2e-4 m` -> `µm`, `1500 N` -> `kN`), the unit unchanged for magnitudes in
+/// `[1, 1000)`; a unit without prefixes (`kg`, `deg`, none) is kept for magnitudes in
+/// `[0.01, 10⁴)` and takes a power-of-ten factor outside (`×10⁻⁶`, `×10⁻³ kg`).
 pub fn scale_for(max_abs: f64, unit: &str) -> Scaled {
     let e = engineering_exponent(max_abs);
     if e == 0 {
@@ -68,6 +69,13 @@ pub fn scale_for(max_abs: f64, unit: &str) -> Scaled {
     }
     let factor = 10f64.powi(-e);
     let (first, rest) = split_first_unit(unit);
+    if !PREFIXABLE.contains(&first) && (1e-2..1e4).contains(&max_abs) {
+        // Ratios near one (a stiffness ratio of 0.98) and masses in kg read best as they are.
+        return Scaled {
+            factor: 1.0,
+            unit: unit.to_string(),
+        };
+    }
     if PREFIXABLE.contains(&first) {
         let prefix = prefix_symbol(e).unwrap_or_default();
         return Scaled {
@@ -88,9 +96,7 @@ pub fn scale_for(max_abs: f64, unit: &str) -> Scaled {
 
 /// The first unit symbol and the rest: `m/s²` -> (`m`, `/s²`), `kg m²` -> (`kg`, ` m²`).
 fn split_first_unit(unit: &str) -> (&str, &str) {
-    let end = unit
-        .find(|c: char| c == '/' || c == ' ' || c == '²' || c == '³' || c == '·')
-        .unwrap_or(unit.len());
+    let end = unit.find(['/', ' ', '²', '³', '·']).unwrap_or(unit.len());
     unit.split_at(end)
 }
 
@@ -268,9 +274,11 @@ mod tests {
             (0.05, "rad", "mrad", 1e3),
             (7e-7, "J", "nJ", 1e9),
             (2e11, "Pa", "GPa", 1e-9),
-            (0.5, "kg", "×10⁻³ kg", 1e3),
+            (0.5, "kg", "kg", 1.0),
+            (2e-3, "kg", "×10⁻³ kg", 1e3),
             (3e-6, "", "×10⁻⁶", 1e6),
-            (0.5, "", "×10⁻³", 1e3),
+            (0.98, "", "", 1.0),
+            (2e4, "", "×10³", 1e-3),
             (40.0, "Hz", "Hz", 1.0),
             (0.0, "m", "m", 1.0),
         ] {
@@ -307,7 +315,8 @@ mod tests {
     proptest! {
         /// The shown magnitude lies in [1, 1000) for every value the prefixes reach.
         #[test]
-        fn scaled_magnitude_is_engineering(m in -11.9f64..11.9, unit in prop::sample::select(vec!["m", "N", "Hz", ""])) {
+        fn scaled_magnitude_is_engineering(m in -11.9f64..11.9, unit in prop::sample::select(vec!["m", "N", "Hz", "deg"])) {
+            let unit = if unit == "deg" && (-2.0..4.0).contains(&m) { "m" } else { unit };
             let v = 10f64.powf(m);
             let s = scale_for(v, unit);
             let shown = v * s.factor;
