@@ -111,7 +111,7 @@ struct StudyProgressView {
     lines: bool,
     name: String,
     start: Instant,
-    last_tenth: AtomicUsize,
+    last_tenth: std::sync::Mutex<usize>,
     failure_lines: AtomicUsize,
 }
 
@@ -135,7 +135,7 @@ impl StudyProgressView {
             lines: !quiet && !terminal,
             name: study.name.clone(),
             start: Instant::now(),
-            last_tenth: AtomicUsize::new(0),
+            last_tenth: std::sync::Mutex::new(0),
             failure_lines: AtomicUsize::new(0),
         }
     }
@@ -165,7 +165,14 @@ impl StudyProgressView {
         }
         if self.lines && progress.total > 0 {
             let tenth = 10 * progress.done / progress.total;
-            if self.last_tenth.fetch_max(tenth, Ordering::SeqCst) < tenth {
+            // Check and print under one lock, so that two workers finishing together cannot
+            // print their tenths out of order (the last line must be the last tenth).
+            let mut last = self
+                .last_tenth
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            if *last < tenth {
+                *last = tenth;
                 eprintln!(
                     "{}: {}/{} cases ({} %), {} failed, {:.1} s",
                     self.name,
