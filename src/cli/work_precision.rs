@@ -23,7 +23,7 @@ pub struct WorkPrecisionArgs {
     /// Relative tolerances of the ladder, comma-separated (default 1e-3 to 1e-12).
     #[arg(long, value_delimiter = ',')]
     pub tolerances: Option<Vec<f64>>,
-    /// Methods to measure, comma-separated (default abm,rk45,bdf).
+    /// Methods to measure, comma-separated (default abm,rk45,bdf,magnus4,magnus6,auto).
     #[arg(long, value_delimiter = ',')]
     pub methods: Option<Vec<String>>,
     /// Timed runs per point (the median is reported).
@@ -60,8 +60,10 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
             .iter()
             .map(|name| {
                 Method::parse(name.trim()).ok_or_else(|| {
+                    let known: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
                     Failure::bad_input(format!(
-                        "--methods: unknown method {name:?} (expected abm, rk45 or bdf)"
+                        "--methods: unknown method {name:?} (expected one of {})",
+                        known.join(", ")
                     ))
                 })
             })
