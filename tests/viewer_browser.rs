@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use chromium::{
-    Screenshot, chromium, console_lines, expected_transform, f, report, run_chromium,
-    run_chromium_sized,
+    changed_machine_pixels, check_instant, chromium, console_lines, expected_transform,
+    run_chromium, run_chromium_sized,
 };
 use flexprr_kinematics::{Circle, Geometry, Trajectory};
 
@@ -84,77 +84,28 @@ fn paper_scene_viewer_from_the_real_run() {
     });
     let (scale, ox, oy) = expected_transform(ends.chain(path));
 
-    let mut shots = Vec::new();
-    for (run, t) in [0.0, 0.0125].into_iter().enumerate() {
-        let profile = dir.path().join(format!("profile-{run}"));
-        let (dom, stderr) = run_chromium(&browser, &profile, &url(t), &["--dump-dom".into()]);
-        assert!(
-            console_lines(&stderr).is_empty(),
-            "console output at t = {t}: {:?}",
-            console_lines(&stderr)
-        );
-        let report = report(&dom);
-        assert_eq!(report["errors"].as_array().unwrap().len(), 0, "{report}");
-        assert_eq!(report["frames"].as_u64(), Some(frames as u64));
-        assert_eq!(report["links"].as_u64(), Some(3));
-        assert!((f(&report["time"]) - t).abs() < 1e-6, "{}", report["time"]);
-        assert_eq!(report["coupled"], serde_json::Value::Bool(false));
-        let tr = &report["transform"];
-        assert!((f(&tr["scale"]) - scale).abs() < 1e-6 * scale, "scale {tr}");
-        assert!((f(&tr["ox"]) - ox).abs() < 1e-3 && (f(&tr["oy"]) - oy).abs() < 1e-3);
-
-        // The slider joints B_i of the closed-form inverse kinematics, through the transform.
-        let legs = geometry.inverse_position(&circle.motion(t).pose).unwrap();
-        let drawn = report["sliderPixels"].as_array().unwrap();
-        assert_eq!(drawn.len(), 3);
-        for (i, leg) in legs.iter().enumerate() {
-            let expected = (ox + scale * leg.b.x, oy - scale * leg.b.y);
-            let got = (f(&drawn[i][0]), f(&drawn[i][1]));
-            // f32 storage of rho: < 1e-6 m, far below a pixel (about 1.5 mm here).
-            assert!(
-                (got.0 - expected.0).abs() < 0.01 && (got.1 - expected.1).abs() < 0.01,
-                "t = {t}, slider {}: drawn at {got:?}, inverse kinematics gives {expected:?}",
-                i + 1
-            );
-        }
-
-        let shot = dir.path().join(format!("shot-{run}.png"));
-        let (_, stderr) = run_chromium(
-            &browser,
-            &dir.path().join(format!("profile-shot-{run}")),
-            &url(t),
-            &[format!("--screenshot={}", shot.display())],
-        );
-        assert!(console_lines(&stderr).is_empty(), "{stderr}");
-        let image = Screenshot::load(&shot);
-        let canvas = &report["canvas"];
-        let (left, top) = (f(&canvas["left"]), f(&canvas["top"]));
-        // The dark slider block (26 x 14 px) is drawn at B on top of everything: 8 px either
-        // way along the guide is block, in the screenshot itself.
-        for (i, leg) in legs.iter().enumerate() {
-            let u = geometry.legs[i].guide.direction;
-            for side in [-8.0, 8.0] {
-                let x = left + ox + scale * leg.b.x + side * u.x;
-                let y = top + oy - scale * leg.b.y - side * u.y;
-                let [r, g, b] = image.at(x, y);
-                assert!(
-                    r < 80 && g < 80 && b < 80,
-                    "t = {t}: no slider block at ({x:.1}, {y:.1}) for leg {}: rgb {:?}",
-                    i + 1,
-                    [r, g, b]
-                );
-            }
-        }
-        shots.push((image, left, top));
+    let shown: Vec<chromium::Shown> = [0.0, 0.0125]
+        .into_iter()
+        .enumerate()
+        .map(|(run, t)| {
+            check_instant(
+                &browser,
+                dir.path(),
+                &run.to_string(),
+                &url(t),
+                t,
+                frames,
+                (scale, ox, oy),
+                &geometry,
+                &circle.motion(t).pose,
+            )
+        })
+        .collect();
+    for s in &shown {
+        assert_eq!(s.report["coupled"], serde_json::Value::Bool(false));
     }
-
     // The machine drawing changes between the two times.
-    let (a, left, top) = (&shots[0].0, shots[0].1, shots[0].2);
-    let b = &shots[1].0;
-    let changed = (0..640)
-        .flat_map(|y| (0..640).map(move |x| (left + x as f64, top + y as f64)))
-        .filter(|&(px, py)| a.at(px, py) != b.at(px, py))
-        .count();
+    let changed = changed_machine_pixels(&shown[0], &shown[1]);
     assert!(
         changed > 2000,
         "only {changed} pixels of the machine changed between t = 0 and 12.5 ms"

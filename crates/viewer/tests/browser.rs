@@ -8,7 +8,10 @@
 mod chromium;
 mod common;
 
-use chromium::{Screenshot, chromium, console_lines, expected_transform, f, report, run_chromium};
+use chromium::{
+    changed_machine_pixels, check_instant, chromium, console_lines, expected_transform, f, report,
+    run_chromium,
+};
 
 use flexprr_kinematics::Trajectory;
 use flexprr_viewer::{ViewerOptions, frame_indices, viewer_html};
@@ -54,85 +57,26 @@ fn paper_scene_viewer_in_headless_chromium() {
     let geometry = common::paper_geometry();
     let circle = common::paper_circle();
     let (scale, ox, oy) = data_transform(&data);
-    let mut shots = Vec::new();
-    for (run, t) in [0.0, 0.0125].into_iter().enumerate() {
-        let profile = dir.path().join(format!("profile-{run}"));
-        let (dom, stderr) = run_chromium(&browser, &profile, &url(t), &["--dump-dom".into()]);
-        assert!(
-            console_lines(&stderr).is_empty(),
-            "console output at t = {t}: {:?}",
-            console_lines(&stderr)
-        );
-        let report = report(&dom);
-        assert_eq!(report["errors"].as_array().unwrap().len(), 0, "{report}");
-        assert_eq!(report["frames"].as_u64(), Some(expected_frames as u64));
-        assert_eq!(report["links"].as_u64(), Some(3));
-        assert!(
-            (f(&report["time"]) - t).abs() < 1e-6,
-            "page time {}",
-            report["time"]
-        );
-        let tr = &report["transform"];
-        assert!((f(&tr["scale"]) - scale).abs() < 1e-9 * scale, "scale {tr}");
-        assert!((f(&tr["ox"]) - ox).abs() < 1e-6 && (f(&tr["oy"]) - oy).abs() < 1e-6);
-
-        // Inverse kinematics of the commanded pose at t, through the transform.
-        let legs = geometry.inverse_position(&circle.motion(t).pose).unwrap();
-        let drawn = report["sliderPixels"].as_array().unwrap();
-        assert_eq!(drawn.len(), 3);
-        for (i, leg) in legs.iter().enumerate() {
-            let expected = (ox + scale * leg.b.x, oy - scale * leg.b.y);
-            let got = (f(&drawn[i][0]), f(&drawn[i][1]));
-            // f32 storage of rho: < 1e-6 m, far below a pixel (~2.4 mm here).
-            assert!(
-                (got.0 - expected.0).abs() < 0.01 && (got.1 - expected.1).abs() < 0.01,
-                "t = {t}, slider {}: drawn at {got:?}, IK gives {expected:?}",
-                i + 1
-            );
-        }
-
-        let shot = dir.path().join(format!("shot-{run}.png"));
-        let (_, stderr) = run_chromium(
-            &browser,
-            &dir.path().join(format!("profile-shot-{run}")),
-            &url(t),
-            &[format!("--screenshot={}", shot.display())],
-        );
-        assert!(console_lines(&stderr).is_empty(), "{stderr}");
-        let image = Screenshot::load(&shot);
-        let canvas = &report["canvas"];
-        let (left, top) = (f(&canvas["left"]), f(&canvas["top"]));
-        // The slider block (26 x 14 px, #2b2b2b) is drawn on top of everything at B, with a
-        // small white joint circle in its middle: 8 px either way along the guide is block.
-        for (i, leg) in legs.iter().enumerate() {
-            let u = geometry.legs[i].guide.direction;
-            for side in [-8.0, 8.0] {
-                let x = left + ox + scale * leg.b.x + side * u.x;
-                let y = top + oy - scale * leg.b.y - side * u.y;
-                let [r, g, b] = image.at(x, y);
-                assert!(
-                    r < 80 && g < 80 && b < 80,
-                    "t = {t}: no slider block drawn at ({x:.1}, {y:.1}) for leg {}: rgb {:?}",
-                    i + 1,
-                    [r, g, b]
-                );
-            }
-        }
-        shots.push((image, left, top));
-    }
+    let shown: Vec<chromium::Shown> = [0.0, 0.0125]
+        .into_iter()
+        .enumerate()
+        .map(|(run, t)| {
+            check_instant(
+                &browser,
+                dir.path(),
+                &run.to_string(),
+                &url(t),
+                t,
+                expected_frames,
+                (scale, ox, oy),
+                &geometry,
+                &circle.motion(t).pose,
+            )
+        })
+        .collect();
 
     // The machine drawing changes between the two times.
-    let (a, left, top) = (&shots[0].0, shots[0].1, shots[0].2);
-    let b = &shots[1].0;
-    let mut changed = 0;
-    for y in 0..640 {
-        for x in 0..640 {
-            let (px, py) = (left + x as f64, top + y as f64);
-            if a.at(px, py) != b.at(px, py) {
-                changed += 1;
-            }
-        }
-    }
+    let changed = changed_machine_pixels(&shown[0], &shown[1]);
     assert!(
         changed > 2000,
         "only {changed} pixels of the machine changed between t = 0 and 12.5 ms"

@@ -167,3 +167,115 @@ pub fn expected_transform(points: impl IntoIterator<Item = [f64; 2]>) -> (f64, f
         (size + scale * (y0 + y1)) / 2.0,
     )
 }
+
+/// What one instant of a viewer page showed: its report, its screenshot and where the
+/// machine canvas sits in the screenshot.
+pub struct Shown {
+    /// The page's self-report (`report`).
+    pub report: Value,
+    /// The screenshot.
+    pub shot: Screenshot,
+    /// Left and top of the machine canvas in the screenshot (CSS pixels).
+    pub canvas: (f64, f64),
+}
+
+/// Loads the page at `url` (showing time `t`) twice, for its report and a screenshot, and
+/// checks everything that must hold at any instant, against independent values: no console
+/// output or page errors; `frames` frames and 3 links; the page's time; the page transform
+/// against `transform` (`expected_transform`, recomputed by the caller); each drawn slider
+/// joint against the closed-form inverse kinematics of `geometry` at `motion`, mapped
+/// through that transform; and, in the screenshot itself, a dark slider block around each
+/// of them. `tag` keeps the browser profiles of different calls apart.
+#[allow(clippy::too_many_arguments)]
+pub fn check_instant(
+    browser: &Path,
+    dir: &Path,
+    tag: &str,
+    url: &str,
+    t: f64,
+    frames: usize,
+    transform: (f64, f64, f64),
+    geometry: &flexprr_kinematics::Geometry,
+    pose: &flexprr_kinematics::Pose,
+) -> Shown {
+    let (scale, ox, oy) = transform;
+    let (dom, stderr) = run_chromium(
+        browser,
+        &dir.join(format!("profile-{tag}")),
+        url,
+        &["--dump-dom".into()],
+    );
+    assert!(
+        console_lines(&stderr).is_empty(),
+        "console output at t = {t}: {:?}",
+        console_lines(&stderr)
+    );
+    let report = report(&dom);
+    assert_eq!(report["errors"].as_array().unwrap().len(), 0, "{report}");
+    assert_eq!(report["frames"].as_u64(), Some(frames as u64));
+    assert_eq!(report["links"].as_u64(), Some(3));
+    assert!(
+        (f(&report["time"]) - t).abs() < 1e-6,
+        "page time {}",
+        report["time"]
+    );
+    // The page computes its transform from f32 data: 1e-6 relative, 1e-3 px.
+    let tr = &report["transform"];
+    assert!((f(&tr["scale"]) - scale).abs() < 1e-6 * scale, "scale {tr}");
+    assert!((f(&tr["ox"]) - ox).abs() < 1e-3 && (f(&tr["oy"]) - oy).abs() < 1e-3);
+
+    let legs = geometry.inverse_position(pose).unwrap();
+    let drawn = report["sliderPixels"].as_array().unwrap();
+    assert_eq!(drawn.len(), 3);
+    for (i, leg) in legs.iter().enumerate() {
+        let expected = (ox + scale * leg.b.x, oy - scale * leg.b.y);
+        let got = (f(&drawn[i][0]), f(&drawn[i][1]));
+        // f32 storage of rho: < 1e-6 m, far below a pixel (about 2 mm).
+        assert!(
+            (got.0 - expected.0).abs() < 0.01 && (got.1 - expected.1).abs() < 0.01,
+            "t = {t}, slider {}: drawn at {got:?}, inverse kinematics gives {expected:?}",
+            i + 1
+        );
+    }
+
+    let path = dir.join(format!("shot-{tag}.png"));
+    let (_, stderr) = run_chromium(
+        browser,
+        &dir.join(format!("profile-shot-{tag}")),
+        url,
+        &[format!("--screenshot={}", path.display())],
+    );
+    assert!(console_lines(&stderr).is_empty(), "{stderr}");
+    let shot = Screenshot::load(&path);
+    let canvas = (f(&report["canvas"]["left"]), f(&report["canvas"]["top"]));
+    // The dark slider block (26 x 14 px) is drawn at B on top of everything: 8 px either
+    // way along the guide is block.
+    for (i, leg) in legs.iter().enumerate() {
+        let u = geometry.legs[i].guide.direction;
+        for side in [-8.0, 8.0] {
+            let x = canvas.0 + ox + scale * leg.b.x + side * u.x;
+            let y = canvas.1 + oy - scale * leg.b.y - side * u.y;
+            let [r, g, b] = shot.at(x, y);
+            assert!(
+                r < 80 && g < 80 && b < 80,
+                "t = {t}: no slider block at ({x:.1}, {y:.1}) for leg {}: rgb {:?}",
+                i + 1,
+                [r, g, b]
+            );
+        }
+    }
+    Shown {
+        report,
+        shot,
+        canvas,
+    }
+}
+
+/// Number of pixels of the 640 px machine canvas that differ between two instants.
+pub fn changed_machine_pixels(a: &Shown, b: &Shown) -> usize {
+    let (left, top) = a.canvas;
+    (0..640)
+        .flat_map(|y| (0..640).map(move |x| (left + x as f64, top + y as f64)))
+        .filter(|&(px, py)| a.shot.at(px, py) != b.shot.at(px, py))
+        .count()
+}
