@@ -68,24 +68,38 @@ pub trait SceneModel: OdeSystem + Send {
     fn deflection(&self, link: usize, xi: f64, y: &[f64]) -> f64 {
         self.machine().links[link].deflection(&y[self.link_range(link)], xi)
     }
-    /// A reader's name for state component `component`, for messages: the link, the mode and
-    /// whether it is the coordinate `eta` or its rate (the state holds every link's
-    /// coordinates, then their rates, in [`Self::link_range`] order). Models with other
-    /// state components override this.
-    fn component_name(&self, component: usize) -> String {
+    /// The link (0-based) and the mode (0-based, within the link) of state component
+    /// `component`, and whether it is a rate: the state holds every link's coordinates,
+    /// then their rates, in [`Self::link_range`] order. `None` for other components.
+    fn component_place(&self, component: usize) -> Option<(usize, usize, bool)> {
         let modes = self.modes();
-        let (part, index) = if component < modes {
-            ("modal coordinate eta", component)
+        let (index, rate) = if component < modes {
+            (component, false)
         } else if component < 2 * modes {
-            ("modal rate d(eta)/dt", component - modes)
+            (component - modes, true)
         } else {
-            return format!("state component {component}");
+            return None;
         };
-        match (0..3).find(|&l| self.link_range(l).contains(&index)) {
-            Some(link) => format!(
-                "{part} of link {}, mode {}",
+        (0..3).find_map(|link| {
+            let range = self.link_range(link);
+            range
+                .contains(&index)
+                .then(|| (link, index - range.start, rate))
+        })
+    }
+    /// A reader's name for state component `component`, for messages: the link, the mode and
+    /// whether it is the coordinate `eta` or its rate (see [`Self::component_place`]).
+    fn component_name(&self, component: usize) -> String {
+        match self.component_place(component) {
+            Some((link, mode, rate)) => format!(
+                "{} of link {}, mode {}",
+                if rate {
+                    "modal rate d(eta)/dt"
+                } else {
+                    "modal coordinate eta"
+                },
                 link + 1,
-                index - self.link_range(link).start + 1
+                mode + 1
             ),
             None => format!("state component {component}"),
         }

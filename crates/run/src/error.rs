@@ -168,43 +168,8 @@ impl std::error::Error for RunFailure {
     }
 }
 
-/// A time for a message: seconds with an SI prefix and four significant digits
-/// (`25.60 ms`, `333.3 ps`), so that tiny times do not print as long runs of zeros.
-pub(crate) fn seconds(t: f64) -> String {
-    if !t.is_finite() {
-        return format!("{t} s");
-    }
-    let magnitude = t.abs();
-    if magnitude < f64::MIN_POSITIVE {
-        return "0 s".to_string();
-    }
-    let (scale, unit) = [
-        (1.0, "s"),
-        (1e-3, "ms"),
-        (1e-6, "\u{b5}s"),
-        (1e-9, "ns"),
-        (1e-12, "ps"),
-    ]
-    .into_iter()
-    .find(|(scale, _)| magnitude >= *scale)
-    .unwrap_or((1e-12, "ps"));
-    let value = t / scale;
-    let decimals = 3usize.saturating_sub(value.abs().log10().floor().max(0.0) as usize);
-    format!("{value:.decimals$} {unit}")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::seconds;
-
-    #[test]
-    fn seconds_pick_a_prefix_and_keep_four_digits() {
-        assert_eq!(seconds(0.0256), "25.60 ms");
-        assert_eq!(seconds(3.3328786676e-10), "333.3 ps");
-        assert_eq!(seconds(0.2), "200.0 ms");
-        assert_eq!(seconds(1.5), "1.500 s");
-        assert_eq!(seconds(12.25), "12.25 s");
-        assert_eq!(seconds(0.0), "0 s");
-        assert_eq!(seconds(1.4404821906729875e-7), "144.0 ns");
-    }
+/// A time for a message, with an SI prefix (`25.6 ms`, `333.3 ps`) so that tiny times do not
+/// print as long runs of zeros.
+fn seconds(t: f64) -> String {
+    crate::plot::ticks::value_label(t, "s")
 }

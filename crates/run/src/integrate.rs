@@ -126,19 +126,11 @@ pub fn integrate_model(
                         Some(cause) => RunError::Model(cause),
                         None => match source {
                             flexprr_integrators::IntegratorError::NonFinite { t, component } => {
-                                let modes = model.modes();
-                                let index = if component < modes {
-                                    Some(component)
-                                } else {
-                                    component.checked_sub(modes).filter(|&i| i < modes)
-                                };
                                 RunError::NonFinite {
                                     method: integrator.name().to_string(),
                                     t,
                                     state: model.component_name(component),
-                                    link: index.and_then(|i| {
-                                        (0..3).find(|&l| model.link_range(l).contains(&i))
-                                    }),
+                                    link: model.component_place(component).map(|(l, _, _)| l),
                                 }
                             }
                             source => RunError::Integrator {
