@@ -13,7 +13,7 @@ damping) beyond the 0.2 s of the production runs and records, per frequency:
 Usage:
     python3 exudyn_collapse.py --series           # f = 30 Hz to 0.1 s -> data/collapse_f30.csv
                                                   # + mesh/step check -> data/collapse_f30_convergence.json
-    python3 exudyn_collapse.py --speeds 25 26 27 28 29 30 --end 0.5   # -> data/collapse_speeds.json
+    python3 exudyn_collapse.py --speeds 25 25.25 25.5 26 27 --end 0.5   # merged into data/collapse_speeds.json
 
 Collapse is not a solver failure here: the ANCF links bend through the type-II pose. If the
 Newton iteration fails anyway, the data up to that time is kept and `solver_ok` is false.
@@ -132,19 +132,32 @@ def main(argv=None):
         with open(os.path.join(data, "collapse_f30_convergence.json"), "w") as fh:
             json.dump(conv, fh, indent=1)
     if args.speeds:
+        # New runs are merged into the file: a run at the same frequency, mesh, step and
+        # window replaces the old one, the others are kept, sorted by frequency.
+        path = os.path.join(data, "collapse_speeds.json")
+        runs = []
+        if os.path.exists(path):
+            with open(path) as fh:
+                runs = json.load(fh).get("runs", [])
         out = {
             "criteria": {
                 "deflection": f"max_i |w_mid_i| > {DEFLECTION_LIMIT} m",
                 "rotation": f"|dphi| > {ROTATION_LIMIT} rad",
             },
             "columns_of_series": COLUMNS,
-            "runs": [],
+            "runs": runs,
         }
+
+        def same(a, b):
+            keys = ("frequency_Hz", "elements_per_link", "step_s", "end_s")
+            return all(a.get(k) == b.get(k) for k in keys)
+
         for f in args.speeds:
             _table, _measure, summary = run(f, args.elements, args.step, args.end)
             print(json.dumps(summary))
-            out["runs"].append(summary)
-            with open(os.path.join(data, "collapse_speeds.json"), "w") as fh:
+            out["runs"] = [r for r in out["runs"] if not same(r, summary)] + [summary]
+            out["runs"].sort(key=lambda r: (r["frequency_Hz"], r["elements_per_link"], r["step_s"]))
+            with open(path, "w") as fh:
                 json.dump(out, fh, indent=1)
 
 

@@ -7,10 +7,11 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
+use flexprr_studies::search::{Criterion, Probe, SearchOutcome};
 use flexprr_studies::study::{
     CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress,
 };
-use flexprr_studies::{merge_studies, run_study};
+use flexprr_studies::{merge_studies, run_search_study, run_study};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::Failure;
@@ -211,14 +212,17 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
         other => failure(other),
     })?;
     check_same_shard(&study, &args.out, args.shard)?;
-    let total = study.shard_cases(args.shard).len() as u64;
-    let view = StudyProgressView::new(&study, total, args.quiet);
     let options = StudyOptions {
         threads: args.threads,
         shard: args.shard,
         resume: args.resume,
         case_outputs: args.case_outputs,
     };
+    if study.search.is_some() {
+        return search(&study, &args, &options);
+    }
+    let total = study.shard_cases(args.shard).len() as u64;
+    let view = StudyProgressView::new(&study, total, args.quiet);
     let summary = run_study(&study, &args.out, &options, &|progress, record| {
         view.update(&study, progress, record);
     });
@@ -237,16 +241,70 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
         p.failed,
         summary.results.display()
     );
-    if let Some(search) = &summary.search {
-        let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
+    Ok(())
+}
+
+/// One probe of a speed search as a progress line: the search's case, the value, the outcome
+/// and the time since the start.
+fn probe_line(study: &Study, search: &SearchOutcome, probe: &Probe, start: Instant) -> String {
+    let key = study.search.as_ref().map_or("", |s| s.key.as_str());
+    let what = match (&probe.error, probe.reached, probe.time_s, probe.link) {
+        (Some(e), _, _, _) => format!("failed: {}", shorten(e, 160)),
+        (None, true, Some(t), Some(link)) => format!(
+            "{} at t = {:.4} s (link {link})",
+            match search.criterion {
+                Criterion::Collapse => "collapses",
+                Criterion::Buckling => "buckles",
+            },
+            t
+        ),
+        (None, true, _, _) => "reaches the limit".to_string(),
+        (None, false, _, _) => format!("no {} within {} s", search.criterion.name(), probe.end_s),
+    };
+    format!(
+        "{} [{}]: {key} = {}: {what} ({:.1} s)",
+        study.name,
+        search.case_label(),
+        probe.value,
+        start.elapsed().as_secs_f64()
+    )
+}
+
+/// Runs a speed-search study: a line per probe on stderr (unless `--quiet`; each probe is a
+/// whole run, up to minutes for the nonlinear model), then one line per search with its
+/// bracket, and `search.md` with the speeds side by side.
+fn search(study: &Study, args: &StudyArgs, options: &StudyOptions) -> Result<(), Failure> {
+    let start = Instant::now();
+    let summary = run_search_study(study, &args.out, options, &|search, probe| {
+        if !args.quiet {
+            eprintln!("{}", probe_line(study, search, probe, start));
+        }
+    })
+    .map_err(failure)?;
+    let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
+    for s in &summary.searches {
+        let cause = s
+            .probes
+            .iter()
+            .find_map(|p| p.error.as_deref())
+            .map(|e| format!(": {}", shorten(e, 200)))
+            .unwrap_or_default();
         println!(
-            "search: {} (no collapse at {}, collapse at {}); probes in {}",
-            search.status,
-            show(search.below),
-            show(search.at_or_above),
-            search.file.display()
+            "{} [{}]: {} search {} (not reached at {}, reached at {}), {} probes{cause}",
+            study.name,
+            s.case_label(),
+            s.criterion.name(),
+            s.status,
+            show(s.below),
+            show(s.at_or_above),
+            s.probes.len()
         );
     }
+    println!(
+        "table {}; side by side in {}",
+        summary.results.display(),
+        args.out.join("search.md").display()
+    );
     Ok(())
 }
 

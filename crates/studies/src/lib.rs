@@ -15,4 +15,4 @@ mod runner;
 pub mod search;
 pub mod study;
 
-pub use study::{Study, StudyError, StudyOptions, merge_studies, run_study};
+pub use study::{Study, StudyError, StudyOptions, merge_studies, run_search_study, run_study};

@@ -89,8 +89,9 @@ pub struct StudySummary {
     pub ran: usize,
     /// `results.csv`.
     pub results: PathBuf,
-    /// The search's outcome, when the study is a speed search.
-    pub search: Option<crate::search::SearchOutcome>,
+    /// The searches' outcomes (one per case of the axes, or one), when the study is a speed
+    /// search; empty for a sweep.
+    pub searches: Vec<crate::search::SearchOutcome>,
 }
 
 /// Contents of `study.json`: identifies the study an output directory belongs to.
@@ -194,8 +195,8 @@ pub fn run_study(
     options: &StudyOptions,
     on_case: &(dyn Fn(&StudyProgress, &CaseRecord) + Sync),
 ) -> Result<StudySummary, StudyError> {
-    if let Some(search) = &study.search {
-        return run_search_study(study, search, out, options);
+    if study.search.is_some() {
+        return run_search_study(study, out, options, &|_, _| {});
     }
     let cases_dir = out.join("cases");
     std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
@@ -251,17 +252,29 @@ pub fn run_study(
         progress,
         ran: pending.len(),
         results,
-        search: None,
+        searches: Vec::new(),
     })
 }
 
-/// A speed search ([`crate::search`]): probes in order, no shards and no resume.
-fn run_search_study(
+/// Runs a speed-search study ([`crate::search`]): one search per case of its axes (or one),
+/// the searches in parallel on [`StudyOptions::threads`] workers, each search's probes in
+/// order; no shards and no resume. `on_probe` sees every probe as it ends, with its search
+/// (for progress). A sweep study (no `[search]`) is refused.
+///
+/// # Errors
+/// As [`run_study`]; [`StudyError::Directory`] for a shard, a resume or a sweep study.
+pub fn run_search_study(
     study: &Study,
-    search: &crate::search::Search,
     out: &Path,
     options: &StudyOptions,
+    on_probe: &(dyn Fn(&crate::search::SearchOutcome, &crate::search::Probe) + Sync),
 ) -> Result<StudySummary, StudyError> {
+    let Some(search) = &study.search else {
+        return Err(StudyError::Directory {
+            dir: out.display().to_string(),
+            message: "the study has no [search] table: run it with run_study".into(),
+        });
+    };
     if options.shard.is_some() || options.resume {
         return Err(StudyError::Directory {
             dir: out.display().to_string(),
@@ -270,9 +283,10 @@ fn run_search_study(
                 .into(),
         });
     }
-    let outcome = crate::search::run_search(study, search, out, &|_| {})?;
-    let n = outcome.probes.len();
-    let failed = outcome.probes.iter().filter(|p| p.error.is_some()).count();
+    let searches = crate::search::run_search(study, search, out, options.threads, on_probe)?;
+    let probes = || searches.iter().flat_map(|s| &s.probes);
+    let n = probes().count();
+    let failed = probes().filter(|p| p.error.is_some()).count();
     Ok(StudySummary {
         progress: StudyProgress {
             total: n,
@@ -282,7 +296,7 @@ fn run_search_study(
         },
         ran: n,
         results: out.join("results.csv"),
-        search: Some(outcome),
+        searches,
     })
 }
 

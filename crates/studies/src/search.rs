@@ -1,9 +1,17 @@
 //! The speed search (`[search]` in a study file, `docs/studies.md`): bisection over one
 //! numeric scene key (typically `trajectory.frequency`) for the smallest value at which the
-//! mechanism collapses within a given number of revolutions or a given time.
+//! machine reaches its speed limit within a given number of revolutions or a given time.
 //!
-//! The search assumes a threshold: values below it do not collapse within the window, values
-//! at or above it do. It first runs both ends of the bracket (`low` must not collapse, `high`
+//! The limit is a [`Criterion`]: the collapse of the mechanism (coupled and nonlinear
+//! models: a run stopped with the collapse outcome) or the buckling of a link (the KED
+//! estimate: a link's lowest bending frequency under the rigid motion's axial forces
+//! reaches zero, paper eq. (12) with `omega^2 <= 0`; frequencies only, nothing integrated).
+//! With `[[axis]]` tables, one search runs per case of the axes (e.g. one per
+//! `model.coupling`), so the KED buckling speed and the collapse speeds of the coupled and
+//! nonlinear models come out side by side in one study.
+//!
+//! The search assumes a threshold: values below it do not reach the limit within the
+//! window, values at or above it do. It first runs both ends of the bracket (`low` must not collapse, `high`
 //! must), then halves the bracket until it is at most `tolerance` wide (bisection: the
 //! bracket after `n` halvings is `(high - low) / 2^n`, Burden & Faires, *Numerical
 //! Analysis*, section 2.1). The answer is the bracket: the largest value seen not to
@@ -11,7 +19,7 @@
 //! diverged KED run, an integrator failure) ends the search with that failure: the threshold
 //! is then not known, and the search says so instead of guessing.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -37,8 +45,43 @@ pub struct SearchConfig {
     /// The window in seconds: `time.end = time`.
     #[serde(default)]
     pub time: Option<f64>,
+    /// `"collapse"` or `"buckling"`; by default each case's own limit: buckling for a KED
+    /// model, collapse for a coupled or nonlinear one.
+    #[serde(default)]
+    pub criterion: Option<Criterion>,
 }
 
+/// What counts as reaching the speed limit in a probe.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Criterion {
+    /// The run stops with the collapse outcome within the window (coupled and nonlinear
+    /// models: a mid-point deflection past `model.collapse_deflection`, or a type-II pose).
+    Collapse,
+    /// A link's lowest bending frequency under the rigid motion's axial forces reaches zero
+    /// within the window (the KED buckling estimate; frequencies only, KED or coupled scenes).
+    Buckling,
+}
+
+impl Criterion {
+    /// The word used in files and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Criterion::Collapse => "collapse",
+            Criterion::Buckling => "buckling",
+        }
+    }
+
+    /// The criterion a case gets when the search names none: buckling for a KED model
+    /// (it cannot collapse: its platform follows the rigid motion), collapse otherwise.
+    pub fn default_for(coupling: &str) -> Self {
+        if coupling == "ked" {
+            Criterion::Buckling
+        } else {
+            Criterion::Collapse
+        }
+    }
+}
 /// The window of a search.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Window {
@@ -61,6 +104,8 @@ pub struct Search {
     pub tolerance: f64,
     /// Collapse within this window.
     pub window: Window,
+    /// The criterion named in the file, if any (else each case's default).
+    pub criterion: Option<Criterion>,
 }
 
 /// One run of the search.
@@ -70,33 +115,50 @@ pub struct Probe {
     pub value: f64,
     /// The end of its window (s).
     pub end_s: f64,
-    /// Whether it collapsed within the window.
-    pub collapses: bool,
-    /// When (s), which link (1-based) and how far (m), if it collapsed.
+    /// Whether it reached the limit (collapsed, or buckled) within the window.
+    pub reached: bool,
+    /// When (s): the collapse, or the start of the first buckling interval.
     pub time_s: Option<f64>,
-    /// Link (1-based).
+    /// Link (1-based) that collapsed or buckled first.
     pub link: Option<usize>,
-    /// Mid-point deflection at the collapse (m).
+    /// Mid-point deflection at the collapse (m); none for buckling.
     pub deflection_m: Option<f64>,
     /// The failure message of a probe that neither finished nor collapsed.
     pub error: Option<String>,
 }
 
-/// What a search found.
+/// What one search (one case of the axes) found.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SearchOutcome {
-    /// `"bracketed"` (the threshold lies in `(below, at_or_above]`), `"low-collapses"`
-    /// (already at `low`), `"high-does-not-collapse"`, or `"failed"` (a probe failed for
+    /// The case: each axis key with its value as written in the table (empty without axes).
+    pub case: CaseLabels,
+    /// The criterion this search used.
+    pub criterion: Criterion,
+    /// `"bracketed"` (the threshold lies in `(below, at_or_above]`), `"low-reaches"`
+    /// (already at `low`), `"high-does-not-reach"`, or `"failed"` (a probe failed for
     /// another reason; see its `error`).
     pub status: &'static str,
-    /// Largest value seen not to collapse.
+    /// Largest value seen not to reach the limit.
     pub below: Option<f64>,
-    /// Smallest value seen to collapse: the collapse speed to within the tolerance.
+    /// Smallest value seen to reach it: the speed limit to within the tolerance.
     pub at_or_above: Option<f64>,
     /// The probes in the order they ran.
     pub probes: Vec<Probe>,
-    /// `search.json`.
-    pub file: PathBuf,
+}
+
+impl SearchOutcome {
+    /// The case as `key = value, ...`, or `base scene` without axes.
+    pub fn case_label(&self) -> String {
+        if self.case.is_empty() {
+            "base scene".to_string()
+        } else {
+            self.case
+                .iter()
+                .map(|(k, v)| format!("{k} = {v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    }
 }
 
 impl Search {
@@ -177,7 +239,35 @@ impl Search {
             high: c.high,
             tolerance: c.tolerance,
             window,
+            criterion: c.criterion,
         })
+    }
+
+    /// The criterion of a case whose scene table is `scene`: the one named in the file, or
+    /// the model's own limit. Refuses pairs that cannot work: a KED model never collapses
+    /// (its platform follows the rigid motion), and the nonlinear model has no KED
+    /// frequencies to buckle.
+    ///
+    /// # Errors
+    /// A message for the `search.criterion` key.
+    pub fn criterion_for(&self, scene: &toml::Table) -> Result<Criterion, String> {
+        let coupling = scene
+            .get("model")
+            .and_then(|m| m.get("coupling"))
+            .and_then(toml::Value::as_str)
+            .unwrap_or("ked");
+        let criterion = self
+            .criterion
+            .unwrap_or_else(|| Criterion::default_for(coupling));
+        match (criterion, coupling) {
+            (Criterion::Collapse, "ked") => Err(
+                "a KED model (model.coupling = \"ked\") cannot collapse: its platform follows the rigid motion; use criterion = \"buckling\" or a coupled model".to_string(),
+            ),
+            (Criterion::Buckling, "nonlinear") => Err(
+                "the buckling criterion needs the KED frequencies, which the nonlinear model does not give; use criterion = \"collapse\" or model.coupling = \"ked\" or \"coupled\"".to_string(),
+            ),
+            _ => Ok(criterion),
+        }
     }
 
     /// The end of the window for `value` (s).
@@ -189,22 +279,35 @@ impl Search {
     }
 }
 
-/// One probe: the base scene with the key set to `value`, `time.end` set to the window, run;
-/// a collapse or a finished run, or the failure.
-fn probe(study: &Study, search: &Search, value: f64) -> Probe {
+/// One probe: the case's scene with the key set to `value` and `time.end` set to the window,
+/// run; the limit reached or not, or the failure. A buckling probe asks for the frequencies
+/// only (nothing is integrated).
+fn probe(
+    study: &Study,
+    search: &Search,
+    scene: &toml::Table,
+    criterion: Criterion,
+    value: f64,
+) -> Probe {
     let end = search.end(value);
     let mut out = Probe {
         value,
         end_s: end,
-        collapses: false,
+        reached: false,
         time_s: None,
         link: None,
         deflection_m: None,
         error: None,
     };
-    let mut scene = study.base.clone();
-    let set = set_key(&mut scene, &search.key, &toml::Value::Float(value))
+    let mut scene = scene.clone();
+    let mut set = set_key(&mut scene, &search.key, &toml::Value::Float(value))
         .and_then(|()| set_key(&mut scene, "time.end", &toml::Value::Float(end)));
+    if criterion == Criterion::Buckling {
+        let requests = toml::Value::Array(vec![toml::Value::String("frequencies".into())]);
+        set = set
+            .and_then(|()| set_key(&mut scene, "output.requests", &requests))
+            .and_then(|()| set_key(&mut scene, "output.plots", &toml::Value::Boolean(false)));
+    }
     if let Err(e) = set {
         out.error = Some(e);
         return out;
@@ -225,65 +328,84 @@ fn probe(study: &Study, search: &Search, value: f64) -> Probe {
             return out;
         }
     };
-    match flexprr_run::run(&scene, &mut |_| {}) {
-        Ok(_) => {}
-        Err(failure) => match failure.error.collapse() {
-            Some(c) => {
-                out.collapses = true;
+    match (flexprr_run::run(&scene, &mut |_| {}), criterion) {
+        (Ok(result), Criterion::Buckling) => {
+            let first = result.frequencies.as_ref().and_then(|h| {
+                h.buckling
+                    .iter()
+                    .filter(|b| b.t_start <= end)
+                    .min_by(|a, b| a.t_start.total_cmp(&b.t_start))
+            });
+            match (first, &result.frequencies) {
+                (Some(b), _) => {
+                    out.reached = true;
+                    out.time_s = Some(b.t_start);
+                    out.link = Some(b.link + 1);
+                }
+                (None, Some(_)) => {}
+                (None, None) => out.error = Some("the run gave no frequencies".into()),
+            }
+        }
+        (Ok(_), Criterion::Collapse) => {}
+        (Err(failure), criterion) => match (failure.error.collapse(), criterion) {
+            (Some(c), Criterion::Collapse) => {
+                out.reached = true;
                 out.time_s = Some(c.t);
                 out.link = Some(c.link + 1);
                 out.deflection_m = Some(c.deflection);
             }
-            None => out.error = Some(failure.error.to_string()),
+            _ => out.error = Some(failure.error.to_string()),
         },
     }
     out
 }
 
-/// Runs the search of `study` and writes `search.json` (the outcome and every probe) and
-/// `results.csv` (one row per probe) into `out`; `on_probe` sees each probe as it ends.
-///
-/// # Errors
-/// [`StudyError::Io`] when the files cannot be written.
-pub fn run_search(
+/// Bisection of one case: `high`, then `low`, then halvings until the bracket is at most
+/// `tolerance` wide; `on_probe` sees each probe as it ends.
+fn bisect(
     study: &Study,
     search: &Search,
-    out: &Path,
-    on_probe: &dyn Fn(&Probe),
-) -> Result<SearchOutcome, StudyError> {
-    std::fs::create_dir_all(out).map_err(|source| StudyError::Io {
-        path: out.display().to_string(),
-        source,
-    })?;
-    let mut probes = Vec::new();
-    let run = |value: f64, probes: &mut Vec<Probe>| {
-        let p = probe(study, search, value);
-        on_probe(&p);
-        probes.push(p.clone());
+    case: CaseLabels,
+    scene: &toml::Table,
+    criterion: Criterion,
+    on_probe: &(dyn Fn(&SearchOutcome, &Probe) + Sync),
+) -> SearchOutcome {
+    let mut outcome = SearchOutcome {
+        case,
+        criterion,
+        status: "failed",
+        below: None,
+        at_or_above: None,
+        probes: Vec::new(),
+    };
+    let run = |value: f64, outcome: &mut SearchOutcome| {
+        let p = probe(study, search, scene, criterion, value);
+        on_probe(outcome, &p);
+        outcome.probes.push(p.clone());
         p
     };
     let (mut low, mut high) = (search.low, search.high);
-    let status = 'search: {
-        for (value, must_collapse) in [(high, true), (low, false)] {
-            let p = run(value, &mut probes);
+    outcome.status = 'search: {
+        for (value, must_reach) in [(high, true), (low, false)] {
+            let p = run(value, &mut outcome);
             if p.error.is_some() {
                 break 'search "failed";
             }
-            if p.collapses != must_collapse {
-                break 'search if must_collapse {
-                    "high-does-not-collapse"
+            if p.reached != must_reach {
+                break 'search if must_reach {
+                    "high-does-not-reach"
                 } else {
-                    "low-collapses"
+                    "low-reaches"
                 };
             }
         }
         while high - low > search.tolerance {
             let mid = 0.5 * (low + high);
-            let p = run(mid, &mut probes);
+            let p = run(mid, &mut outcome);
             if p.error.is_some() {
                 break 'search "failed";
             }
-            if p.collapses {
+            if p.reached {
                 high = mid;
             } else {
                 low = mid;
@@ -291,25 +413,125 @@ pub fn run_search(
         }
         "bracketed"
     };
-    let below = probes
+    let ok = |p: &&Probe| p.error.is_none();
+    outcome.below = outcome
+        .probes
         .iter()
-        .filter(|p| p.error.is_none() && !p.collapses)
+        .filter(ok)
+        .filter(|p| !p.reached)
         .map(|p| p.value)
-        .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))));
-    let at_or_above = probes
+        .reduce(f64::max);
+    outcome.at_or_above = outcome
+        .probes
         .iter()
-        .filter(|p| p.collapses)
+        .filter(|p| p.reached)
         .map(|p| p.value)
-        .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.min(v))));
-    let file = out.join("search.json");
-    let outcome = SearchOutcome {
-        status,
-        below,
-        at_or_above,
-        probes,
-        file: file.clone(),
+        .reduce(f64::min);
+    outcome
+}
+
+/// A search's case: each axis key with its value as written in the table.
+pub type CaseLabels = Vec<(String, String)>;
+
+/// The cases a search runs: each case of the axes with its labelled values and scene table,
+/// or the base scene alone without axes.
+///
+/// # Errors
+/// A message naming the case when an axis value cannot be set.
+pub fn search_cases(study: &Study) -> Result<Vec<(CaseLabels, toml::Table)>, String> {
+    if study.axes.is_empty() {
+        return Ok(vec![(Vec::new(), study.base.clone())]);
+    }
+    study
+        .cases
+        .iter()
+        .map(|case| {
+            let table = study.case_table(case)?;
+            let labels = study
+                .axes
+                .iter()
+                .zip(study.case_parameters(case))
+                .map(|(axis, value)| (axis.key.clone(), value))
+                .collect();
+            Ok((labels, table))
+        })
+        .collect()
+}
+
+/// Runs every search of `study` (one per case of its axes, or one on the base scene), the
+/// searches in parallel on `threads` workers (each search's probes in order), and writes
+/// `search.json`, `search.md` (the speeds side by side) and `results.csv` (one row per
+/// probe) into `out`. `on_probe` sees each probe as it ends, with its search.
+///
+/// # Errors
+/// [`StudyError::Io`] when the files cannot be written or the workers cannot start;
+/// [`StudyError::Input`] when a case's scene cannot be formed.
+pub fn run_search(
+    study: &Study,
+    search: &Search,
+    out: &Path,
+    threads: Option<usize>,
+    on_probe: &(dyn Fn(&SearchOutcome, &Probe) + Sync),
+) -> Result<Vec<SearchOutcome>, StudyError> {
+    use rayon::prelude::*;
+    let io = |path: &Path| {
+        let path = path.display().to_string();
+        move |source| StudyError::Io { path, source }
     };
-    let json = serde_json::json!({
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let input = |key: &str, message: String| StudyError::Input {
+        file: study.file.clone(),
+        location: None,
+        key: key.to_string(),
+        message,
+    };
+    let cases = search_cases(study).map_err(|m| input("axis", m))?;
+    let mut jobs = Vec::with_capacity(cases.len());
+    for (labels, table) in cases {
+        let criterion = search
+            .criterion_for(&table)
+            .map_err(|m| input("search.criterion", m))?;
+        jobs.push((labels, table, criterion));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| StudyError::Io {
+            path: out.display().to_string(),
+            source: std::io::Error::other(format!("cannot start worker threads: {e}")),
+        })?;
+    let outcomes: Vec<SearchOutcome> = pool.install(|| {
+        jobs.into_par_iter()
+            .map(|(labels, table, criterion)| {
+                bisect(study, search, labels, &table, criterion, on_probe)
+            })
+            .collect()
+    });
+    let json = search_json(study, search, &outcomes);
+    let file = out.join("search.json");
+    let bytes = serde_json::to_vec_pretty(&json).unwrap_or_default();
+    std::fs::write(&file, bytes).map_err(io(&file))?;
+    let markdown = out.join("search.md");
+    std::fs::write(&markdown, search_markdown(study, search, &outcomes)).map_err(io(&markdown))?;
+    let results = out.join("results.csv");
+    std::fs::write(&results, search_csv(study, search, &outcomes)?).map_err(io(&results))?;
+    Ok(outcomes)
+}
+
+/// `search.json`: the settings and every search with its probes. With a single search its
+/// `status`, `below`, `at_or_above` and `probes` are also given at the top level.
+fn search_json(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> serde_json::Value {
+    let one = |o: &SearchOutcome| {
+        serde_json::json!({
+            "case": o.case.iter().map(|(k, v)| (k.clone(), serde_json::Value::String(v.clone()))).collect::<serde_json::Map<_, _>>(),
+            "criterion": o.criterion.name(),
+            "status": o.status,
+            "below": o.below,
+            "at_or_above": o.at_or_above,
+            "probes": o.probes,
+        })
+    };
+    let mut json = serde_json::json!({
         "study": study.name,
         "key": search.key,
         "low": search.low,
@@ -319,35 +541,103 @@ pub fn run_search(
             Window::Revolutions(n) => serde_json::json!({ "revolutions": n }),
             Window::Time(t) => serde_json::json!({ "time_s": t }),
         },
-        "status": outcome.status,
-        "below": outcome.below,
-        "at_or_above": outcome.at_or_above,
-        "probes": outcome.probes,
+        "searches": outcomes.iter().map(one).collect::<Vec<_>>(),
     });
-    let io = |path: &Path| {
-        let path = path.display().to_string();
-        move |source| StudyError::Io { path, source }
+    if let ([single], Some(map)) = (outcomes, json.as_object_mut()) {
+        for key in ["criterion", "status", "below", "at_or_above", "probes"] {
+            map.insert(key.to_string(), one(single)[key].clone());
+        }
+    }
+    json
+}
+
+/// `search.md`: one row per search, the speeds side by side.
+fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> String {
+    let num = |v: Option<f64>| v.map_or("-".to_string(), crate::record::format_value);
+    let window = match search.window {
+        Window::Revolutions(n) => format!("{n} revolutions"),
+        Window::Time(t) => format!("{t} s"),
     };
-    let bytes = serde_json::to_vec_pretty(&json).unwrap_or_default();
-    std::fs::write(&file, bytes).map_err(io(&file))?;
-    let mut csv = format!(
-        "probe,{},end_s,collapses,collapse_time_s,collapse_link,collapse_deflection_m,error\n",
-        search.key
+    let mut md = format!(
+        "# {}: speed limit in `{}`\n\nBisection over {} to {} (tolerance {}), window {window}. \
+         The limit is reached at or above the upper end and not at the lower end.\n\n\
+         | case | criterion | status | not reached at | reached at | when (s) | link | probes |\n\
+         |---|---|---|---:|---:|---:|---:|---:|\n",
+        study.name, search.key, search.low, search.high, search.tolerance
     );
-    let num = |v: Option<f64>| v.map(crate::record::format_value).unwrap_or_default();
-    for (k, p) in outcome.probes.iter().enumerate() {
-        csv.push_str(&format!(
-            "{k},{},{},{},{},{},{},\"{}\"\n",
-            crate::record::format_value(p.value),
-            crate::record::format_value(p.end_s),
-            if p.collapses { "yes" } else { "no" },
-            num(p.time_s),
-            p.link.map(|l| l.to_string()).unwrap_or_default(),
-            num(p.deflection_m),
-            p.error.as_deref().unwrap_or("").replace('"', "'"),
+    for o in outcomes {
+        let first = o.at_or_above.and_then(|v| {
+            o.probes
+                .iter()
+                .find(|p| p.reached && p.value.total_cmp(&v).is_eq())
+        });
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            o.case_label(),
+            o.criterion.name(),
+            o.status,
+            num(o.below),
+            num(o.at_or_above),
+            num(first.and_then(|p| p.time_s)),
+            first
+                .and_then(|p| p.link)
+                .map_or("-".to_string(), |l| l.to_string()),
+            o.probes.len()
         ));
     }
-    let results = out.join("results.csv");
-    std::fs::write(&results, csv).map_err(io(&results))?;
-    Ok(outcome)
+    md
+}
+
+/// `results.csv`: one row per probe, with its search's case and criterion (written by the
+/// `csv` crate, so case values with commas, such as inline tables, are quoted).
+///
+/// # Errors
+/// [`StudyError::Directory`] if the CSV writer fails.
+fn search_csv(
+    study: &Study,
+    search: &Search,
+    outcomes: &[SearchOutcome],
+) -> Result<Vec<u8>, StudyError> {
+    let err = |e: &dyn std::fmt::Display| StudyError::Directory {
+        dir: "results.csv".into(),
+        message: e.to_string(),
+    };
+    let num = |v: Option<f64>| v.map(crate::record::format_value).unwrap_or_default();
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header = vec!["search".to_string()];
+    header.extend(study.axes.iter().map(|a| a.key.clone()));
+    header.extend(
+        [
+            "criterion",
+            "probe",
+            search.key.as_str(),
+            "end_s",
+            "reached",
+            "time_s",
+            "link",
+            "collapse_deflection_m",
+            "error",
+        ]
+        .map(String::from),
+    );
+    w.write_record(&header).map_err(|e| err(&e))?;
+    for (s, o) in outcomes.iter().enumerate() {
+        for (k, p) in o.probes.iter().enumerate() {
+            let mut row = vec![s.to_string()];
+            row.extend(o.case.iter().map(|(_, v)| v.clone()));
+            row.extend([
+                o.criterion.name().to_string(),
+                k.to_string(),
+                crate::record::format_value(p.value),
+                crate::record::format_value(p.end_s),
+                if p.reached { "yes" } else { "no" }.to_string(),
+                num(p.time_s),
+                p.link.map(|l| l.to_string()).unwrap_or_default(),
+                num(p.deflection_m),
+                p.error.clone().unwrap_or_default(),
+            ]);
+            w.write_record(&row).map_err(|e| err(&e))?;
+        }
+    }
+    w.into_inner().map_err(|e| err(&e))
 }

@@ -35,7 +35,8 @@ pub use crate::record::{
     read_case_records, results_csv,
 };
 pub use crate::runner::{
-    MergeSummary, Shard, StudyOptions, StudyProgress, StudySummary, merge_studies, run_study,
+    MergeSummary, Shard, StudyOptions, StudyProgress, StudySummary, merge_studies,
+    run_search_study, run_study,
 };
 
 use crate::record::format_parameter;
@@ -243,16 +244,18 @@ impl Study {
         let search = match &raw.search {
             None => None,
             Some(config) => {
-                if !raw.axis.is_empty() {
+                let search = crate::search::Search::from_config(config)
+                    .map_err(|(key, message)| at.input(key, message))?;
+                if let Some(axis) = axes.iter().position(|a| a.key == search.key) {
                     return Err(at.input(
-                        "search",
-                        "a search varies its own key: remove the [[axis]] tables or the [search] table",
+                        &format!("axis.{axis}.key"),
+                        format!(
+                            "the search varies {} itself: an axis may vary any other key (one search runs per case)",
+                            search.key
+                        ),
                     ));
                 }
-                Some(
-                    crate::search::Search::from_config(config)
-                        .map_err(|(key, message)| at.input(key, message))?,
-                )
+                Some(search)
             }
         };
         let study = Study {
@@ -267,6 +270,21 @@ impl Study {
             search,
         };
         study.check_plots(&at)?;
+        if let Some(search) = &study.search {
+            let cases = crate::search::search_cases(&study).map_err(|m| at.input("axis", m))?;
+            for (labels, table) in &cases {
+                search.criterion_for(table).map_err(|m| {
+                    let case: Vec<String> =
+                        labels.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+                    let message = if case.is_empty() {
+                        m
+                    } else {
+                        format!("in the case {}: {m}", case.join(", "))
+                    };
+                    at.input("search.criterion", message)
+                })?;
+            }
+        }
         let fingerprint = study.compute_fingerprint(raw.combine);
         Ok(Study {
             fingerprint,
@@ -377,11 +395,19 @@ impl Study {
     /// # Errors
     /// A message when a key cannot be set.
     pub fn case_scene_text(&self, case: &Case) -> Result<String, String> {
+        toml::to_string(&self.case_table(case)?).map_err(|e| e.to_string())
+    }
+
+    /// A case's scene as a TOML table: the base scene with the case's axis values set.
+    ///
+    /// # Errors
+    /// The message of [`set_key`] when a value cannot be set.
+    pub fn case_table(&self, case: &Case) -> Result<toml::Table, String> {
         let mut scene = self.base.clone();
         for (axis, value) in self.axes.iter().zip(&case.values) {
             set_key(&mut scene, &axis.key, value)?;
         }
-        toml::to_string(&scene).map_err(|e| e.to_string())
+        Ok(scene)
     }
 
     /// Builds a case's scene (same validation as a scene file).
