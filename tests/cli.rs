@@ -165,6 +165,51 @@ fn check_accepts_the_shipped_configs() {
     }
 }
 
+/// `check` names the model the scene asks for, with its own discretisation: modes and basis
+/// for the KED and coupled models, elements for the nonlinear one.
+#[test]
+fn check_names_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let coupled = std::fs::read_to_string(config("coupled_f20.toml")).unwrap();
+    assert!(coupled.contains("coupling = \"coupled\""));
+    let nonlinear = coupled.replace(
+        "coupling = \"coupled\"",
+        "coupling = \"nonlinear\"\nelements = 12",
+    );
+    let nonlinear = nonlinear.replace(
+        "requests = [\"axial_forces\", \"driving_forces\", \"frequencies\", \"modes\", \"deflections\"]",
+        "requests = [\"deflections\"]",
+    );
+    for (name, text, expected) in [
+        (
+            "ked",
+            std::fs::read_to_string(config("paper_f20.toml")).unwrap(),
+            "KED model, paper formulation, 3 modes per link",
+        ),
+        (
+            "coupled",
+            coupled.clone(),
+            "coupled model, consistent formulation, 3 modes per link",
+        ),
+        (
+            "nonlinear",
+            nonlinear,
+            "nonlinear model, 12 co-rotational elements per link",
+        ),
+    ] {
+        let path = scene_file(dir.path(), &format!("{name}.toml"), &text);
+        let output = flexprr().arg("check").arg(&path).output().unwrap();
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{name}: {}",
+            stderr_of(&output)
+        );
+        assert!(stdout.contains(expected), "{name}: {stdout}");
+    }
+}
+
 #[test]
 fn the_short_example_configs_run() {
     for name in [
