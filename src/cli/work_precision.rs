@@ -9,7 +9,7 @@ use flexprr_bench::work_precision::{
     WorkPrecisionRow, csv_text, markdown_at_error, markdown_models, markdown_rows, measure,
     read_csv, write_svg,
 };
-use flexprr_scene::{Method, Scene};
+use flexprr_scene::{Method, ScenarioError, Scene};
 
 use super::Failure;
 use super::run::failure;
@@ -41,8 +41,8 @@ pub struct WorkPrecisionArgs {
     /// deflection.
     #[arg(long)]
     pub error: Option<String>,
-    /// Relative tolerance of the reference. Default per reference model: 1e-14 (KED),
-    /// 1e-12 (coupled), 1e-10 (nonlinear).
+    /// Relative tolerance of the reference. Default per reference model: 1e-14 (KED and
+    /// coupled), 1e-10 (nonlinear).
     #[arg(long)]
     pub reference_rtol: Option<f64>,
     /// Methods to measure, comma-separated (default abm,rk45,bdf,magnus4,magnus6,auto).
@@ -132,9 +132,34 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         )));
     }
     config.validate().map_err(failure)?;
-    let measure_name = config.error_measure(&scene).map_err(failure)?.name();
+    let option_error = |option: String| {
+        move |e: ScenarioError| match e {
+            ScenarioError::Input { message, .. } => {
+                Failure::bad_input(format!("{option}: {message}"))
+            }
+            other => failure(other),
+        }
+    };
+    let measure_name = config
+        .error_measure(&scene)
+        .map_err(option_error(format!(
+            "--error {}",
+            args.error.as_deref().unwrap_or_default()
+        )))?
+        .name();
+    for choice in config.measured_models(&scene) {
+        choice
+            .apply(&scene)
+            .map_err(option_error("--models".to_string()))?;
+    }
+    config
+        .reference_model(&scene)
+        .apply(&scene)
+        .map_err(option_error("--reference-model".to_string()))?;
     if args.reference.is_none() {
-        config.reference_plan(&scene).map_err(failure)?;
+        config
+            .reference_plan(&scene)
+            .map_err(option_error("--reference-rtol".to_string()))?;
     }
     let out = args.out.unwrap_or_else(|| {
         PathBuf::from("out")
