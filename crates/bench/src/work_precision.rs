@@ -203,10 +203,11 @@ impl ModelChoice {
 /// * Coupled: [`Method::Abm`] at `1e-14` checked by [`Method::Rk45`] at the same tolerance;
 ///   agreement below `1e-9` (the 0.2 s coupled scene at 20 Hz: `8.7e-12` in deflections).
 /// * Nonlinear: [`Method::Abm`] at `1e-10` checked by [`Method::Rk45`] at the same
-///   tolerance; agreement below `1e-8`. Tighter does not finish in minutes: the elements'
-///   axial modes hold both methods to small steps already at loose tolerances, and below
-///   `1e-10` the steps become accuracy-limited on top (32 elements over 20 ms at `1e-10`:
-///   376 000 ABM steps, 193 000 RK45 steps of six right-hand sides each).
+///   tolerance; agreement below `1e-8`. Tighter costs minutes per run: the elements' axial
+///   modes hold both methods to small steps already at loose tolerances, and from `1e-10`
+///   on the steps become accuracy-limited on top (32 elements over 20 ms: 376 000 ABM steps
+///   at `1e-10`, 1 003 000 at `1e-11`; RK45 193 000 steps of six right-hand sides each at
+///   `1e-10`).
 pub fn default_reference(kind: CouplingModel) -> ReferencePlan {
     match kind {
         CouplingModel::Ked => ReferencePlan {
