@@ -1,13 +1,15 @@
 //! `flexprr work-precision`: wall time against achieved error for each integrator over a
-//! ladder of tolerances, with optional rows of other packages merged in.
+//! ladder of tolerances, optionally for several models side by side (`--models`), with
+//! optional rows of other packages merged in.
 
 use std::path::PathBuf;
 
 use flexprr_bench::work_precision::{
-    Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, markdown_at_error, markdown_rows,
-    measure, read_csv, write_svg,
+    ErrorMeasure, ModelChoice, NONLINEAR_TOLERANCES, Reference, WorkPrecisionConfig,
+    WorkPrecisionRow, csv_text, markdown_at_error, markdown_models, markdown_rows, measure,
+    read_csv, write_svg,
 };
-use flexprr_scene::{Method, Scene};
+use flexprr_scene::{Method, ScenarioError, Scene};
 
 use super::Failure;
 use super::run::failure;
@@ -20,9 +22,29 @@ pub struct WorkPrecisionArgs {
     /// Output directory (default `out/<scene name>/work_precision`).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Relative tolerances of the ladder, comma-separated (default 1e-3 to 1e-12).
+    /// Relative tolerances of the ladder, comma-separated (default 1e-3 to 1e-12; 1e-3 to
+    /// 1e-8 when a nonlinear model is measured).
     #[arg(long, value_delimiter = ',')]
     pub tolerances: Option<Vec<f64>>,
+    /// Models to set side by side, comma-separated, each overriding the scene's
+    /// `model.coupling` (and `model.elements`): ked, coupled, nonlinear, nonlinear:N (N even,
+    /// 2 to 512). All are measured in mid-point deflections against one reference. Default:
+    /// the scene's own model.
+    #[arg(long, value_delimiter = ',')]
+    pub models: Option<Vec<String>>,
+    /// Model of the reference (a name as in --models). Default: the most faithful model
+    /// measured (nonlinear with the most elements, then coupled, then KED).
+    #[arg(long)]
+    pub reference_model: Option<String>,
+    /// Error measure: deflection (the links' mid-point deflections; every model) or state
+    /// (the modal state; KED models only). Default: state when every model is KED, else
+    /// deflection.
+    #[arg(long)]
+    pub error: Option<String>,
+    /// Relative tolerance of the reference. Default per reference model: 1e-14 (KED and
+    /// coupled), 1e-10 (nonlinear).
+    #[arg(long)]
+    pub reference_rtol: Option<f64>,
     /// Methods to measure, comma-separated (default abm,rk45,bdf,magnus4,magnus6,auto).
     #[arg(long, value_delimiter = ',')]
     pub methods: Option<Vec<String>>,
@@ -50,10 +72,44 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     let mut config = WorkPrecisionConfig {
         repeats: args.repeats,
         warmup: args.warmup,
+        reference_rtol: args.reference_rtol,
         ..WorkPrecisionConfig::default()
     };
-    if let Some(tolerances) = args.tolerances {
-        config.tolerances = tolerances;
+    let model = |option: &str, name: &str| {
+        ModelChoice::parse(name.trim()).ok_or_else(|| {
+            Failure::bad_input(format!(
+                "{option}: unknown model {name:?} (expected one of {})",
+                ModelChoice::NAMES
+            ))
+        })
+    };
+    if let Some(names) = &args.models {
+        config.models = names
+            .iter()
+            .map(|name| model("--models", name))
+            .collect::<Result<_, _>>()?;
+    }
+    if let Some(name) = &args.reference_model {
+        config.reference_model = Some(model("--reference-model", name)?);
+    }
+    if let Some(name) = &args.error {
+        config.error = Some(ErrorMeasure::parse(name.trim()).ok_or_else(|| {
+            let known: Vec<&str> = ErrorMeasure::ALL.iter().map(|m| m.name()).collect();
+            Failure::bad_input(format!(
+                "--error: unknown error measure {name:?} (expected one of {})",
+                known.join(", ")
+            ))
+        })?);
+    }
+    let nonlinear = config
+        .measured_models(&scene)
+        .into_iter()
+        .chain([config.reference_model(&scene)])
+        .any(|m| matches!(m, ModelChoice::Nonlinear(_)));
+    match args.tolerances {
+        Some(tolerances) => config.tolerances = tolerances,
+        None if nonlinear => config.tolerances = NONLINEAR_TOLERANCES.to_vec(),
+        None => {}
     }
     if let Some(names) = args.methods {
         config.methods = names
@@ -76,6 +132,35 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         )));
     }
     config.validate().map_err(failure)?;
+    let option_error = |option: String| {
+        move |e: ScenarioError| match e {
+            ScenarioError::Input { message, .. } => {
+                Failure::bad_input(format!("{option}: {message}"))
+            }
+            other => failure(other),
+        }
+    };
+    let measure_name = config
+        .error_measure(&scene)
+        .map_err(option_error(format!(
+            "--error {}",
+            args.error.as_deref().unwrap_or_default()
+        )))?
+        .name();
+    for choice in config.measured_models(&scene) {
+        choice
+            .apply(&scene)
+            .map_err(option_error("--models".to_string()))?;
+    }
+    config
+        .reference_model(&scene)
+        .apply(&scene)
+        .map_err(option_error("--reference-model".to_string()))?;
+    if args.reference.is_none() {
+        config
+            .reference_plan(&scene)
+            .map_err(option_error("--reference-rtol".to_string()))?;
+    }
     let out = args.out.unwrap_or_else(|| {
         PathBuf::from("out")
             .join(&scene.name)
@@ -84,15 +169,28 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     std::fs::create_dir_all(&out)
         .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
 
+    let clock = std::time::Instant::now();
     let reference = match &args.reference {
         Some(path) => Reference::read_csv(path).map_err(failure)?,
         None => Reference::compute(&scene, &config).map_err(failure)?,
     };
-    if let Some(a) = reference.agreement {
-        println!(
-            "reference: {} at rtol {:e}, checked with {}: agree to {:.1e} (end) / {:.1e} (max)",
-            reference.method, config.reference_rtol, reference.check_method, a.end, a.max
-        );
+    let reference_s = clock.elapsed().as_secs_f64();
+    let reference_line = reference.agreement.map(|a| {
+        format!(
+            "reference: {} with {} at rtol {:e}, checked with {} at rtol {:e}: agree to {:.1e} \
+             (end) / {:.1e} (max) in the {measure_name} measure ({reference_s:.1} s with its \
+             pilot run)",
+            reference.model,
+            reference.method,
+            reference.rtol,
+            reference.check_method,
+            reference.check_rtol,
+            a.end,
+            a.max
+        )
+    });
+    if let Some(line) = &reference_line {
+        println!("{line}");
     }
     reference
         .write_csv(&out.join("reference.csv"))
@@ -103,13 +201,13 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         peers.extend(read_csv(path).map_err(failure)?);
     }
     println!(
-        "{:<8} {:>7} {:>10} {:>8} {:>9} {:>10} {:>10}",
+        "{:<24} {:>7} {:>10} {:>8} {:>9} {:>10} {:>10}",
         "method", "rtol", "time_ms", "steps", "rhs", "end_err", "max_err"
     );
     let (mut rows, failures) = measure(&scene, &reference, &config, &mut |r| {
         println!(
-            "{:<8} {:>7.0e} {:>10.3} {:>8} {:>9} {:>10.2e} {:>10.2e}",
-            r.method,
+            "{:<24} {:>7.0e} {:>10.3} {:>8} {:>9} {:>10.2e} {:>10.2e}",
+            r.series_label(),
             r.rtol,
             1e3 * r.time_median_s,
             r.accepted_steps.unwrap_or(0),
@@ -131,12 +229,27 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     };
     write("work_precision.csv", &csv)?;
     let at_error = markdown_at_error(&rows, args.target_error);
+    let what = match measure_name {
+        "state" => "the modal state, relative to the solution's size",
+        _ => "the links' mid-point deflections, relative to the reference's largest",
+    };
     let mut md = format!(
-        "# Work-precision: {}\n\nAt equal achieved error (maximum over the output times, relative \
-         to the solution's size):\n\n{at_error}\nAll points:\n\n{}",
-        scene.name,
-        markdown_rows(&rows)
+        "# Work-precision: {}\n\nErrors: maximum over the output times of {what}.\n\n",
+        scene.name
     );
+    if let Some(line) = &reference_line {
+        md.push_str(&format!("{line}\n\n"));
+    }
+    if !config.models.is_empty() {
+        md.push_str(&format!(
+            "Cost against fidelity:\n\n{}\n",
+            markdown_models(&rows)
+        ));
+    }
+    md.push_str(&format!(
+        "At equal achieved error:\n\n{at_error}\nAll points:\n\n{}",
+        markdown_rows(&rows)
+    ));
     if !failures.is_empty() {
         md.push_str("\nFailed points:\n\n");
         for f in &failures {

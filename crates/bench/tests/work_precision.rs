@@ -1,12 +1,16 @@
 //! Work-precision measurement on a short scene (the paper's machine on the 20 Hz circle for
 //! 20 ms): the achieved error falls as the tolerance tightens, the reference agrees with its
 //! check and with a third method, the error measure and the equal-error interpolation match
-//! closed forms, and the CSV carries every column.
+//! closed forms, and the CSV carries every column. On the 30 Hz scene: the mid-point
+//! deflection measure against closed forms, the nonlinear model's reference against its
+//! check and a tighter run, and models side by side flooring at their model error.
 
 use flexprr_bench::work_precision::{
-    PACKAGE, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, markdown_at_error,
-    read_csv, time_at_error, work_precision,
+    ErrorMeasure, ModelChoice, PACKAGE, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text,
+    default_reference, markdown_at_error, markdown_models, measure, midpoint_deflections, read_csv,
+    time_at_error, work_precision,
 };
+use flexprr_dynamics::CouplingModel;
 use flexprr_integrators::{Bdf, Integrator, Options};
 use flexprr_scene::Method;
 use flexprr_scene::Scene;
@@ -188,6 +192,7 @@ fn row(method: &str, rtol: f64, time: f64, error: f64) -> WorkPrecisionRow {
         jacobian_evaluations: Some(0),
         end_error: error,
         max_error: error,
+        model: String::new(),
     }
 }
 
@@ -241,6 +246,7 @@ fn the_csv_has_every_column_and_reads_back() {
         "jacobian_evaluations",
         "end_error",
         "max_error",
+        "model",
     ];
     assert_eq!(header.split(',').collect::<Vec<_>>(), expected);
     // A count a package does not report is an empty field.
@@ -258,4 +264,287 @@ fn the_csv_has_every_column_and_reads_back() {
     std::fs::write(&path, broken).expect("write");
     let err = read_csv(&path).expect_err("negative error").to_string();
     assert!(err.contains("row 1"), "{err}");
+}
+
+/// The paper scene at 30 Hz over `end` seconds, consistent formulation (every model can be
+/// built from it), with `model` as its `[model]` table body.
+fn scene_f30(model: &str, end: f64) -> Scene {
+    let text = format!(
+        r#"
+[links]
+length = 0.2
+modes = 3
+material = {{ youngs_modulus = 7.3e10, density = 2770.0 }}
+section = {{ kind = "uniform", thickness = 0.002, height = 0.03 }}
+basis = {{ kind = "sine" }}
+
+[trajectory]
+kind = "circle"
+centre = [-0.05, 0.0]
+radius = 0.05
+frequency = 30.0
+phi_deg = 45.0
+
+[model]
+formulation = "consistent"
+{model}
+
+[integrator]
+method = "abm"
+rtol = 1e-8
+atol = 1e-12
+
+[time]
+start = 0.0
+end = {end}
+output_step = 2e-4
+
+[output]
+requests = ["deflections"]
+plots = false
+"#
+    );
+    Scene::from_text("f30.toml", "f30", &text).expect("valid scene")
+}
+
+#[test]
+fn the_deflection_error_of_a_run_is_zero_against_itself_and_the_perturbation_against_a_copy() {
+    // A KED run: with three sine modes psi_j = sin(j pi xi), the mid-point deflection is
+    // eta_1 - eta_3 (psi_2(1/2) = 0), a closed form independent of the model's own sum.
+    let scene = scene_f30("", 0.004);
+    let mut system = scene.build_model().expect("KED model");
+    let y0 = system.initial_state();
+    let options = Options::default().rtol(1e-9).atol(1e-13);
+    let solution = Method::Abm
+        .solve(options, &mut system.as_mut(), &y0, &scene.output_times)
+        .expect("solves");
+    let w = midpoint_deflections(system.as_mut(), &solution).expect("deflections");
+    assert_eq!(w.len(), 3 * solution.t.len());
+    for k in 0..solution.t.len() {
+        let y = solution.y(k);
+        for i in 0..3 {
+            let eta = &y[system.link_range(i)];
+            let closed = eta[0] - eta[2];
+            assert!(
+                (w[3 * k + i] - closed).abs() <= 1e-12 * closed.abs().max(1e-9),
+                "link {i} at t = {}: {} vs eta_1 - eta_3 = {closed}",
+                solution.t[k],
+                w[3 * k + i]
+            );
+        }
+    }
+
+    let reference = Reference::from_deflections(solution.t.clone(), w.clone()).expect("valid");
+    assert_eq!(reference.measure, ErrorMeasure::Deflection);
+    let size = w.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    assert!((reference.displacement_size - size).abs() < 1e-18);
+    let itself = reference
+        .errors_of(system.as_mut(), &solution)
+        .expect("same shape");
+    assert!(
+        itself.max.abs() < 1e-300 && itself.end.abs() < 1e-300,
+        "{itself:?}"
+    );
+
+    // Perturb link 2 at the middle time by delta and link 3 at the end by delta / 4: the
+    // maximum error is delta / size, the end error delta / (4 size).
+    let delta = 1e-3 * size;
+    let mut perturbed = w.clone();
+    let middle = solution.t.len() / 2;
+    perturbed[3 * middle + 1] += delta;
+    let last = solution.t.len() - 1;
+    perturbed[3 * last + 2] -= 0.25 * delta;
+    let error = reference.deflection_errors(&perturbed).expect("same shape");
+    assert!((error.max - 1e-3).abs() < 1e-15, "{error:?}");
+    assert!((error.end - 0.25e-3).abs() < 1e-15, "{error:?}");
+
+    // The state measure refuses a deflection reference and the other way round, and wrong
+    // shapes are refused naming what they hold.
+    assert!(reference.errors(&solution.states).is_err());
+    let err = reference.deflection_errors(&w[..3]).expect_err("short");
+    assert!(err.to_string().contains("3 links"), "{err}");
+    let mut nan = w;
+    nan[4] = f64::NAN;
+    let err = reference.deflection_errors(&nan).expect_err("NaN");
+    assert!(err.to_string().contains("link 2"), "{err}");
+}
+
+#[test]
+fn a_deflection_reference_reads_back_from_its_csv() {
+    let t = vec![0.0, 1e-3, 2e-3];
+    let w = vec![0.0, 0.0, 0.0, 1e-3, -2e-3, 5e-4, 2e-3, -4e-3, 1e-3];
+    let reference = Reference::from_deflections(t, w).expect("valid");
+    assert!((reference.displacement_size - 4e-3).abs() < 1e-18);
+    assert!((reference.atol(1e-6) - 4e-9).abs() < 1e-22);
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("reference.csv");
+    reference.write_csv(&path).expect("writes");
+    let text = std::fs::read_to_string(&path).expect("read");
+    assert!(
+        text.starts_with("t_s,w_1_xi0.5_m,w_2_xi0.5_m,w_3_xi0.5_m\n"),
+        "{text}"
+    );
+    let back = Reference::read_csv(&path).expect("reads");
+    assert_eq!(back.measure, ErrorMeasure::Deflection);
+    let error = back
+        .deflection_errors(&reference.deflections)
+        .expect("same");
+    assert!(error.max.abs() < 1e-300, "{error:?}");
+    assert!(Reference::from_deflections(vec![0.0], vec![0.0; 3]).is_err());
+    assert!(Reference::from_deflections(vec![0.0], vec![1.0; 2]).is_err());
+}
+
+#[test]
+fn the_nonlinear_reference_agrees_with_its_check_and_with_a_tighter_third_run() {
+    // Four elements per link over 2 ms: a few thousand steps.
+    let scene = scene_f30("coupling = \"nonlinear\"\nelements = 4", 0.002);
+    let config = WorkPrecisionConfig {
+        tolerances: vec![1e-4, 1e-6],
+        methods: vec![Method::Abm],
+        warmup: 0,
+        repeats: 1,
+        ..WorkPrecisionConfig::default()
+    };
+    assert_eq!(
+        config.error_measure(&scene).expect("measure"),
+        ErrorMeasure::Deflection
+    );
+    let plan = config.reference_plan(&scene).expect("plan");
+    assert_eq!(plan, default_reference(CouplingModel::Nonlinear));
+    let reference = Reference::compute(&scene, &config).expect("reference");
+    assert_eq!(reference.model, "nonlinear:4");
+    assert_ne!(reference.method, reference.check_method);
+    let agreement = reference.agreement.expect("checked");
+    assert!(
+        agreement.max < plan.agreement_limit && agreement.end <= agreement.max,
+        "{agreement:?} against the limit {:e}",
+        plan.agreement_limit
+    );
+
+    // A third run, ABM ten times tighter than the reference, agrees to the same limit: the
+    // reference is accurate, not only reproducible.
+    let mut system = scene.build_model().expect("nonlinear model");
+    let y0 = system.initial_state();
+    let tight = 0.1 * plan.rtol;
+    let options = Options::default()
+        .rtol(tight)
+        .atol(tight * reference.displacement_size);
+    let third = Method::Abm
+        .solve(options, &mut system.as_mut(), &y0, &scene.output_times)
+        .expect("solves");
+    let error = reference
+        .errors_of(system.as_mut(), &third)
+        .expect("same shape");
+    assert!(error.max < plan.agreement_limit, "{error:?}");
+
+    // The measurement gives rows whose error falls with the tolerance down to the
+    // reference's agreement.
+    let (rows, failures) = measure(&scene, &reference, &config, &mut |_| {}).expect("measures");
+    assert!(failures.is_empty(), "{failures:?}");
+    assert_eq!(rows.len(), 2);
+    assert!(rows.iter().all(|r| r.model.is_empty()));
+    assert!(
+        rows[1].max_error < rows[0].max_error || rows[1].max_error < 10.0 * agreement.max,
+        "{rows:?}"
+    );
+}
+
+#[test]
+fn models_side_by_side_share_one_reference_and_floor_at_their_model_error() {
+    let scene = scene_f30("coupling = \"nonlinear\"\nelements = 4", 0.002);
+    let config = WorkPrecisionConfig {
+        tolerances: vec![1e-5, 1e-7],
+        methods: vec![Method::Abm],
+        models: vec![ModelChoice::Ked, ModelChoice::Nonlinear(Some(4))],
+        warmup: 0,
+        repeats: 1,
+        ..WorkPrecisionConfig::default()
+    };
+    assert_eq!(
+        config.reference_model(&scene),
+        ModelChoice::Nonlinear(Some(4))
+    );
+    let reference = Reference::compute(&scene, &config).expect("reference");
+    let (rows, failures) = measure(&scene, &reference, &config, &mut |_| {}).expect("measures");
+    assert!(failures.is_empty(), "{failures:?}");
+    let labels: Vec<String> = rows.iter().map(WorkPrecisionRow::series_label).collect();
+    assert_eq!(
+        labels,
+        [
+            "ked (consistent) abm",
+            "ked (consistent) abm",
+            "nonlinear:4 abm",
+            "nonlinear:4 abm"
+        ]
+    );
+
+    // The KED rows floor at KED's model error: the difference of a KED reference (computed
+    // on its own, RK45 at 1e-14 checked by ABM) from the nonlinear one, found directly.
+    let ked_config = WorkPrecisionConfig {
+        models: vec![ModelChoice::Ked],
+        error: Some(ErrorMeasure::Deflection),
+        ..config.clone()
+    };
+    let ked = Reference::compute(&scene, &ked_config).expect("KED reference");
+    assert_eq!(ked.model, "ked (consistent)");
+    let model_error = reference
+        .deflection_errors(&ked.deflections)
+        .expect("same times");
+    assert!(model_error.max > 1e-3, "{model_error:?}");
+    let tight = &rows[1];
+    assert!(
+        (tight.max_error / model_error.max - 1.0).abs() < 1e-3,
+        "{} vs {}",
+        tight.max_error,
+        model_error.max
+    );
+    // The nonlinear rows go far below it.
+    assert!(rows[3].max_error < 1e-3 * model_error.max, "{rows:?}");
+    let md = markdown_models(&rows);
+    assert!(md.contains("| flexprr | nonlinear:4 abm |"), "{md}");
+}
+
+#[test]
+fn choices_that_do_not_apply_are_refused_with_the_setting() {
+    let scene = scene_f30("coupling = \"nonlinear\"\nelements = 4", 0.002);
+    let state = WorkPrecisionConfig {
+        error: Some(ErrorMeasure::State),
+        ..WorkPrecisionConfig::default()
+    };
+    let err = state.error_measure(&scene).expect_err("state on nonlinear");
+    let text = err.to_string();
+    assert!(
+        text.contains("error") && text.contains("nonlinear:4"),
+        "{text}"
+    );
+    assert!(!text.contains('\n'), "{text}");
+
+    // The paper formulation cannot carry the coupled model.
+    let paper = short_scene();
+    let err = ModelChoice::Coupled
+        .apply(&paper)
+        .expect_err("paper + coupled");
+    assert!(err.to_string().contains("consistent"), "{err}");
+
+    // A reference tolerance not below the ladder is refused naming it.
+    let loose = WorkPrecisionConfig {
+        tolerances: vec![1e-4, 1e-11],
+        ..WorkPrecisionConfig::default()
+    };
+    let err = loose.reference_plan(&scene).expect_err("1e-10 above 1e-11");
+    assert!(err.to_string().contains("reference_rtol"), "{err}");
+
+    for (name, parsed) in [
+        ("ked", Some(ModelChoice::Ked)),
+        ("coupled", Some(ModelChoice::Coupled)),
+        ("nonlinear", Some(ModelChoice::Nonlinear(None))),
+        ("nonlinear:16", Some(ModelChoice::Nonlinear(Some(16)))),
+        ("nonlinear:15", None),
+        ("nonlinear:0", None),
+        ("nonlinear:1024", None),
+        ("linear", None),
+    ] {
+        assert_eq!(ModelChoice::parse(name), parsed, "{name}");
+    }
+    assert_eq!(ModelChoice::Nonlinear(None).label(&scene), "nonlinear:4");
 }
