@@ -15,22 +15,19 @@ use std::cell::RefCell;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-
-use flexprr_integrators::OdeSystem;
+use flexprr_bench::work_precision::{
+    DEFAULT_TOLERANCES, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text, time_runs,
+};
+use flexprr_dynamics::SceneModel;
+use flexprr_scene::Scene;
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, Dim, Dyn, OVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
-use flexprr_scene::Scene;
-use flexprr_bench::work_precision::{
-    DEFAULT_TOLERANCES, Reference, SceneSystem, WorkPrecisionConfig, WorkPrecisionRow, csv_text,
-    modal_system,
-    time_runs,
-};
 
-/// The modal system behind `ode_solvers`' `&self` interface (the flexprr system keeps work
-/// counters, hence `&mut self`).
+/// The scene's model (the one `flexprr run` builds) behind `ode_solvers`' `&self` interface
+/// (the flexprr system keeps work counters, hence `&mut self`).
 struct Modal<'a> {
-    system: &'a RefCell<SceneSystem>,
+    system: &'a RefCell<Box<dyn SceneModel>>,
 }
 
 impl<D: Dim> System<f64, OVector<f64, D>> for Modal<'_>
@@ -65,7 +62,7 @@ type Outcome = (Vec<f64>, (usize, usize, usize));
 
 fn solve<D: Dim>(
     peer: Peer,
-    system: &RefCell<SceneSystem>,
+    system: &RefCell<Box<dyn SceneModel>>,
     dim: D,
     t_out: &[f64],
     rtol: f64,
@@ -76,7 +73,8 @@ where
     OVector<f64, D>: std::ops::Mul<f64, Output = OVector<f64, D>>,
 {
     let n = dim.value();
-    let y0 = OVector::<f64, D>::from_iterator_generic(dim, Const::<1>, std::iter::repeat_n(0.0, n));
+    let start = system.borrow().initial_state();
+    let y0 = OVector::<f64, D>::from_iterator_generic(dim, Const::<1>, start.into_iter());
     let (t0, t_end) = (t_out[0], t_out[t_out.len() - 1]);
     let dt = t_out[1] - t_out[0];
     let f = Modal { system };
@@ -226,7 +224,7 @@ fn run() -> Result<(), String> {
     if let Some(path) = &args.write_reference {
         reference.write_csv(path).map_err(|e| e.to_string())?;
     }
-    let system = RefCell::new(modal_system(&scene).map_err(|e| e.to_string())?);
+    let system = RefCell::new(scene.build_model().map_err(|e| e.to_string())?);
     let dim = system.borrow().dim();
     let t_out = &scene.output_times;
     if t_out.len() < 2 || reference.t.len() != t_out.len() {
@@ -268,6 +266,7 @@ fn run() -> Result<(), String> {
                 jacobian_evaluations: Some(0),
                 end_error: error.end,
                 max_error: error.max,
+                model: String::new(),
             };
             println!(
                 "ode_solvers {:<7} {:>7.0e} {:>10.3} ms {:>8} steps {:>9} rhs {:>10.2e} {:>10.2e}",
