@@ -16,7 +16,8 @@ use flexprr_bench::classify::{Attempt, Failure, Outcome, attempt};
 use flexprr_run::guard::DIVERGENCE_FRACTION;
 use flexprr_run::{RunError, run};
 use flexprr_scene::{
-    FormulationChoice, Method, OutputKind, ScenarioError, Scene, SceneFile, parse_scene,
+    CouplingChoice, FormulationChoice, Method, OutputKind, ScenarioError, Scene, SceneFile,
+    parse_scene,
 };
 
 /// Every stress scene that is integrated (all but `near_singular_type2`, refused at load).
@@ -187,6 +188,34 @@ fn every_stress_scene_runs_the_exponential_methods() {
         assert_eq!(model.kind(), "ked", "{name}");
         assert_eq!(methods(&s), [GENERAL, EXPONENTIAL].concat(), "{name}");
     }
+}
+
+/// The classification resolves a method for the scene's model as a scene does: on the
+/// coupled model (nonlinear in its state) `auto` runs `abm` and solves, and `magnus6` fails
+/// with the scene's own refusal, naming what to use instead.
+#[test]
+fn classification_resolves_methods_like_a_scene() {
+    let coupled = scene("max_step_huge", |f| {
+        f.model.coupling = CouplingChoice::Coupled;
+        f.time.end = 0.002;
+    });
+    let a = attempt(&coupled, Method::Auto);
+    assert_eq!(a.resolved, "abm");
+    assert!(a.result.is_ok(), "{:?}", a.result);
+    let m = attempt(&coupled, Method::Magnus6);
+    assert_eq!(m.resolved, "magnus6");
+    match &m.result {
+        Err(Failure::Model { source }) => {
+            let message = source.to_string();
+            assert!(
+                message.contains("needs a linear (KED) model") && message.contains("use abm"),
+                "{message}"
+            );
+        }
+        other => panic!("magnus6 on the coupled model: {other:?}"),
+    }
+    let ked = scene("max_step_huge", |f| f.time.end = 0.002);
+    assert_eq!(attempt(&ked, Method::Auto).resolved, "magnus6");
 }
 
 /// Many modes (r = 12 and 20 per link): an explicit method solves the scene accurately or

@@ -6,9 +6,8 @@
 //! with a chosen [`Method`] (the scene's own method is ignored), resolved for that model the
 //! way a scene resolves it (`auto` becomes `magnus6` on a KED model and `abm` otherwise; an
 //! exponential method on a nonlinear model fails with the scene's message), through the run
-//! layer's one
-//! observed stepping loop, so the integrator's work counters survive a failure and the
-//! divergence guard ([`flexprr_run::guard`], one limit) stops a link that buckles with
+//! layer's one observed stepping loop, so the integrator's work counters survive a failure
+//! and the divergence guard ([`flexprr_run::guard`], one limit) stops a link that buckles with
 //! [`Failure::Diverged`] instead of integrating to overflow.
 //!
 //! [`Attempt::classify`] then labels the attempt: [`Outcome::Solved`] with the relative
