@@ -1,6 +1,8 @@
 //! The stress suite (`configs/stress/`, `docs/stability.md`) on short horizons: every stiff
-//! or extreme scene is run by every integrator and the outcome (solved with error X, solved
-//! but slow, failed with a clear error) is asserted.
+//! or extreme scene is run by every integrator (the general ones, `abm`, `rk45` and `bdf`,
+//! and, since every stress scene is a KED scene, the exponential `magnus4`, `magnus6` and
+//! the automatic choice `auto`) and the outcome (solved with error X, solved but slow, failed
+//! with a clear error) is asserted.
 //!
 //! Errors are measured against the same scene integrated by a *different* method at a much
 //! tighter tolerance (rtol 1e-11); the buckling checks use Euler's load and the periodicity
@@ -14,10 +16,48 @@ use flexprr_bench::classify::{Attempt, Failure, Outcome, attempt};
 use flexprr_run::guard::DIVERGENCE_FRACTION;
 use flexprr_run::{RunError, run};
 use flexprr_scene::{
-    FormulationChoice, Method, OutputKind, ScenarioError, Scene, SceneFile, parse_scene,
+    CouplingChoice, FormulationChoice, Method, OutputKind, ScenarioError, Scene, SceneFile,
+    parse_scene,
 };
 
-const METHODS: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
+/// Every stress scene that is integrated (all but `near_singular_type2`, refused at load).
+const INTEGRATED_SCENES: [&str; 12] = [
+    "many_modes_r12",
+    "many_modes_r12_damped",
+    "many_modes_r20",
+    "many_modes_r20_damped",
+    "high_speed_f30",
+    "high_speed_f35",
+    "high_speed_f40",
+    "long_horizon_f20",
+    "tolerance_tight",
+    "tolerance_loose",
+    "max_step_tiny",
+    "max_step_huge",
+];
+
+/// The general methods (any model).
+const GENERAL: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
+/// The exponential methods and the automatic choice (`magnus6` on a KED model): models that
+/// are linear in their state only.
+const EXPONENTIAL: [Method; 3] = [Method::Magnus4, Method::Magnus6, Method::Auto];
+
+fn is_exponential(method: Method) -> bool {
+    EXPONENTIAL.contains(&method)
+}
+
+/// The methods run on `s`: the general ones, and the exponential ones where the scene's
+/// model is linear in its state (the KED model: every stress scene).
+fn methods(s: &Scene) -> Vec<Method> {
+    let mut model = s
+        .build_model()
+        .unwrap_or_else(|e| panic!("{}: {e}", s.name));
+    let linear = model.linear_form().is_some();
+    GENERAL
+        .into_iter()
+        .chain(EXPONENTIAL.into_iter().filter(|_| linear))
+        .collect()
+}
 
 /// Loads `configs/stress/<name>.toml`, applies `edit` (short horizon, caps) and validates it.
 fn load(name: &str, edit: impl FnOnce(&mut SceneFile)) -> Result<Scene, ScenarioError> {
@@ -69,9 +109,18 @@ fn describe(name: &str, a: &Attempt, outcome: &Outcome) -> String {
             None => format!("peak deflection {:.3e} m", a.max_deflection_m),
         },
     };
+    let method = if a.resolved == a.method.name() {
+        a.method.name().to_string()
+    } else {
+        format!("{} ({})", a.method.name(), a.resolved)
+    };
+    let unit = if is_exponential(a.method) {
+        "coefficient evaluations"
+    } else {
+        "rhs"
+    };
     format!(
-        "{name} {}: {} ({} steps, {} rejected, {} rhs, stiffness at {:?}): {detail}",
-        a.method.name(),
+        "{name} {method}: {} ({} steps, {} rejected, {} {unit}, stiffness at {:?}): {detail}",
         outcome.label(),
         a.stats.accepted_steps,
         a.stats.rejected_steps,
@@ -81,19 +130,25 @@ fn describe(name: &str, a: &Attempt, outcome: &Outcome) -> String {
 }
 
 /// Runs every method on the scene and classifies each against its reference, with a work
-/// budget of `slow_factor` times the cheapest successful method.
+/// budget of `slow_factor` times the cheapest successful method of the same kind (the
+/// general methods count right-hand sides, the exponential ones coefficient evaluations: not
+/// the same unit, so they are not compared with each other; docs/performance.md compares
+/// them by wall time).
 fn classify_all(
     name: &str,
     edit: impl Fn(&mut SceneFile) + Copy,
     slow_factor: usize,
 ) -> Vec<(Attempt, Outcome)> {
     let s = scene(name, edit);
-    let attempts: Vec<Attempt> = METHODS.iter().map(|&m| attempt(&s, m)).collect();
-    let cheapest = attempts
-        .iter()
-        .filter(|a| a.result.is_ok())
-        .map(Attempt::rhs_evaluations)
-        .min();
+    let attempts: Vec<Attempt> = methods(&s).into_iter().map(|m| attempt(&s, m)).collect();
+    let cheapest = |exponential: bool| {
+        attempts
+            .iter()
+            .filter(|a| a.result.is_ok() && is_exponential(a.method) == exponential)
+            .map(Attempt::rhs_evaluations)
+            .min()
+    };
+    let cheapest = [cheapest(false), cheapest(true)];
     // One reference per other method, computed only when needed.
     let mut references: Vec<(Method, Attempt)> = Vec::new();
     attempts
@@ -109,7 +164,8 @@ fn classify_all(
                     .find(|(m, _)| *m == other)
                     .expect("added")
                     .1;
-                let budget = cheapest.map(|c| c.saturating_mul(slow_factor));
+                let budget = cheapest[usize::from(is_exponential(a.method))]
+                    .map(|c| c.saturating_mul(slow_factor));
                 a.classify(r.result.as_ref().ok(), budget)
             } else {
                 a.classify(None, None)
@@ -120,8 +176,52 @@ fn classify_all(
         .collect()
 }
 
+/// Every integrated stress scene is a KED scene, so the suite runs the exponential methods
+/// and `auto` on all of them, and a scene naming `auto` runs `magnus6`, the registry's choice
+/// for a model linear in its state.
+#[test]
+fn every_stress_scene_runs_the_exponential_methods() {
+    for name in INTEGRATED_SCENES {
+        let s = scene(name, |f| f.integrator.method = "auto".to_string());
+        assert_eq!(s.method.name(), "magnus6", "{name}");
+        let model = s.build_model().unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(model.kind(), "ked", "{name}");
+        assert_eq!(methods(&s), [GENERAL, EXPONENTIAL].concat(), "{name}");
+    }
+}
+
+/// The classification resolves a method for the scene's model as a scene does: on the
+/// coupled model (nonlinear in its state) `auto` runs `abm` and solves, and `magnus6` fails
+/// with the scene's own refusal, naming what to use instead.
+#[test]
+fn classification_resolves_methods_like_a_scene() {
+    let coupled = scene("max_step_huge", |f| {
+        f.model.coupling = CouplingChoice::Coupled;
+        f.time.end = 0.002;
+    });
+    let a = attempt(&coupled, Method::Auto);
+    assert_eq!(a.resolved, "abm");
+    assert!(a.result.is_ok(), "{:?}", a.result);
+    let m = attempt(&coupled, Method::Magnus6);
+    assert_eq!(m.resolved, "magnus6");
+    match &m.result {
+        Err(Failure::Model { source }) => {
+            let message = source.to_string();
+            assert!(
+                message.contains("needs a linear (KED) model") && message.contains("use abm"),
+                "{message}"
+            );
+        }
+        other => panic!("magnus6 on the coupled model: {other:?}"),
+    }
+    let ked = scene("max_step_huge", |f| f.time.end = 0.002);
+    assert_eq!(attempt(&ked, Method::Auto).resolved, "magnus6");
+}
+
 /// Many modes (r = 12 and 20 per link): an explicit method solves the scene accurately or
-/// reports stiffness or stops at its step cap; nothing else.
+/// reports stiffness or stops at its step cap; nothing else. The exponential methods solve
+/// it, within the budget of their kind, to the same accuracy, in fewer steps than ABM (their
+/// step is set by how fast the coefficients vary, not by the highest mode).
 #[test]
 fn many_modes_explicit_methods_solve_or_report_stiffness() {
     for name in [
@@ -134,8 +234,32 @@ fn many_modes_explicit_methods_solve_or_report_stiffness() {
             f.time.end = 0.01;
             f.integrator.max_steps = 60_000;
         };
-        for (a, outcome) in classify_all(name, short, 3) {
+        let results = classify_all(name, short, 3);
+        let abm_steps = results
+            .iter()
+            .find(|(a, _)| a.method == Method::Abm)
+            .map(|(a, _)| a.stats.accepted_steps)
+            .expect("abm ran");
+        for (a, outcome) in results {
             if a.method == Method::Bdf {
+                continue;
+            }
+            if is_exponential(a.method) {
+                let Outcome::Solved { error, .. } = outcome else {
+                    panic!("{name} {}: {outcome:?}", a.method.name());
+                };
+                let error = error.expect("a reference");
+                assert!(
+                    error < 1e-3,
+                    "{name} {}: error {error:e} at rtol 1e-6",
+                    a.method.name()
+                );
+                assert!(
+                    a.stats.accepted_steps < abm_steps,
+                    "{name} {}: {} steps, abm {abm_steps}",
+                    a.method.name(),
+                    a.stats.accepted_steps
+                );
                 continue;
             }
             match &outcome {
@@ -165,7 +289,8 @@ fn many_modes_explicit_methods_solve_or_report_stiffness() {
 }
 
 /// With modal damping the high modes die out and the problem is stiff: BDF solves it
-/// accurately with fewer right-hand-side evaluations than either explicit method.
+/// accurately with fewer right-hand-side evaluations than either explicit method (the
+/// exponential methods, which count coefficient evaluations, are checked for accuracy).
 #[test]
 fn many_modes_damped_bdf_is_efficient() {
     for name in ["many_modes_r12_damped", "many_modes_r20_damped"] {
@@ -179,14 +304,22 @@ fn many_modes_damped_bdf_is_efficient() {
             .iter()
             .find(|(a, _)| a.method == Method::Bdf)
             .expect("bdf ran");
-        match &bdf.1 {
-            Outcome::Solved { error, .. } => {
-                let error = error.expect("a reference");
-                assert!(error < 1e-3, "{name} bdf: error {error:e}");
+        for (a, outcome) in results
+            .iter()
+            .filter(|(a, _)| a.method == Method::Bdf || is_exponential(a.method))
+        {
+            match outcome {
+                Outcome::Solved { error, .. } => {
+                    let error = error.expect("a reference");
+                    assert!(error < 1e-3, "{name} {}: error {error:e}", a.method.name());
+                }
+                other => panic!("{name} {}: {other:?}", a.method.name()),
             }
-            other => panic!("{name} bdf: {other:?}"),
         }
-        for (a, _) in results.iter().filter(|(a, _)| a.method != Method::Bdf) {
+        for (a, _) in results
+            .iter()
+            .filter(|(a, _)| matches!(a.method, Method::Abm | Method::Rk45))
+        {
             assert!(
                 bdf.0.rhs_evaluations() < a.rhs_evaluations(),
                 "{name}: bdf used {} rhs evaluations, {} used {}",
@@ -255,7 +388,8 @@ fn high_speed_buckling_intervals_follow_euler_load_and_period() {
 }
 
 /// High speed, integrated: the growth is bounded by the small-deflection limit or the run
-/// stops with a clear divergence error; all three methods agree on when (to 1 %).
+/// stops with a clear divergence error; every method (general and exponential) agrees on
+/// when (to 1 %).
 #[test]
 fn high_speed_integration_is_bounded_or_diverges_clearly() {
     for f in [30, 35, 40] {
@@ -266,7 +400,8 @@ fn high_speed_integration_is_bounded_or_diverges_clearly() {
         });
         let limit = DIVERGENCE_FRACTION * 0.2;
         let mut diverged_at = Vec::new();
-        for m in METHODS {
+        let all = methods(&s);
+        for &m in &all {
             let a = attempt(&s, m);
             println!("{}", describe(&name, &a, &a.classify(None, None)));
             match &a.result {
@@ -290,7 +425,7 @@ fn high_speed_integration_is_bounded_or_diverges_clearly() {
             diverged_at.iter().copied().reduce(f64::min),
             diverged_at.iter().copied().reduce(f64::max),
         ) {
-            assert_eq!(diverged_at.len(), 3, "{name}: the methods disagree");
+            assert_eq!(diverged_at.len(), all.len(), "{name}: the methods disagree");
             assert!(
                 (hi - lo) / lo < 0.01,
                 "{name}: divergence times {diverged_at:?}"
@@ -301,8 +436,9 @@ fn high_speed_integration_is_bounded_or_diverges_clearly() {
 
 /// High speed over the full 0.2 s with a loose limit (half the link length, far outside the
 /// linear model's range, to tell bounded from unbounded growth): at 30 Hz, where no link
-/// buckles, the deflection stays bounded (about 55 mm) and the three methods agree on its
-/// peak to 1 %; at 35 and 40 Hz every method stops with a divergence error, and not before
+/// buckles, the deflection stays bounded (about 50 mm) and every method (general and
+/// exponential) agrees on its peak to 1 %; at 35 and 40 Hz every method stops with a
+/// divergence error, and not before
 /// the first buckling interval found by the frequency analysis starts (a linear
 /// time-varying system can only grow exponentially where its stiffness is indefinite): the
 /// link that diverges is one that has started buckling.
@@ -320,7 +456,7 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
             .expect("requested");
         let first_buckling = hist.buckling.iter().map(|b| b.t_start).reduce(f64::min);
         let mut peaks = Vec::new();
-        for m in METHODS {
+        for m in methods(&s) {
             let a = attempt(&s, m);
             println!("{}", describe(&name, &a, &a.classify(None, None)));
             match (&a.result, first_buckling) {
@@ -348,6 +484,63 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
         ) {
             assert!(hi < 0.1 && (hi - lo) / lo < 0.01, "{name}: peaks {peaks:?}");
         }
+    }
+}
+
+/// Inside a buckling interval (the lowest `omega^2` of a link negative, where the exponential
+/// methods switch to cosh/sinh): at 35 and 40 Hz, integrated up to just before the
+/// divergence, every method agrees with a reference by a different method at rtol 1e-11 to
+/// 1e-4 relative, and the link that grows is one the frequency analysis finds buckled.
+#[test]
+fn buckling_intervals_are_integrated_accurately_by_every_method() {
+    // (scene, end of the span: inside the first buckling interval, before the 50 % limit)
+    for (name, end) in [("high_speed_f35", 0.025), ("high_speed_f40", 0.0155)] {
+        let span = |file: &mut SceneFile| {
+            file.time.end = end;
+            file.integrator.max_steps = 200_000;
+        };
+        let frequencies = scene(name, |file| {
+            span(file);
+            file.output.requests = vec![OutputKind::Frequencies];
+        });
+        let hist = run(&frequencies, &mut |_| {})
+            .expect("frequencies only")
+            .frequencies
+            .expect("requested");
+        let results = classify_all(name, span, usize::MAX);
+        for (a, outcome) in &results {
+            let error = outcome
+                .error()
+                .unwrap_or_else(|| panic!("{name} {}: {outcome:?}", a.method.name()));
+            assert!(error < 1e-4, "{name} {}: error {error:e}", a.method.name());
+        }
+        // The growth happens on a buckled link: the link deflected most at the end of the
+        // span (far beyond the 20 Hz response, about 3 mm) has been buckled for at least
+        // 2 ms by then.
+        let (a, _) = results
+            .iter()
+            .find(|(a, _)| a.method == Method::Magnus6)
+            .expect("magnus6 ran");
+        assert!(
+            a.max_deflection_m > 0.01,
+            "{name}: peak {}",
+            a.max_deflection_m
+        );
+        let sol = a.result.as_ref().expect("solved");
+        let y = sol.y(sol.len() - 1);
+        let model = frequencies.build_model().expect("model");
+        let w: Vec<f64> = (0..3).map(|l| model.deflection(l, 0.5, y).abs()).collect();
+        let largest = (0..3)
+            .max_by(|&i, &j| w[i].total_cmp(&w[j]))
+            .expect("three links");
+        assert!(
+            hist.buckling
+                .iter()
+                .any(|b| b.link == largest && b.t_start < end - 2e-3),
+            "{name}: link {} deflected most ({w:?} m) but is not buckled: {:?}",
+            largest + 1,
+            hist.buckling
+        );
     }
 }
 
@@ -443,7 +636,7 @@ fn long_horizon_drift_is_small() {
         f.time.output_step = Some(2e-4);
     };
     let s = scene("long_horizon_f20", short);
-    for m in METHODS {
+    for m in methods(&s) {
         let a = attempt(&s, m);
         let r = reference("long_horizon_f20", m, short);
         let outcome = a.classify(r.result.as_ref().ok(), None);
@@ -468,7 +661,7 @@ fn tolerance_extremes_finish_without_nan() {
         assert!(error < 1e-8, "{}: error {error:e}", a.method.name());
     }
     let s = scene("tolerance_loose", |_| {});
-    for m in METHODS {
+    for m in methods(&s) {
         let a = attempt(&s, m);
         println!(
             "{}",
@@ -487,7 +680,7 @@ fn tolerance_extremes_finish_without_nan() {
 #[test]
 fn max_step_extremes() {
     let s = scene("max_step_tiny", |f| f.integrator.max_steps = 20_000);
-    for m in METHODS {
+    for m in methods(&s) {
         let a = attempt(&s, m);
         match &a.result {
             Err(Failure::Integrator {
@@ -515,20 +708,7 @@ fn max_step_extremes() {
 #[test]
 #[ignore = "full-length survey for docs/stability.md"]
 fn survey_full_length() {
-    for name in [
-        "many_modes_r12",
-        "many_modes_r12_damped",
-        "many_modes_r20",
-        "many_modes_r20_damped",
-        "high_speed_f30",
-        "high_speed_f35",
-        "high_speed_f40",
-        "long_horizon_f20",
-        "tolerance_tight",
-        "tolerance_loose",
-        "max_step_tiny",
-        "max_step_huge",
-    ] {
+    for name in INTEGRATED_SCENES {
         // STRESS_SCENES=name,name,... runs only those.
         if let Ok(only) = std::env::var("STRESS_SCENES") {
             if !only.split(',').any(|n| n == name) {

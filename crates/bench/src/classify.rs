@@ -3,9 +3,11 @@
 //! `docs/stability.md`).
 //!
 //! [`attempt`] integrates a scene's own model (KED or coupled, from the scene's one builder)
-//! with a chosen [`Method`] (the scene's own method is ignored) through the run layer's one
-//! observed stepping loop, so the integrator's work counters survive a failure and the
-//! divergence guard ([`flexprr_run::guard`], one limit) stops a link that buckles with
+//! with a chosen [`Method`] (the scene's own method is ignored), resolved for that model the
+//! way a scene resolves it (`auto` becomes `magnus6` on a KED model and `abm` otherwise; an
+//! exponential method on a nonlinear model fails with the scene's message), through the run
+//! layer's one observed stepping loop, so the integrator's work counters survive a failure
+//! and the divergence guard ([`flexprr_run::guard`], one limit) stops a link that buckles with
 //! [`Failure::Diverged`] instead of integrating to overflow.
 //!
 //! [`Attempt::classify`] then labels the attempt: [`Outcome::Solved`] with the relative
@@ -89,8 +91,11 @@ impl fmt::Display for Failure {
 /// One integration of a scene with one method.
 #[derive(Debug, Clone)]
 pub struct Attempt {
-    /// The method used.
+    /// The method asked for.
     pub method: Method,
+    /// The method actually used: `method` itself, or the choice of `auto` for the model
+    /// (`magnus6` on a KED model, `abm` otherwise).
+    pub resolved: &'static str,
     /// The states at the scene's output times, or why the integration stopped.
     pub result: Result<Solution, Failure>,
     /// The integrator's work counters (also when it failed).
@@ -150,7 +155,10 @@ impl Outcome {
 }
 
 impl Attempt {
-    /// Right-hand-side evaluations used (including those of differenced Jacobians).
+    /// Right-hand-side evaluations used (including those of differenced Jacobians); for the
+    /// exponential methods, evaluations of the linear form's coefficients (three per step
+    /// attempt), a different unit: their costs are compared by wall time in
+    /// `flexprr work-precision`.
     pub fn rhs_evaluations(&self) -> usize {
         self.stats.rhs_evaluations
     }
@@ -223,37 +231,36 @@ impl From<RunError> for Failure {
 /// the failure is in [`Attempt::result`].
 pub fn attempt(scene: &Scene, method: Method) -> Attempt {
     let clock = Clock::now();
+    let failed = |resolved: &'static str, source: DynamicsError| Attempt {
+        method,
+        resolved,
+        result: Err(Failure::Model { source }),
+        stats: Stats::default(),
+        max_deflection_m: 0.0,
+        wall_time_s: clock.elapsed().as_secs_f64(),
+        deflection_model: None,
+    };
     let mut model = match scene.build_model() {
         Ok(m) => m,
-        Err(source) => {
-            return Attempt {
-                method,
-                result: Err(Failure::Model { source }),
-                stats: Stats::default(),
-                max_deflection_m: 0.0,
-                wall_time_s: clock.elapsed().as_secs_f64(),
-                deflection_model: None,
-            };
+        Err(source) => return failed(method.name(), source),
+    };
+    // The method a scene naming `method` would run on this model.
+    let linear = model.linear_form().is_some();
+    let handle = match flexprr_scene::Registry::default().resolve_method(
+        method.name(),
+        linear,
+        model.kind(),
+    ) {
+        Ok(handle) => handle,
+        Err(message) => {
+            return failed(
+                method.name(),
+                DynamicsError::Inconsistent(format!("{}: {message}", scene.name)),
+            );
         }
     };
-    let integrator = flexprr_scene::Registry::default()
-        .method(method.name())
-        .map(|handle| handle.integrator(scene.options.clone()));
-    let Some(integrator) = integrator else {
-        return Attempt {
-            method,
-            result: Err(Failure::Model {
-                source: DynamicsError::Inconsistent(format!(
-                    "no integrator {:?} in the default registry",
-                    method.name()
-                )),
-            }),
-            stats: Stats::default(),
-            max_deflection_m: 0.0,
-            wall_time_s: clock.elapsed().as_secs_f64(),
-            deflection_model: None,
-        };
-    };
+    let resolved = Method::parse(handle.name()).map_or(method.name(), Method::name);
+    let integrator = handle.integrator(scene.options.clone());
     let integration =
         flexprr_run::integrate_model(scene, integrator.as_ref(), model.as_mut(), &mut |_| {});
     let stats = integration.solution.stats.clone();
@@ -269,6 +276,7 @@ pub fn attempt(scene: &Scene, method: Method) -> Attempt {
     };
     Attempt {
         method,
+        resolved,
         result,
         stats,
         max_deflection_m: integration.max_deflection_m,

@@ -373,9 +373,10 @@ impl Default for ModelConfig {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct IntegratorConfig {
-    /// A registered integrator: `"abm"` (default, like the paper's ode113), `"rk45"`, `"bdf"`,
-    /// `"magnus4"` and `"magnus6"` (exponential, KED model only), or `"auto"` (`"magnus6"` for
-    /// the KED model, `"abm"` for the others).
+    /// A registered integrator: `"auto"` (the default: `"magnus6"` for the KED model, `"abm"`
+    /// for the coupled and nonlinear ones; resolved when the scene is loaded), `"abm"` (like
+    /// the paper's ode113), `"rk45"`, `"bdf"`, or `"magnus4"` and `"magnus6"` (exponential,
+    /// KED model only).
     #[serde(default = "default_method")]
     pub method: String,
     /// Relative tolerance.
@@ -395,8 +396,10 @@ pub struct IntegratorConfig {
     pub max_steps: usize,
 }
 
+/// `auto`: the stress suite (docs/stability.md) found it right on every stress scene and the
+/// work-precision runs (docs/performance.md) faster than `abm` on every KED scene measured.
 fn default_method() -> String {
-    "abm".into()
+    "auto".into()
 }
 fn default_rtol() -> f64 {
     1e-8

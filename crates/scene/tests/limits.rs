@@ -58,7 +58,8 @@ fn rejects(text: &str, at: &str, key: &str, phrases: &[&str]) {
 #[test]
 fn the_base_scene_is_valid() {
     let scene = Scene::from_text("scene.toml", "scene", BASE).unwrap();
-    assert_eq!(scene.method.name(), "abm");
+    // No method named: the default `auto` chooses `magnus6` for the KED model.
+    assert_eq!(scene.method.name(), "magnus6");
     assert!(scene.stop_times.is_empty());
 }
 

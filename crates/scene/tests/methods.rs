@@ -5,7 +5,11 @@
 use flexprr_scene::{MethodKind, Registry, ScenarioError, Scene};
 
 fn scene(coupling: &str, method: &str) -> Result<Scene, ScenarioError> {
-    let text = format!(
+    Scene::from_text("m.toml", "m", &scene_text(coupling, method))
+}
+
+fn scene_text(coupling: &str, method: &str) -> String {
+    format!(
         r#"name = "m"
 [links]
 modes = 3
@@ -23,8 +27,22 @@ method = "{method}"
 [time]
 end = 0.01
 "#
-    );
-    Scene::from_text("m.toml", "m", &text)
+    )
+}
+
+/// A scene that names no method runs `auto`'s choice for its model: `magnus6` on the KED
+/// model, `abm` on the coupled one (whose right-hand side is nonlinear in the state); the
+/// echo of the file keeps `auto`.
+#[test]
+fn a_scene_without_a_method_runs_auto() {
+    for (coupling, chosen) in [("ked", "magnus6"), ("coupled", "abm")] {
+        let text = scene_text(coupling, "none");
+        let without = text.replace("method = \"none\"\n", "");
+        assert_ne!(text, without, "the method line is removed");
+        let s = Scene::from_text("m.toml", "m", &without).expect("valid");
+        assert_eq!(s.method.name(), chosen, "{coupling}");
+        assert_eq!(s.file.integrator.method, "auto", "{coupling}");
+    }
 }
 
 #[test]
