@@ -132,7 +132,7 @@ fn choices_that_do_not_apply_are_refused_in_one_located_line() {
     let dir = tempfile::tempdir().expect("temp dir");
     let scene = short_scene(dir.path());
     let out = dir.path().join("wp");
-    let cases: [(&[&str], &[&str]); 6] = [
+    let cases: [(&[&str], &[&str]); 7] = [
         (
             &["--models", "ked,linear"],
             &["--models", "\"linear\"", "ked, coupled, nonlinear"],
@@ -156,6 +156,14 @@ fn choices_that_do_not_apply_are_refused_in_one_located_line() {
         (
             &["--tolerances", "1e-6,1e-11"],
             &["--reference-rtol", "1e-10", "1e-11"],
+        ),
+        (
+            &["--methods", "magnus6"],
+            &[
+                "--methods",
+                "magnus6 needs a linear (KED) model",
+                "nonlinear:4",
+            ],
         ),
     ];
     for (args, expected) in cases {

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use flexprr_bench::work_precision::{
     ErrorMeasure, ModelChoice, NONLINEAR_TOLERANCES, Reference, WorkPrecisionConfig,
     WorkPrecisionRow, csv_text, markdown_at_error, markdown_models, markdown_rows, measure,
-    read_csv, write_svg,
+    method_applies, read_csv, write_svg,
 };
 use flexprr_scene::{Method, ScenarioError, Scene};
 
@@ -111,7 +111,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         None if nonlinear => config.tolerances = NONLINEAR_TOLERANCES.to_vec(),
         None => {}
     }
-    if let Some(names) = args.methods {
+    if let Some(names) = &args.methods {
         config.methods = names
             .iter()
             .map(|name| {
@@ -147,10 +147,29 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
             args.error.as_deref().unwrap_or_default()
         )))?
         .name();
+    let mut model_scenes = Vec::new();
     for choice in config.measured_models(&scene) {
-        choice
+        let applied = choice
             .apply(&scene)
             .map_err(option_error("--models".to_string()))?;
+        model_scenes.push((choice.label(&scene), applied));
+    }
+    // A method named on the command line must apply to at least one measured model; the
+    // default list simply skips those that do not (said in the output).
+    if args.methods.is_some() {
+        for &method in &config.methods {
+            let reasons: Vec<String> = model_scenes
+                .iter()
+                .filter_map(|(_, s)| method_applies(s, method).err())
+                .collect();
+            if let (true, Some(why)) = (reasons.len() == model_scenes.len(), reasons.first()) {
+                let models: Vec<&str> = model_scenes.iter().map(|(l, _)| l.as_str()).collect();
+                return Err(Failure::bad_input(format!(
+                    "--methods: {why} (measured: {})",
+                    models.join(", ")
+                )));
+            }
+        }
     }
     config
         .reference_model(&scene)

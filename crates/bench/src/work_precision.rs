@@ -1133,6 +1133,17 @@ pub fn measure(
         };
         let mut system = build(&model_scene)?;
         for &method in &config.methods {
+            // A linear-only method (magnus4, magnus6) does not apply to a coupled or
+            // nonlinear model: said once, not once per tolerance.
+            if let Err(why) = method_applies(&model_scene, method) {
+                let place = if label.is_empty() {
+                    String::new()
+                } else {
+                    format!("{label}: ")
+                };
+                failures.push(format!("{place}{} skipped: {why}", method.name()));
+                continue;
+            }
             for &rtol in &config.tolerances {
                 let atol = reference.atol(rtol);
                 let options = Options::default().rtol(rtol).atol(atol);
@@ -1181,6 +1192,21 @@ pub fn measure(
         }
     }
     Ok((rows, failures))
+}
+
+/// Whether `method` can integrate the model of `scene`: the scene's own rule
+/// ([`flexprr_scene::Registry::resolve_method`]: a linear-only method needs the KED model).
+///
+/// # Errors
+/// The registry's one-line reason.
+pub fn method_applies(scene: &Scene, method: Method) -> Result<(), String> {
+    flexprr_scene::Registry::default()
+        .resolve_method(
+            method.name(),
+            scene.coupling == flexprr_dynamics::CouplingModel::Ked,
+            scene.coupling.name(),
+        )
+        .map(|_| ())
 }
 
 /// Reference plus measurement for a scene.
