@@ -309,6 +309,19 @@ fn profile(spec: &str) {
             .flat_map(|k| rd.y(k)[m..2 * m].to_vec())
             .fold(0.0_f64, |a, v| a.max(v.abs()));
         let mut per = vec![0.0_f64; 2 * m];
+        // Where the worst velocity error is, and its size over time (tenths of the span).
+        let mut tenths = [0.0_f64; 10];
+        for k in 0..rd.len() {
+            let bin = (10 * k / rd.len()).min(9);
+            for i in 0..2 * m {
+                let s = if i < m { size } else { vs };
+                tenths[bin] = tenths[bin].max((sol.y(k)[i] - rd.y(k)[i]).abs() / s);
+            }
+        }
+        println!(
+            "  max error per tenth of the span: {}",
+            tenths.iter().map(|v| format!("{v:.1e}")).collect::<Vec<_>>().join(" ")
+        );
         for k in 0..rd.len() {
             for i in 0..m {
                 dd = dd.max((sol.y(k)[i] - rd.y(k)[i]).abs() / size);
