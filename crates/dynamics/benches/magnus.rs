@@ -320,7 +320,11 @@ fn profile(spec: &str) {
         }
         println!(
             "  max error per tenth of the span: {}",
-            tenths.iter().map(|v| format!("{v:.1e}")).collect::<Vec<_>>().join(" ")
+            tenths
+                .iter()
+                .map(|v| format!("{v:.1e}"))
+                .collect::<Vec<_>>()
+                .join(" ")
         );
         for k in 0..rd.len() {
             for i in 0..m {

@@ -259,7 +259,10 @@ impl Mode {
                 let (w, _) = frozen.apply_sub(op);
                 g[i] = self.f[i] - dk[i] * w;
                 change = change.max((g[i] - frozen.f[i]).abs());
-                size = size.max(g[i].abs()).max(self.f[i].abs()).max((self.k[i] * w).abs());
+                size = size
+                    .max(g[i].abs())
+                    .max(self.f[i].abs())
+                    .max((self.k[i] * w).abs());
             }
             frozen.f = g;
             if change <= limit * size {
@@ -885,7 +888,7 @@ impl MagnusStepper {
                 }
             }
             if !b.diagonal {
-                converged &= Self::couple(b, h, &self.options);
+                converged &= Self::couple(b, h, &self.options, self.order == MagnusOrder::Six);
             }
             // The two solutions in the frozen basis.
             let w4 = &mut self.w4[2 * b.offset..2 * (b.offset + r)];
@@ -898,6 +901,8 @@ impl MagnusStepper {
                         converged = false;
                         (q4, v4)
                     })
+                } else if self.order == MagnusOrder::Six {
+                    m.frozen().sub_step(1.0, h)
                 } else {
                     m.magnus6(h)
                 };
@@ -950,19 +955,33 @@ impl MagnusStepper {
     /// Picard iteration on the coupling forces between the modes of a coupled block
     /// (off-diagonal stiffness at the nodes and off-diagonal damping in the frozen basis),
     /// using the 4th-order sub-step to the nodes. Returns whether it converged.
-    fn couple(b: &mut Block, h: f64, options: &Options) -> bool {
+    fn couple(b: &mut Block, h: f64, options: &Options, frozen: bool) -> bool {
         let r = b.r;
         b.coupling.fill(0.0);
+        for m in &mut b.modes {
+            m.g = m.f;
+        }
         for (i, c) in GAUSS3.iter().enumerate() {
             for j in 0..r {
-                b.node_ops[i * r + j] = b.modes[j].sub_op(*c, h);
+                let m = &b.modes[j];
+                b.node_ops[i * r + j] = if frozen {
+                    m.frozen().sub_op(*c, h)
+                } else {
+                    m.sub_op(*c, h)
+                };
             }
         }
         for _ in 0..COUPLING_ITERATIONS {
             // States at the nodes with the current forces.
             for i in 0..3 {
                 for j in 0..r {
-                    let (q, v) = b.modes[j].apply_sub(&b.node_ops[i * r + j]);
+                    let m = &b.modes[j];
+                    let op = &b.node_ops[i * r + j];
+                    let (q, v) = if frozen {
+                        m.frozen().apply_sub(op)
+                    } else {
+                        m.apply_sub(op)
+                    };
                     b.node_states[i * 2 * r + j] = q;
                     b.node_states[i * 2 * r + r + j] = v;
                 }
@@ -979,16 +998,25 @@ impl MagnusStepper {
                             c -= s[j * r + k] * q[k] + b.damping[j * r + k] * v[k];
                         }
                     }
-                    let old = b.coupling[i * r + j];
-                    change = change.max((c - old).abs());
-                    b.coupling[i * r + j] = c;
                     let total = b.g_nodes[i * r + j] + c;
+                    let m = &mut b.modes[j];
+                    // In the frozen step the mode's own stiffness variation is a force too.
+                    let frozen_total = total - (m.k[i] - m.k[1]) * q[j];
+                    let old = if frozen {
+                        m.g[i]
+                    } else {
+                        b.coupling[i * r + j]
+                    };
+                    let new = if frozen { frozen_total } else { c };
+                    change = change.max((new - old).abs());
+                    b.coupling[i * r + j] = c;
                     // The forces acting on the mode: forcing, coupling, restoring force.
                     size = size
                         .max(total.abs())
                         .max(c.abs())
-                        .max((b.modes[j].k[i] * q[j]).abs());
-                    b.modes[j].f[i] = total;
+                        .max((m.k[i] * q[j]).abs());
+                    m.f[i] = total;
+                    m.g[i] = frozen_total;
                 }
             }
             if change <= (1e-3 * options.rtol.min(1e-3)).max(1e-12) * size {
@@ -1112,7 +1140,7 @@ impl Stepper for MagnusStepper {
         let (xw, xs) = work.split_at_mut(2 * half);
         for b in &self.blocks {
             let r = b.r;
-            let collocated = b.diagonal && self.order == MagnusOrder::Six;
+            let collocated = self.order == MagnusOrder::Six;
             for (j, m) in b.modes.iter().enumerate() {
                 let (q, v) = if collocated {
                     m.frozen().sub_step(theta, self.h_previous)
