@@ -221,7 +221,7 @@ fn scenes(c: &mut Criterion) {
 /// and prints the statistics; with `MAGNUS_PROFILE_ERROR=1` it also prints the max error
 /// against Dormand-Prince at rtol 1e-12 (run that one natively, not under callgrind). The
 /// instructions of one solve are the difference of the counts of two runs with different
-/// `repeats`.
+/// `repeats`. `MAGNUS_PROFILE_TEND` changes the span (same number of outputs).
 fn profile(spec: &str) {
     let parts: Vec<&str> = spec.split(':').collect();
     let (case_name, method, tol) = (parts[0], parts[1], parts[2].parse::<f64>().expect("rtol"));
@@ -235,6 +235,10 @@ fn profile(spec: &str) {
         "long" => (sine(3, Formulation::consistent()), 10.0, 2001),
         other => panic!("unknown case {other}"),
     };
+    // MAGNUS_PROFILE_TEND shortens (or lengthens) the span, same number of outputs.
+    let t_end = std::env::var("MAGNUS_PROFILE_TEND")
+        .ok()
+        .map_or(t_end, |s| s.parse().expect("t_end"));
     let t_out: Vec<f64> = (0..outputs)
         .map(|k| t_end * k as f64 / (outputs - 1) as f64)
         .collect();
