@@ -452,3 +452,92 @@ fn steps_and_dense_output_allocate_nothing() {
     assert_eq!(allocations(), before);
     assert!(st.stats().accepted_steps > 5);
 }
+
+/// `w'' + (omega^2 + a sin(nu t)) w = 0`: a free oscillation at `omega` with a moderate
+/// time-varying stiffness (as the geometric stiffness of a high mode), one coordinate.
+struct FreeMathieu {
+    omega2: f64,
+}
+
+impl LinearSecondOrder for FreeMathieu {
+    fn block_count(&self) -> usize {
+        1
+    }
+    fn block_operators(&self, _block: usize) -> BlockOperators {
+        BlockOperators {
+            size: 1,
+            stiffness: vec![vec![self.omega2], vec![40.0]],
+            forcing: vec![vec![1.0]],
+            damping: None,
+            transform: None,
+        }
+    }
+    fn coefficients(&mut self, t: f64, s: &mut [f64], f: &mut [f64]) {
+        s[0] = 1.0;
+        s[1] = (3.0 * t).sin();
+        f[0] = (2.0 * t).cos();
+    }
+}
+
+impl OdeSystem for FreeMathieu {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+        dy[0] = y[1];
+        dy[1] = (2.0 * t).cos() - (self.omega2 + 40.0 * (3.0 * t).sin()) * y[0];
+    }
+    fn linear_form(&mut self) -> Option<&mut dyn LinearSecondOrder> {
+        Some(self)
+    }
+}
+
+/// The 6th-order step propagates the frozen oscillation exactly and integrates only the
+/// stiffness variation (as a force at the Gauss nodes), while the 4th-order Magnus
+/// generator's commutators carry powers of `h omega`. At one fixed step set by the
+/// variation and `h omega` from 0.5 to 2.5, both against RK45 at rtol 1e-12 (displacement,
+/// and velocity over `omega`): the 6th-order error stays at least ten times below the
+/// 4th-order one (measured: 500x at `h omega = 0.5`, 19x at 2.5). It still grows with
+/// `h omega` (the variation times the oscillating state is interpolated by a quadratic),
+/// which docs/performance.md reports.
+#[test]
+fn the_sixth_order_step_stays_accurate_at_large_h_omega() {
+    let h = 0.05;
+    let error = |omega: f64, order: MagnusOrder| {
+        let mut p = FreeMathieu {
+            omega2: omega * omega,
+        };
+        let y0 = [1.0, 0.0];
+        let t_out = [1.0, 2.0];
+        let reference = Rk45::new(Options::default().rtol(1e-12).atol(1e-14))
+            .solve(&mut p, 0.0, &y0, &t_out)
+            .unwrap();
+        let opts = Options::default()
+            .rtol(1e3)
+            .atol(1e9)
+            .initial_step(h)
+            .max_step(h);
+        let sol = Magnus::new(opts, order)
+            .solve(&mut p, 0.0, &y0, &t_out)
+            .unwrap();
+        assert_eq!(sol.stats.rejected_steps, 0);
+        (0..2)
+            .map(|k| {
+                let (a, b) = (sol.y(k), reference.y(k));
+                (a[0] - b[0]).abs().max((a[1] - b[1]).abs() / omega)
+            })
+            .fold(0.0, f64::max)
+    };
+    let six: Vec<f64> = [10.0, 20.0, 50.0]
+        .map(|w| error(w, MagnusOrder::Six))
+        .to_vec();
+    let four: Vec<f64> = [10.0, 20.0, 50.0]
+        .map(|w| error(w, MagnusOrder::Four))
+        .to_vec();
+    for (k, (s, f)) in six.iter().zip(&four).enumerate() {
+        assert!(
+            s.is_finite() && *s < 0.1 * f,
+            "omega index {k}: order 6 error {s:e}, order 4 error {f:e}"
+        );
+    }
+}
