@@ -689,7 +689,7 @@ impl Integrator for Magnus {
         let name = self.name();
         let Some(lin) = system.linear_form() else {
             return Err(IntegratorError::InvalidInput(format!(
-                "{name} needs a linear time-varying system (OdeSystem::linear_form); the coupled model is nonlinear: use abm"
+                "{name} needs a linear time-varying system (OdeSystem::linear_form), and this system offers none: use a general method such as abm"
             )));
         };
         let mut blocks = Vec::new();
@@ -1062,7 +1062,7 @@ impl Stepper for MagnusStepper {
         }
         let Some(lin) = system.linear_form() else {
             return Err(IntegratorError::InvalidInput(
-                "magnus needs a linear time-varying system; the coupled model is nonlinear: use abm"
+                "magnus needs a linear time-varying system, and this system offers none: use a general method such as abm"
                     .to_string(),
             ));
         };
