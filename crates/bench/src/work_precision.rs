@@ -568,6 +568,45 @@ pub fn midpoint_deflections(
     Ok(w)
 }
 
+/// The error of `values` against `reference`, both row by row with `width` values per output
+/// time `t[k]`: per row the largest `|v_i - v_ref_i| / size(i)`, at the end time and the
+/// maximum over the rows.
+///
+/// # Errors
+/// [`ScenarioError::Run`] naming the value (`name(i)`) and time of the first non-finite one.
+fn max_row_error(
+    values: &[f64],
+    reference: &[f64],
+    width: usize,
+    t: &[f64],
+    size: impl Fn(usize) -> f64,
+    name: impl Fn(usize) -> String,
+) -> Result<AchievedError, ScenarioError> {
+    let (mut max, mut row_error) = (0.0_f64, 0.0_f64);
+    for (k, (row, reference)) in values
+        .chunks_exact(width)
+        .zip(reference.chunks_exact(width))
+        .enumerate()
+    {
+        row_error = 0.0;
+        for (i, (v, v_ref)) in row.iter().zip(reference).enumerate() {
+            if !v.is_finite() {
+                return Err(ScenarioError::Run(format!(
+                    "{} at t = {} s is not finite ({v})",
+                    name(i),
+                    t[k]
+                )));
+            }
+            row_error = row_error.max((v - v_ref).abs() / size(i));
+        }
+        max = max.max(row_error);
+    }
+    Ok(AchievedError {
+        end: row_error,
+        max,
+    })
+}
+
 impl Reference {
     /// A state reference from states at output times; the sizes are taken from the states.
     ///
@@ -801,29 +840,14 @@ impl Reference {
                 self.t.len()
             )));
         }
-        let (mut max, mut row_error) = (0.0_f64, 0.0_f64);
-        for (k, (row, reference)) in w
-            .chunks_exact(3)
-            .zip(self.deflections.chunks_exact(3))
-            .enumerate()
-        {
-            row_error = 0.0;
-            for (i, (v, v_ref)) in row.iter().zip(reference).enumerate() {
-                if !v.is_finite() {
-                    return Err(ScenarioError::Run(format!(
-                        "the mid-point deflection of link {} at t = {} s is not finite ({v})",
-                        i + 1,
-                        self.t[k]
-                    )));
-                }
-                row_error = row_error.max((v - v_ref).abs() / self.displacement_size);
-            }
-            max = max.max(row_error);
-        }
-        Ok(AchievedError {
-            end: row_error,
-            max,
-        })
+        max_row_error(
+            w,
+            &self.deflections,
+            3,
+            &self.t,
+            |_| self.displacement_size,
+            |i| format!("the mid-point deflection of link {}", i + 1),
+        )
     }
 
     /// State dimension (0 for a deflection reference).
@@ -861,34 +885,20 @@ impl Reference {
                 self.t.len()
             )));
         }
-        let mut max = 0.0_f64;
-        let mut row_error = 0.0_f64;
-        for (k, (row, reference)) in states
-            .chunks_exact(dim)
-            .zip(self.states.chunks_exact(dim))
-            .enumerate()
-        {
-            row_error = 0.0;
-            for (i, (y, y_ref)) in row.iter().zip(reference).enumerate() {
-                if !y.is_finite() {
-                    return Err(ScenarioError::Run(format!(
-                        "component {i} at t = {} s is not finite ({y})",
-                        self.t[k]
-                    )));
-                }
-                let size = if i < self.modes {
+        max_row_error(
+            states,
+            &self.states,
+            dim,
+            &self.t,
+            |i| {
+                if i < self.modes {
                     self.displacement_size
                 } else {
                     self.velocity_size
-                };
-                row_error = row_error.max((y - y_ref).abs() / size);
-            }
-            max = max.max(row_error);
-        }
-        Ok(AchievedError {
-            end: row_error,
-            max,
-        })
+                }
+            },
+            |i| format!("component {i}"),
+        )
     }
 
     /// Writes the reference as CSV: `t_s`, then `eta_1 .. eta_n`, then `eta_dot_1 ..` (state
