@@ -529,7 +529,15 @@ fn buckling_intervals_are_integrated_accurately_by_every_method() {
         let sol = a.result.as_ref().expect("solved");
         let y = sol.y(sol.len() - 1);
         let model = frequencies.build_model().expect("model");
-        let w: Vec<f64> = (0..3).map(|l| model.deflection(l, 0.5, y).abs()).collect();
+        let t_end = sol.t[sol.len() - 1];
+        let w: Vec<f64> = (0..3)
+            .map(|l| {
+                model
+                    .deflection(t_end, l, 0.5, y)
+                    .expect("deflection")
+                    .abs()
+            })
+            .collect();
         let largest = (0..3)
             .max_by(|&i, &j| w[i].total_cmp(&w[j]))
             .expect("three links");

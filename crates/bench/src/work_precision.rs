@@ -524,11 +524,9 @@ fn build(scene: &Scene) -> Result<Box<dyn SceneModel>, ScenarioError> {
 }
 
 /// The links' mid-point deflections `w_i(1/2)` (m) of `solution` of `model`: three per
-/// output time, links in order. The modal models give `w = sum_j psi_j(1/2) eta_j` (the
-/// paper's eq. 1, [`SceneModel::deflection`]); the nonlinear model measures from the chord
-/// of the deflected link, which needs the time
-/// ([`flexprr_dynamics::NonlinearSystem::deflection_at`]). These are the values of
-/// `deflections.csv` at `xi = 0.5`.
+/// output time, links in order, from [`SceneModel::deflection`] (the modal models'
+/// `w = sum_j psi_j(1/2) eta_j`, the paper's eq. 1; the nonlinear model's from the chord of
+/// the deflected link). These are the values of `deflections.csv` at `xi = 0.5`.
 ///
 /// # Errors
 /// [`ScenarioError::Run`] naming the time and link if a deflection cannot be computed or is
@@ -540,21 +538,15 @@ pub fn midpoint_deflections(
     let n = solution.t.len();
     let kind = model.kind();
     let mut w = Vec::with_capacity(3 * n);
-    if let Some(system) = model.as_nonlinear() {
-        for k in 0..n {
-            let (t, y) = (solution.t[k], solution.y(k));
-            for i in 0..3 {
-                w.push(system.deflection_at(t, i, DEFLECTION_XI, y).map_err(|e| {
-                    ScenarioError::Run(format!(
-                        "mid-point deflection of link {} at t = {t} s ({kind} model): {e}",
-                        i + 1
-                    ))
-                })?);
-            }
-        }
-    } else {
-        for k in 0..n {
-            w.extend((0..3).map(|i| model.deflection(i, DEFLECTION_XI, solution.y(k))));
+    for k in 0..n {
+        let (t, y) = (solution.t[k], solution.y(k));
+        for i in 0..3 {
+            w.push(model.deflection(t, i, DEFLECTION_XI, y).map_err(|e| {
+                ScenarioError::Run(format!(
+                    "mid-point deflection of link {} at t = {t} s ({kind} model): {e}",
+                    i + 1
+                ))
+            })?);
         }
     }
     if let Some(j) = w.iter().position(|v| !v.is_finite()) {

@@ -174,6 +174,9 @@ pub struct CoupledOutput {
     /// The actual platform motion: pose from the sliders and chords, velocity and acceleration
     /// by implicit differentiation of the closure.
     pub platform: PlatformMotion,
+    /// Slider positions, velocities and accelerations `(rho_i, rho_i', rho_i'')` (m, m/s,
+    /// m/s^2): the commanded ones.
+    pub slider: [[f64; 3]; 3],
     /// Chord lengths `L_i = l - delta_i` (m).
     pub chord_length: [f64; 3],
     /// Chord angles `b_i`, rates and accelerations (rad, rad/s, rad/s^2).
@@ -1024,6 +1027,7 @@ impl CoupledSystem {
                 velocity: kin.velocity,
                 acceleration,
             },
+            slider: kin.rho,
             chord_length: kin.lengths,
             chord_angle: [[0.0; 3]; 3],
             axial_force_b: [0.0; 3],

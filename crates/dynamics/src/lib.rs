@@ -13,6 +13,7 @@
 //! * [`Formulation`]: the named formulations `paper` and `consistent` and their switches.
 
 mod axial;
+mod column;
 mod coupled;
 mod error;
 mod formulation;
@@ -28,6 +29,7 @@ pub mod paper;
 pub use axial::{
     AxialForceModel, AxialInput, JointReactionAxialForce, NoAxialForce, PaperAxialForce, end_forces,
 };
+pub use column::{Column, Quantity, Table};
 pub use coupled::{CoupledCounters, CoupledOptions, CoupledOutput, CoupledSystem, CouplingModel};
 pub use error::DynamicsError;
 pub use formulation::{AxialModel, Formulation};
@@ -38,7 +40,10 @@ pub use inverse::{
 };
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
-pub use model::{ModelCounters, SceneModel};
+pub use model::{
+    MachineSnapshot, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION, SceneModel,
+    SliderMotion, force_table, platform_deviation_table,
+};
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
 
 pub use flexprr_beam::{AxialLoad, Coupling};

@@ -51,7 +51,8 @@ impl DeflectionModel {
                             .clone()
                             .map(|j| {
                                 unit[j] = 1.0;
-                                let w = model.deflection(i, xi, &unit);
+                                // Linear and time-free (`linear_deflection`): any time will do.
+                                let w = model.deflection(0.0, i, xi, &unit).unwrap_or(f64::NAN);
                                 unit[j] = 0.0;
                                 w
                             })

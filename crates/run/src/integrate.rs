@@ -79,6 +79,23 @@ pub fn stop_times(scene: &Scene) -> Vec<f64> {
     stops
 }
 
+/// The largest deflection of any link at the guard's points over the output times of
+/// `solution` (m), for a model the guard cannot tabulate (its deflection needs the time);
+/// points it cannot evaluate are skipped.
+fn sampled_max_deflection(model: &dyn SceneModel, solution: &Solution) -> f64 {
+    let mut max = 0.0_f64;
+    for k in 0..solution.len() {
+        for i in 0..3 {
+            for &xi in &crate::guard::GUARD_POINTS {
+                if let Ok(w) = model.deflection(solution.t[k], i, xi, solution.y(k)) {
+                    max = max.max(w.abs());
+                }
+            }
+        }
+    }
+    max
+}
+
 /// Integrates `model` over the scene's output times with `integrator`, the divergence
 /// guard and the scene's stop times. Never panics and never loses what was computed: a
 /// failure comes back in [`Integration::failure`] with the outputs up to the last accepted
@@ -103,7 +120,13 @@ pub fn integrate_model(
     };
     let stops = stop_times(scene);
     let result = integrator.solve_dyn(model, t0, &y0, t, &stops, &mut observer);
-    let max_deflection_m = observer.guard.max_deflection();
+    let mut max_deflection_m = observer.guard.max_deflection();
+    if !model.linear_deflection() {
+        let solution = match &result {
+            Ok(solution) | Err(Interrupted { solution, .. }) => solution,
+        };
+        max_deflection_m = sampled_max_deflection(model, solution);
+    }
     match result {
         Ok(solution) => Integration {
             solution,

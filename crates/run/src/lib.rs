@@ -13,7 +13,6 @@ pub mod column;
 mod error;
 pub mod guard;
 mod integrate;
-mod nonlinear;
 mod output;
 mod outputs;
 pub mod plot;
@@ -24,9 +23,10 @@ mod viewer;
 
 pub use column::{Column, Quantity};
 pub use error::{Collapse, RunError, RunFailure};
+pub use flexprr_dynamics::NONLINEAR_ADVICE_FRACTION;
 pub use integrate::{Integration, integrate_model, stop_times};
 pub use output::{
     WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs, write_outputs_with,
 };
-pub use run::{NONLINEAR_ADVICE_FRACTION, integrate, run, scene_integrator};
+pub use run::{integrate, run, run_model, scene_integrator};
 pub use table::{RunResult, RunStats, Table};

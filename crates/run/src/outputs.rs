@@ -2,9 +2,8 @@
 //! them, the integrated states.
 
 use flexprr_dynamics::{
-    AxialForceModel, AxialInput, CoupledSystem, DynamicsError, FrequencyHistory,
-    JointReactionAxialForce, ModalSystem, SceneModel, end_forces, inverse_dynamics,
-    rigid_kinetic_energy,
+    AxialForceModel, AxialInput, DynamicsError, FrequencyHistory, JointReactionAxialForce,
+    MachineSnapshot, ModalSystem, SceneModel, end_forces, rigid_kinetic_energy,
 };
 use flexprr_integrators::Solution;
 use flexprr_scene::Scene;
@@ -12,11 +11,6 @@ use flexprr_scene::Scene;
 use crate::column::{Column, Quantity as Q};
 use crate::samples::Samples;
 use crate::table::Table;
-
-/// `count` empty columns, each with room for `rows` values.
-fn columns(count: usize, rows: usize) -> Vec<Vec<f64>> {
-    (0..count).map(|_| Vec::with_capacity(rows)).collect()
-}
 
 /// Slider and link kinematics (`kinematics.csv`).
 pub(crate) fn kinematics(s: &Samples) -> Table {
@@ -45,12 +39,13 @@ pub(crate) fn kinematics(s: &Samples) -> Table {
     table
 }
 
-/// Rigid driving forces, and with the links' elastic inertia when a KED solution is given
-/// (`driving_forces.csv`, the paper's figures 10-11).
+/// Rigid driving forces, and the integrated model's own when its snapshots are given
+/// (`driving_forces.csv`; the KED model's are the paper's figures 10-11, with the links'
+/// elastic inertia).
 pub(crate) fn driving_forces(
     scene: &Scene,
     s: &mut Samples,
-    flexible: Option<(&mut ModalSystem, &Solution)>,
+    model: Option<&[MachineSnapshot]>,
 ) -> Result<(Table, usize), DynamicsError> {
     let machine = scene.machine.clone();
     let reactions = s.with_reactions(&machine)?.to_vec();
@@ -59,29 +54,20 @@ pub(crate) fn driving_forces(
         let rigid = reactions.iter().map(|r| r.driving_force[i]).collect();
         table.push(Column::link(Q::DrivingForceRigid, i), rigid);
     }
-    let mut solves = reactions.len();
-    if let Some((system, solution)) = flexible {
-        let mut flex = columns(3, s.len());
-        for k in 0..s.len() {
-            let acc = system.modal_accelerations(s.t[k], solution.y(k))?;
-            let elastic = system.elastic_inertia(&acc);
-            let f = inverse_dynamics(&machine, &s.states[k], Some(&elastic), s.t[k])?;
-            solves += 1;
-            for (column, force) in flex.iter_mut().zip(f.driving_force) {
-                column.push(force);
-            }
-        }
-        for (i, column) in flex.into_iter().enumerate() {
-            let diff = column
+    if let Some(snapshots) = model {
+        let n = snapshots.len().min(reactions.len());
+        for i in 0..3 {
+            let flexible: Vec<f64> = snapshots[..n].iter().map(|p| p.driving_force[i]).collect();
+            let diff = flexible
                 .iter()
                 .zip(&reactions)
                 .map(|(f, r)| f - r.driving_force[i])
                 .collect();
-            table.push(Column::link(Q::DrivingForceFlexible, i), column);
+            table.push(Column::link(Q::DrivingForceFlexible, i), flexible);
             table.push(Column::link(Q::DrivingForceDifference, i), diff);
         }
     }
-    Ok((table, solves))
+    Ok((table, reactions.len()))
 }
 
 /// One component of the joint reactions of link `i`.
@@ -189,29 +175,36 @@ pub(crate) fn modes(model: &dyn SceneModel, solution: &Solution) -> Table {
 
 /// Deflections at the requested `xi`, and without axial force when that run was made
 /// (`deflections.csv`, the paper's figures 6-8).
+///
+/// # Errors
+/// A deflection the model cannot compute at an output time (a kinematic failure).
 pub(crate) fn deflections(
     scene: &Scene,
     model: &dyn SceneModel,
     solution: &Solution,
     without_axial: Option<(&dyn SceneModel, &Solution)>,
-) -> Table {
+) -> Result<Table, DynamicsError> {
     let mut table = Table::new("deflections", &solution.t);
-    let n = solution.len();
+    let deflection = |model: &dyn SceneModel, states: &Solution, i: usize, xi: f64| {
+        (0..solution.len().min(states.len()))
+            .map(|k| model.deflection(states.t[k], i, xi, states.y(k)))
+            .collect::<Result<Vec<_>, _>>()
+    };
     for &xi in &scene.file.output.deflection_xi {
         for i in 0..3 {
-            let w = (0..n)
-                .map(|k| model.deflection(i, xi, solution.y(k)))
-                .collect();
-            table.push(Column::at(Q::Deflection, i, xi), w);
+            table.push(
+                Column::at(Q::Deflection, i, xi),
+                deflection(model, solution, i, xi)?,
+            );
             if let Some((plain, states)) = without_axial {
-                let w = (0..n.min(states.len()))
-                    .map(|k| plain.deflection(i, xi, states.y(k)))
-                    .collect();
-                table.push(Column::at(Q::DeflectionWithoutAxialForce, i, xi), w);
+                table.push(
+                    Column::at(Q::DeflectionWithoutAxialForce, i, xi),
+                    deflection(plain, states, i, xi)?,
+                );
             }
         }
     }
-    table
+    Ok(table)
 }
 
 /// The inertial and coupling modal forces (`modal_forces.csv`, the paper's figure 9).
@@ -237,99 +230,48 @@ pub(crate) fn modal_forces(scene: &Scene, s: &Samples) -> Table {
     table
 }
 
-/// `v^T m v / 2` for a modal matrix `m`.
-fn half_quadratic_form(m: &faer::Mat<f64>, v: &[f64]) -> f64 {
-    let mut s = 0.0;
-    for (a, va) in v.iter().enumerate() {
-        for (b, vb) in v.iter().enumerate() {
-            s += va * m[(a, b)] * vb;
-        }
-    }
-    0.5 * s
-}
-
-/// Rigid kinetic energy and each link's strain and elastic kinetic energy
+/// The kinetic energy of the commanded rigid motion, and the model's own energies
+/// ([`SceneModel::energies`]): the whole machine's kinetic energy where the model has it,
+/// each link's strain energy and, for modal models, each link's elastic kinetic energy
 /// (`energies.csv`).
+///
+/// # Errors
+/// The model failed to give its energies at an output time.
 pub(crate) fn energies(
-    scene: &Scene,
-    model: &dyn SceneModel,
+    model: &mut dyn SceneModel,
     s: &Samples,
     solution: &Solution,
-) -> Table {
-    let machine = &scene.machine;
-    let n_out = solution.len();
-    let mut table = Table::new("energies", &solution.t);
+) -> Result<Table, DynamicsError> {
+    let n_out = solution.len().min(s.len());
+    let mut table = Table::new("energies", &solution.t[..n_out]);
+    let machine = model.machine();
     let rigid = s.states[..n_out]
         .iter()
         .map(|st| rigid_kinetic_energy(machine, st))
         .collect();
     table.push(Column::of(Q::RigidKineticEnergy), rigid);
-    let n = model.modes();
+    let energies = (0..n_out)
+        .map(|k| model.energies(solution.t[k], solution.y(k)))
+        .collect::<Result<Vec<_>, _>>()?;
+    if energies.iter().all(|e| e.kinetic.is_some()) {
+        let kinetic = energies.iter().map(|e| e.kinetic.unwrap_or(0.0)).collect();
+        table.push(Column::of(Q::KineticEnergy), kinetic);
+    }
+    let elastic = energies.iter().all(|e| e.elastic_kinetic.is_some());
     for i in 0..3 {
-        let ints = &machine.links[i].integrals;
-        let r = model.link_range(i);
-        let strain = (0..n_out)
-            .map(|k| half_quadratic_form(&ints.stiffness, &solution.y(k)[r.clone()]))
-            .collect();
-        let kinetic = (0..n_out)
-            .map(|k| {
-                let y = solution.y(k);
-                half_quadratic_form(&ints.mass, &y[n + r.start..n + r.end])
-            })
-            .collect();
-        table.push(Column::link(Q::StrainEnergy, i), strain);
-        table.push(Column::link(Q::ElasticKineticEnergy, i), kinetic);
-    }
-    table
-}
-
-/// The coupled model's platform deviation and forces (`platform_deviation.csv`,
-/// `coupled_forces.csv`).
-pub(crate) fn coupled(
-    system: &mut CoupledSystem,
-    solution: &Solution,
-) -> Result<[Table; 2], DynamicsError> {
-    let n_out = solution.len();
-    let mut deviation = columns(6, n_out);
-    let mut forces = columns(10, n_out);
-    for k in 0..n_out {
-        let (tk, y) = (solution.t[k], solution.y(k));
-        let out = system.output(tk, y)?;
-        let (plain, stretched) = (out.pose_deviation(), out.pose_deviation_with_stretch());
-        for q in 0..3 {
-            deviation[q].push(plain[q]);
-            deviation[3 + q].push(stretched[q]);
-        }
-        for i in 0..3 {
-            forces[3 * i].push(out.axial_force_b[i]);
-            forces[3 * i + 1].push(out.axial_force_c[i]);
-            forces[3 * i + 2].push(out.driving_force[i]);
-        }
-        let shortening = system.chord_shortening(&y[..system.modes()]);
-        forces[9].push(shortening.iter().fold(0.0, |m: f64, d| m.max(*d)));
-    }
-    let mut pose = Table::new("platform_deviation", &solution.t);
-    let names = [
-        Q::DeviationX,
-        Q::DeviationY,
-        Q::DeviationPhi,
-        Q::DeviationXWithStretch,
-        Q::DeviationYWithStretch,
-        Q::DeviationPhiWithStretch,
-    ];
-    for (q, column) in names.into_iter().zip(deviation) {
-        pose.push(Column::of(q), column);
-    }
-    let mut table = Table::new("coupled_forces", &solution.t);
-    let mut cols = forces.into_iter();
-    for i in 0..3 {
-        for q in [Q::AxialForceB, Q::AxialForceC, Q::CoupledDrivingForce] {
-            table.push(Column::link(q, i), cols.next().unwrap_or_default());
+        table.push(
+            Column::link(Q::StrainEnergy, i),
+            energies.iter().map(|e| e.strain[i]).collect(),
+        );
+        if elastic {
+            table.push(
+                Column::link(Q::ElasticKineticEnergy, i),
+                energies
+                    .iter()
+                    .map(|e| e.elastic_kinetic.map_or(0.0, |k| k[i]))
+                    .collect(),
+            );
         }
     }
-    table.push(
-        Column::of(Q::MaxChordShortening),
-        cols.next().unwrap_or_default(),
-    );
-    Ok([pose, table])
+    Ok(table)
 }

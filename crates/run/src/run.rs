@@ -1,13 +1,13 @@
 //! Running a scene: only the requested outputs are computed ("leave out what a scene does
 //! not need"): a frequencies-only scene never integrates the ODE, a kinematics-only scene
 //! never solves the inverse dynamics. The model comes from the scene's one builder
-//! ([`Scene::build_model`]); the integration from the one observed loop
-//! ([`integrate_model`]); every output kind from the shared samples, so the inverse
-//! kinematics is computed once per output time.
+//! ([`Scene::build_model`]) or from the caller ([`run_model`]); the integration from the one
+//! observed loop ([`integrate_model`]); every output kind from the shared samples and the
+//! model's [`SceneModel`] interface, so nothing here knows which model it runs.
 
 use std::time::Instant as Clock;
 
-use flexprr_dynamics::{CouplingModel, DynamicsError, ModalSystem, SceneModel};
+use flexprr_dynamics::{DynamicsError, MachineSnapshot, ModalSystem, SceneModel};
 use flexprr_integrators::{DynIntegrator, Solution};
 use flexprr_scene::{OutputKind, Scene};
 
@@ -47,6 +47,22 @@ struct Integrated {
     model: Box<dyn SceneModel>,
     solution: Solution,
     without_axial: Option<(Box<dyn SceneModel>, Solution)>,
+    /// The model's [`MachineSnapshot`] at every output time reached, once an output needs
+    /// them.
+    snapshots: Option<Vec<MachineSnapshot>>,
+}
+
+impl Integrated {
+    /// The model's snapshots at the solution's output times (computed once).
+    fn snapshots(&mut self) -> Result<&[MachineSnapshot], DynamicsError> {
+        if self.snapshots.is_none() {
+            let all = (0..self.solution.len())
+                .map(|k| self.model.snapshot(self.solution.t[k], self.solution.y(k)))
+                .collect::<Result<Vec<_>, _>>()?;
+            self.snapshots = Some(all);
+        }
+        Ok(self.snapshots.as_deref().unwrap_or(&[]))
+    }
 }
 
 /// Runs a scene, computing only what it requests. `report` receives the progress of the
@@ -56,9 +72,33 @@ struct Integrated {
 /// A [`RunFailure`]: why the run stopped, with every requested output computed up to the
 /// last accepted time.
 pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, RunFailure> {
+    run_with(scene, None, report)
+}
+
+/// [`run`] with a model built outside the scene's builder: any [`SceneModel`] runs through
+/// the same pipeline (outputs, failure outcome, divergence guard). The scene still gives the
+/// commanded motion, the integrator, the output times and the requested outputs; the model
+/// is integrated even when the requested outputs would not need it.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_model(
+    scene: &Scene,
+    model: Box<dyn SceneModel>,
+    report: &mut dyn FnMut(f64),
+) -> Result<RunResult, RunFailure> {
+    run_with(scene, Some(model), report)
+}
+
+/// [`run`] or [`run_model`]: `model` is the scene's own when `None`.
+fn run_with(
+    scene: &Scene,
+    model: Option<Box<dyn SceneModel>>,
+    report: &mut dyn FnMut(f64),
+) -> Result<RunResult, RunFailure> {
     let clock = Clock::now();
     let mut result = RunResult::default();
-    let outcome = run_into(scene, report, &mut result);
+    let outcome = run_into(scene, model, report, &mut result);
     result.stats.wall_time_s = clock.elapsed().as_secs_f64();
     match outcome {
         Ok(()) => Ok(result),
@@ -73,46 +113,25 @@ fn wants(scene: &Scene, kind: OutputKind) -> bool {
     scene.outputs.contains(&kind)
 }
 
-/// Whether the scene's main model must be integrated: for its states, or (coupled,
-/// nonlinear) for its actual forces.
-fn needs_model_integration(scene: &Scene) -> bool {
-    scene.needs_integration()
-        || (scene.coupling != CouplingModel::Ked
-            && (wants(scene, OutputKind::AxialForces) || wants(scene, OutputKind::DrivingForces)))
-}
-
-/// Largest deflection of a coupled run, as a fraction of the link length, beyond which the
-/// run warns and recommends the nonlinear model. Measured on the paper scene at 30 Hz
-/// (docs/coupled.md, "Which model when"): the coupled mid-point deflections leave 5 %
-/// (relative L2 over 10 ms windows) of the nonlinear model's when the largest deflection has
-/// reached 11 % of the link length, and are within 1 % of it up to 5 %. The warning comes at
-/// 5 %: the coupled results are still good there, and a collapsing run is told early (at
-/// 30 Hz the largest deflection passes 5 % at about 11 ms, the 10 % collapse limit at 29.8 ms).
-pub const NONLINEAR_ADVICE_FRACTION: f64 = 0.05;
-
-/// The warning of a coupled run whose deflection passed [`NONLINEAR_ADVICE_FRACTION`].
-fn large_deflection_warning(scene: &Scene, max_deflection: f64) -> Option<String> {
-    let length = scene.machine.links[0].length();
-    let fraction = max_deflection / length;
-    (scene.coupling == CouplingModel::Coupled && fraction > NONLINEAR_ADVICE_FRACTION).then(|| {
-        format!(
-            "the largest link deflection reached {:.1} mm ({:.1} % of the link length, above {:.0} %): \
-             the coupled model assumes small deflections and drifts from a geometrically exact one \
-             beyond this; rerun with model.coupling = \"nonlinear\" (docs/coupled.md)",
-            max_deflection * 1e3,
-            100.0 * fraction,
-            100.0 * NONLINEAR_ADVICE_FRACTION
-        )
-    })
-}
-
-/// Integrates what the scene needs; on failure, the error with the partial states.
+/// Integrates `model` (the scene's own when `None`) and, when the scene compares with a run
+/// without axial force and its model has that switch, that model too; on failure, the error
+/// with the partial states.
 fn integrate_all(
     scene: &Scene,
+    model: Option<Box<dyn SceneModel>>,
     report: &mut dyn FnMut(f64),
     stats: &mut RunStats,
 ) -> Result<(Integrated, Option<RunError>), RunError> {
-    let (main, model) = integrate(scene, report)?;
+    let mut model = match model {
+        Some(model) => model,
+        None => scene.build_model()?,
+    };
+    let main = integrate_model(
+        scene,
+        scene_integrator(scene).as_ref(),
+        model.as_mut(),
+        report,
+    );
     stats.integrated = true;
     stats.integrator = Some(main.stats().clone());
     stats.max_deflection_m = Some(main.max_deflection_m);
@@ -123,12 +142,12 @@ fn integrate_all(
         model,
         solution,
         without_axial: None,
+        snapshots: None,
     };
-    if failure.is_none()
-        && integrated.model.as_modal().is_some()
-        && scene.file.output.compare_without_axial_force
-    {
-        let mut plain = scene.build_model_without_axial_force()?;
+    if failure.is_some() || !scene.file.output.compare_without_axial_force {
+        return Ok((integrated, failure));
+    }
+    if let Some(mut plain) = scene.build_model_without_axial_force()? {
         let integ = integrate_model(
             scene,
             scene_integrator(scene).as_ref(),
@@ -149,12 +168,13 @@ fn integrate_all(
 /// The body of [`run`]: fills `result` as far as it gets.
 fn run_into(
     scene: &Scene,
+    model: Option<Box<dyn SceneModel>>,
     report: &mut dyn FnMut(f64),
     result: &mut RunResult,
 ) -> Result<(), RunError> {
     let mut ked = scene.build_ked(false)?;
-    let (mut integrated, failure) = if needs_model_integration(scene) {
-        let (i, f) = integrate_all(scene, report, &mut result.stats)?;
+    let (mut integrated, failure) = if model.is_some() || scene.integrates_model() {
+        let (i, f) = integrate_all(scene, model, report, &mut result.stats)?;
         (Some(i), f)
     } else {
         (None, None)
@@ -169,17 +189,17 @@ fn run_into(
         let c = i.model.counters();
         result.stats.rhs_evaluations += c.rhs_evaluations;
         result.stats.inverse_dynamics_solves += c.inverse_dynamics_solves;
+        if let Some(w) = result
+            .stats
+            .max_deflection_m
+            .and_then(|d| i.model.deflection_advice(d))
+        {
+            result.warnings.push(w);
+        }
     }
     let c = ked.counters();
     result.stats.rhs_evaluations += c.rhs_evaluations;
     result.stats.inverse_dynamics_solves += c.inverse_dynamics_solves;
-    if let Some(w) = result
-        .stats
-        .max_deflection_m
-        .and_then(|d| large_deflection_warning(scene, d))
-    {
-        result.warnings.push(w);
-    }
     outcome?;
     match failure {
         Some(e) => Err(e),
@@ -211,48 +231,65 @@ fn produce(
     } else {
         None
     };
-    let tables = &mut result.tables;
     if let Some(s) = samples.as_mut() {
-        if wants(scene, OutputKind::Kinematics) {
-            tables.push(outputs::kinematics(s));
-        }
-        if wants(scene, OutputKind::DrivingForces) {
-            let flexible = integrated.as_deref_mut().and_then(|i| {
-                let solution = &i.solution;
-                i.model.as_modal().map(|m| (m, solution))
-            });
-            let (table, solves) = outputs::driving_forces(scene, s, flexible)?;
-            result.stats.inverse_dynamics_solves += solves;
-            tables.push(table);
-        }
-        if wants(scene, OutputKind::JointReactions) {
-            tables.push(outputs::joint_reactions(scene, s)?);
-        }
-        if wants(scene, OutputKind::AxialForces) {
-            tables.push(outputs::axial_forces(scene, s)?);
-        }
-        if wants(scene, OutputKind::Machine) {
-            result.documents.push(viewer::machine_file(scene, s)?);
-        }
+        produce_rigid(scene, s, integrated.as_deref_mut(), result)?;
     }
     if wants(scene, OutputKind::Frequencies) {
         let (table, hist) = outputs::frequencies(ked, times)?;
-        tables.push(table);
+        result.tables.push(table);
         result.frequencies = Some(hist);
     }
     let Some(integrated) = integrated else {
         return Ok(());
     };
-    if let Some(system) = integrated.model.as_nonlinear() {
-        let produced = crate::nonlinear::tables(scene, system, &integrated.solution)?;
-        tables.extend(produced.tables);
-        result.stats.max_deflection_m = Some(produced.max_midpoint_deflection);
-        return Ok(());
+    produce_integrated(scene, samples.as_ref(), ked, integrated, result)
+}
+
+/// The outputs of the commanded rigid motion: kinematics, driving forces (with the model's
+/// own where it was integrated), joint reactions, axial forces, the machine figure.
+fn produce_rigid(
+    scene: &Scene,
+    s: &mut Samples,
+    integrated: Option<&mut Integrated>,
+    result: &mut RunResult,
+) -> Result<(), RunError> {
+    let tables = &mut result.tables;
+    if wants(scene, OutputKind::Kinematics) {
+        tables.push(outputs::kinematics(s));
     }
-    if let Some(coupled) = integrated.model.as_coupled() {
-        tables.extend(outputs::coupled(coupled, &integrated.solution)?);
+    if wants(scene, OutputKind::DrivingForces) {
+        let model_forces = match integrated {
+            Some(i) => Some(i.snapshots()?),
+            None => None,
+        };
+        let (table, solves) = outputs::driving_forces(scene, s, model_forces)?;
+        result.stats.inverse_dynamics_solves += solves;
+        tables.push(table);
     }
-    let (model, solution) = (integrated.model.as_ref(), &integrated.solution);
+    if wants(scene, OutputKind::JointReactions) {
+        tables.push(outputs::joint_reactions(scene, s)?);
+    }
+    if wants(scene, OutputKind::AxialForces) {
+        tables.push(outputs::axial_forces(scene, s)?);
+    }
+    if wants(scene, OutputKind::Machine) {
+        result.documents.push(viewer::machine_file(scene, s)?);
+    }
+    Ok(())
+}
+
+/// The outputs of the integrated model: its own tables, coordinates, deflections, modal
+/// forces, energies and the viewer.
+fn produce_integrated(
+    scene: &Scene,
+    samples: Option<&Samples>,
+    ked: &mut ModalSystem,
+    integrated: &mut Integrated,
+    result: &mut RunResult,
+) -> Result<(), RunError> {
+    let tables = &mut result.tables;
+    tables.extend(integrated.model.tables(&integrated.solution)?);
+    let (model, solution) = (integrated.model.as_mut(), &integrated.solution);
     if wants(scene, OutputKind::Modes) {
         tables.push(outputs::modes(model, solution));
     }
@@ -261,28 +298,30 @@ fn produce(
             .without_axial
             .as_ref()
             .map(|(m, s)| (m.as_ref(), s));
-        tables.push(outputs::deflections(scene, model, solution, plain));
+        tables.push(outputs::deflections(scene, model, solution, plain)?);
     }
-    if let Some(s) = samples.as_ref() {
-        if wants(scene, OutputKind::ModalForces) {
-            tables.push(outputs::modal_forces(scene, s));
-        }
-        if wants(scene, OutputKind::Energies) {
-            tables.push(outputs::energies(scene, model, s, solution));
-        }
-        if wants(scene, OutputKind::Viewer) || wants(scene, OutputKind::Snapshots) {
-            let data = viewer::viewer_data(
-                scene,
-                s,
-                model,
-                solution,
-                ked,
-                result.frequencies.as_ref(),
-                &result.tables,
-            )?;
-            result.documents.extend(viewer::viewer_files(scene, &data)?);
-            result.viewer = Some(data);
-        }
+    let Some(s) = samples else {
+        return Ok(());
+    };
+    if wants(scene, OutputKind::ModalForces) {
+        tables.push(outputs::modal_forces(scene, s));
+    }
+    if wants(scene, OutputKind::Energies) {
+        tables.push(outputs::energies(model, s, solution)?);
+    }
+    if wants(scene, OutputKind::Viewer) || wants(scene, OutputKind::Snapshots) {
+        let snapshots = integrated.snapshots()?.to_vec();
+        let data = viewer::viewer_data(
+            scene,
+            s,
+            integrated.model.as_ref(),
+            &integrated.solution,
+            &snapshots,
+            ked,
+            result.frequencies.as_ref(),
+        )?;
+        result.documents.extend(viewer::viewer_files(scene, &data)?);
+        result.viewer = Some(data);
     }
     Ok(())
 }

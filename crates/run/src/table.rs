@@ -3,60 +3,7 @@
 use flexprr_dynamics::FrequencyHistory;
 use flexprr_integrators::Stats;
 
-use crate::column::{Column, Quantity};
-
-/// A time-series table: the time column first, then typed columns.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Table {
-    /// File stem (`kinematics`, `deflections`, ...).
-    pub name: String,
-    /// Column identities, time first.
-    pub columns: Vec<Column>,
-    /// Column data, `data[column][row]`.
-    pub data: Vec<Vec<f64>>,
-}
-
-impl Table {
-    /// A table with only the time column.
-    pub fn new(name: &str, t: &[f64]) -> Self {
-        Self {
-            name: name.to_string(),
-            columns: vec![Column::of(Quantity::Time)],
-            data: vec![t.to_vec()],
-        }
-    }
-    /// Appends a column.
-    pub fn push(&mut self, column: Column, values: Vec<f64>) {
-        self.columns.push(column);
-        self.data.push(values);
-    }
-    /// The values of `column`.
-    pub fn get(&self, column: &Column) -> Option<&[f64]> {
-        self.columns
-            .iter()
-            .position(|c| c == column)
-            .map(|i| self.data[i].as_slice())
-    }
-    /// The values of the column whose CSV header is `header` (for readers of the files).
-    pub fn column(&self, header: &str) -> Option<&[f64]> {
-        self.columns
-            .iter()
-            .position(|c| c.header() == header)
-            .map(|i| self.data[i].as_slice())
-    }
-    /// The CSV headers, rendered from the column identities.
-    pub fn headers(&self) -> Vec<String> {
-        self.columns.iter().map(Column::header).collect()
-    }
-    /// Number of rows.
-    pub fn rows(&self) -> usize {
-        self.data.first().map_or(0, Vec::len)
-    }
-    /// The time column.
-    pub fn time(&self) -> &[f64] {
-        &self.data[0]
-    }
-}
+pub use flexprr_dynamics::Table;
 
 /// What a run did (tests use it to prove that only the needed work was done).
 #[derive(Debug, Clone, Default, PartialEq)]

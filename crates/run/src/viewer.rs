@@ -5,26 +5,28 @@
 //!
 //! - slider positions `rho_i` and the platform pose: the closed-form inverse kinematics of
 //!   the commanded motion (the shared [`Samples`]);
-//! - mode shapes: the scene's own basis `psi_j(xi)` ([`flexprr_beam::Basis::eval`]) sampled
-//!   at [`SHAPE_POINTS`] points, and the modal coordinates `eta_ij` from the integrated
-//!   state, so the drawn line is the model's `w = sum_j psi_j eta_j` (the paper's eq. 1);
+//! - shapes: for a model whose deflection is linear in its coordinates, the deflection of
+//!   each unit coordinate (the scene's own basis `psi_j(xi)` for the modal models) sampled
+//!   at [`SHAPE_POINTS`] points, and the coordinates `eta_ij` from the integrated state, so
+//!   the drawn line is the model's `w = sum_j psi_j eta_j` (the paper's eq. 1); for any other
+//!   model the deflection itself at the [`SHAPE_POINTS`] points (unit shapes);
 //! - axial force: the mean of the end forces `(P_B + P_C) / 2` (the force at mid-link for
-//!   the linear distribution of model.md section 5): the scene's axial model along the
-//!   motion (KED), or the coupled model's actual chord tension;
+//!   the linear distribution of model.md section 5) of the model's own snapshots
+//!   ([`SceneModel::snapshot`]): the scene's axial model along the motion (KED), or the
+//!   actual chord forces (coupled, nonlinear);
 //! - first-mode frequency and buckling: the lowest eigenvalue `omega^2` of the KED
 //!   stiffness along the motion ([`FrequencyHistory`]); where `omega^2 <= 0` the frequency
 //!   is drawn as 0 and the interval is a buckling interval;
-//! - coupled model: the platform deviation `(dx, dy, dphi)` of `platform_deviation.csv`.
+//! - a model whose platform follows the links (coupled, nonlinear): the platform deviation
+//!   `(dx, dy, dphi)` from the commanded pose, from its snapshots.
 
-use flexprr_dynamics::{FrequencyHistory, ModalSystem, SceneModel};
+use flexprr_dynamics::{DynamicsError, FrequencyHistory, MachineSnapshot, ModalSystem, SceneModel};
 use flexprr_integrators::Solution;
 use flexprr_scene::{OutputKind, ScenarioError, Scene};
 use flexprr_viewer::{GuideView, LinkView, ViewerData, ViewerError, frame_indices};
 
-use crate::column::{Column, Quantity as Q};
 use crate::error::RunError;
 use crate::samples::Samples;
-use crate::table::Table;
 
 /// Points along each link at which the mode shapes are sampled for the viewer.
 pub const SHAPE_POINTS: usize = 41;
@@ -60,30 +62,74 @@ fn basis_name(name: &str) -> String {
     name.split(", r =").next().unwrap_or(name).to_string()
 }
 
-/// The coupled model's tables, when the run has them and they cover `n` frames.
-fn coupled_tables(tables: &[Table], n: usize) -> Option<(&Table, &Table)> {
-    let find = |name: &str| tables.iter().find(|t| t.name == name && t.rows() >= n);
-    Some((find("platform_deviation")?, find("coupled_forces")?))
+/// Shapes `[shape][point]` and coordinates `[frame][shape]` of one link, as
+/// [`LinkView::mode_shapes`] and [`LinkView::modal`] hold them.
+type ShapesAndCoordinates = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// The shapes and coordinates of link `i` for the first `n` frames of `solution`: the
+/// deflection of each unit coordinate at `xi` and the coordinates, for a model whose
+/// deflection is linear in them; otherwise unit shapes and the deflection itself at `xi`.
+fn link_shapes(
+    model: &dyn SceneModel,
+    solution: &Solution,
+    n: usize,
+    i: usize,
+    xi: &[f64],
+) -> Result<ShapesAndCoordinates, DynamicsError> {
+    if model.linear_deflection() {
+        let range = model.link_range(i);
+        let mut unit = vec![0.0; model.dim()];
+        let mut shapes = Vec::with_capacity(range.len());
+        for j in range.clone() {
+            unit[j] = 1.0;
+            let shape = xi
+                .iter()
+                .map(|&x| model.deflection(0.0, i, x, &unit))
+                .collect::<Result<Vec<_>, _>>();
+            unit[j] = 0.0;
+            shapes.push(shape?);
+        }
+        let coordinates = (0..n)
+            .map(|k| solution.y(k)[range.clone()].to_vec())
+            .collect();
+        return Ok((shapes, coordinates));
+    }
+    let shapes = (0..xi.len())
+        .map(|p| {
+            (0..xi.len())
+                .map(|q| if p == q { 1.0 } else { 0.0 })
+                .collect()
+        })
+        .collect();
+    let deflections = (0..n)
+        .map(|k| {
+            xi.iter()
+                .map(|&x| model.deflection(solution.t[k], i, x, solution.y(k)))
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((shapes, deflections))
 }
 
 /// The viewer data of a run: `n` frames at the solution's first `n` output times, where
-/// `n` is the number of output times both the samples and the solution reached.
+/// `n` is the number of output times the samples, the solution and the model's snapshots
+/// reached.
 ///
 /// `hist` is the run's frequency history when `frequencies` was requested (reused when it
 /// covers the frames); otherwise it is sampled here from `ked`.
 ///
 /// # Errors
-/// The frequency history failed (with its time).
+/// The frequency history or the model's deflection failed (with its time).
 pub(crate) fn viewer_data(
     scene: &Scene,
     samples: &Samples,
     model: &dyn SceneModel,
     solution: &Solution,
+    snapshots: &[MachineSnapshot],
     ked: &mut ModalSystem,
     hist: Option<&FrequencyHistory>,
-    tables: &[Table],
 ) -> Result<ViewerData, RunError> {
-    let n = solution.len().min(samples.len());
+    let n = solution.len().min(samples.len()).min(snapshots.len());
     let time = solution.t[..n].to_vec();
     let sampled;
     let hist = match hist {
@@ -93,36 +139,17 @@ pub(crate) fn viewer_data(
             &sampled
         }
     };
-    let coupled = if model.kind() == "coupled" {
-        coupled_tables(tables, n)
-    } else {
-        None
-    };
     let machine = model.machine();
     let xi: Vec<f64> = (0..SHAPE_POINTS)
         .map(|j| j as f64 / (SHAPE_POINTS - 1) as f64)
         .collect();
-    let links = std::array::from_fn(|i| {
-        let link = &machine.links[i];
-        let range = model.link_range(i);
-        let mode_shapes = (0..link.modes())
-            .map(|j| xi.iter().map(|&x| link.basis.eval(j, x)[0]).collect())
+    let mut links = Vec::with_capacity(3);
+    for (i, link) in machine.links.iter().enumerate() {
+        let (mode_shapes, modal) = link_shapes(model, solution, n, i, &xi)?;
+        let axial_force = snapshots[..n]
+            .iter()
+            .map(|p| 0.5 * (p.axial_force_b[i] + p.axial_force_c[i]))
             .collect();
-        let modal = (0..n)
-            .map(|k| solution.y(k)[range.clone()].to_vec())
-            .collect();
-        let axial_force = match coupled.and_then(|(_, f)| {
-            Some((
-                f.get(&Column::link(Q::AxialForceB, i))?,
-                f.get(&Column::link(Q::AxialForceC, i))?,
-            ))
-        }) {
-            Some((pb, pc)) => (0..n).map(|k| 0.5 * (pb[k] + pc[k])).collect(),
-            None => hist.end_forces[i][..n]
-                .iter()
-                .map(|(pb, pc)| 0.5 * (pb + pc))
-                .collect(),
-        };
         let first_frequency = hist.omega_squared[i].first().map_or_else(
             || vec![0.0; n],
             |w2| {
@@ -138,7 +165,7 @@ pub(crate) fn viewer_data(
             .filter(|b| b.link == i)
             .map(|b| (b.t_start, b.t_end))
             .collect();
-        LinkView {
+        links.push(LinkView {
             length: link.length(),
             basis: basis_name(&link.basis.name()),
             xi: xi.clone(),
@@ -147,21 +174,21 @@ pub(crate) fn viewer_data(
             axial_force,
             first_frequency,
             buckling,
-        }
-    });
-    let deviation = coupled.and_then(|(d, _)| {
-        let dx = d.get(&Column::of(Q::DeviationX))?;
-        let dy = d.get(&Column::of(Q::DeviationY))?;
-        let dphi = d.get(&Column::of(Q::DeviationPhi))?;
-        Some((0..n).map(|k| [dx[k], dy[k], dphi[k]]).collect())
-    });
+        });
+    }
+    let links: [LinkView; 3] = links
+        .try_into()
+        .map_err(|_| RunError::Scene(ScenarioError::Run("a machine has three links".into())))?;
+    let deviation = model
+        .platform_follows_links()
+        .then(|| snapshots[..n].iter().map(|p| p.pose_deviation()).collect());
     let pose = samples.motions[..n]
         .iter()
         .map(|m| [m.pose.x, m.pose.y, m.pose.phi])
         .collect();
-    let sliders = samples.states[..n]
+    let sliders = snapshots[..n]
         .iter()
-        .map(|s| std::array::from_fn(|i| s.legs[i].rho))
+        .map(|p| p.sliders.map(|s| s.position))
         .collect();
     let (guides, attachments) = machine_views(scene);
     let f = &scene.formulation;

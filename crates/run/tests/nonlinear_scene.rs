@@ -95,20 +95,21 @@ fn a_nonlinear_scene_runs_the_nonlinear_model_and_agrees_with_the_coupled_one() 
             .iter()
             .all(|v| *v > 0.0)
     );
-    assert!(
-        energies
-            .column("strain_J")
-            .unwrap()
-            .iter()
-            .all(|v| *v >= 0.0)
-    );
-    // The run's largest deflection is the largest mid-point one of the table.
-    let peak = (1..=3)
-        .flat_map(|i| dn.column(&format!("w_{i}_xi0.5_m")).unwrap().to_vec())
+    for link in 1..=3 {
+        let strain = energies.column(&format!("strain_{link}_J")).unwrap();
+        assert!(strain.iter().all(|v| *v >= 0.0));
+    }
+    // The run's largest deflection is taken over the guard's points (0.1, ..., 0.9) at the
+    // output times: at least the largest of the table's (xi = 0.3 and 0.5, two of them),
+    // and within a few per cent of it (the first mode dominates: sin(0.4 pi) = 0.95).
+    let peak = ["0.3", "0.5"]
+        .iter()
+        .flat_map(|xi| (1..=3).map(move |i| format!("w_{i}_xi{xi}_m")))
+        .flat_map(|name| dn.column(&name).unwrap().to_vec())
         .fold(0.0_f64, |m, w| m.max(w.abs()));
     let reported = nl.stats.max_deflection_m.unwrap();
     assert!(
-        (reported - peak).abs() <= 1e-15 + 1e-12 * peak,
+        reported >= peak * (1.0 - 1e-12) && reported <= 1.1 * peak,
         "{reported} {peak}"
     );
 }

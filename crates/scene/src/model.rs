@@ -50,13 +50,30 @@ impl Scene {
         Ok(system)
     }
 
-    /// The KED modal system of the scene with the axial force switched off (the paper's
-    /// comparison "without axial force", figures 6-8).
+    /// The scene's model with the axial force switched off, for the paper's comparison
+    /// "without axial force" (figures 6-8): the KED modal system without it. `None` for the
+    /// coupled and nonlinear models, whose axial force is the actual constraint force, not a
+    /// switch.
     ///
     /// # Errors
     /// As [`Scene::build_model`].
-    pub fn build_model_without_axial_force(&self) -> Result<Box<dyn SceneModel>, DynamicsError> {
-        Ok(Box::new(self.build_ked(true)?))
+    pub fn build_model_without_axial_force(
+        &self,
+    ) -> Result<Option<Box<dyn SceneModel>>, DynamicsError> {
+        match self.coupling {
+            CouplingModel::Ked => Ok(Some(Box::new(self.build_ked(true)?))),
+            CouplingModel::Coupled | CouplingModel::Nonlinear => Ok(None),
+        }
+    }
+
+    /// Whether a run of the scene integrates its model: for its states, or because the
+    /// model's actual forces (coupled, nonlinear) are only known along its solution.
+    pub fn integrates_model(&self) -> bool {
+        use crate::OutputKind;
+        self.needs_integration()
+            || (self.coupling != CouplingModel::Ked
+                && (self.outputs.contains(&OutputKind::AxialForces)
+                    || self.outputs.contains(&OutputKind::DrivingForces)))
     }
 
     /// The KED modal system of the scene (also for a coupled scene: its frequencies and

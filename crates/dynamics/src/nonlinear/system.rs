@@ -34,7 +34,7 @@ use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 use super::element::{CorotationalElement, wrap_angle};
-use crate::{DynamicsError, Machine, ModelCounters, SceneModel};
+use crate::{DynamicsError, Machine};
 
 /// Model switches of a [`NonlinearSystem`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -105,6 +105,9 @@ pub struct NonlinearOutput {
     /// The actual platform motion (pose and velocity from the state, acceleration from the
     /// equations of motion).
     pub platform: PlatformMotion,
+    /// Slider positions, velocities and accelerations `(rho_i, rho_i', rho_i'')` (m, m/s,
+    /// m/s^2): the commanded ones.
+    pub slider: [[f64; 3]; 3],
     /// Chord lengths `|C_i - B_i|` (m).
     pub chord_length: [f64; 3],
     /// Chord angles `b_i` (rad).
@@ -125,6 +128,8 @@ pub struct NonlinearOutput {
     pub kinetic_energy: f64,
     /// Strain energy of the links (J).
     pub strain_energy: f64,
+    /// Strain energy of each link (J).
+    pub link_strain_energy: [f64; 3],
     /// Power the sliders deliver to the links, `sum_i F_B_i . B_i'` (W): the rate of change
     /// of the total energy when there is no damping.
     pub slider_power: f64,
@@ -304,6 +309,16 @@ impl NonlinearSystem {
     pub fn coordinates(&self) -> usize {
         3 + 3 * self.per_link
     }
+    /// Range of link `link`'s nodal coordinates (0-based link) among the generalized
+    /// coordinates; the platform's three come first.
+    pub fn link_range(&self, link: usize) -> std::ops::Range<usize> {
+        let start = 3 + link * self.per_link;
+        start..start + self.per_link
+    }
+    /// The state set by [`NonlinearSystem::start_at`], empty before.
+    pub(crate) fn start_state(&self) -> &[f64] {
+        &self.initial
+    }
     /// Work counters so far.
     pub fn counters(&self) -> NonlinearCounters {
         self.counters
@@ -355,7 +370,7 @@ impl NonlinearSystem {
     }
 
     /// Sets the initial state of the integration to the rigid state at `t0`
-    /// ([`NonlinearSystem::initial_state`]); [`SceneModel::initial_state`] returns it.
+    /// ([`NonlinearSystem::initial_state`]); [`crate::SceneModel::initial_state`] returns it.
     ///
     /// # Errors
     /// The rigid inverse kinematics fails at `t0`.
@@ -646,6 +661,7 @@ impl NonlinearSystem {
                 velocity: Vector3::new(y[n], y[n + 1], y[n + 2]),
                 acceleration: qdd,
             },
+            slider: frame.rho,
             chord_length: [0.0; 3],
             chord_angle: [0.0; 3],
             midpoint_deflection: self.midpoint_deflections(y, &frame),
@@ -657,6 +673,7 @@ impl NonlinearSystem {
                 * (self.machine.platform_mass * (y[n] * y[n] + y[n + 1] * y[n + 1])
                     + self.machine.platform_inertia * omega * omega),
             strain_energy: 0.0,
+            link_strain_energy: [0.0; 3],
             slider_power: 0.0,
         };
         for i in 0..3 {
@@ -689,12 +706,13 @@ impl NonlinearSystem {
                     let (q2, _) = self.node(y, &frame, i, k + 1);
                     let st = el.state(&[q[0], q[1], q[2], q2[0], q2[1], q2[2]]);
                     let [t1, t2] = st.rotations;
-                    out.strain_energy += 0.5 * el.axial_stiffness * st.stretch * st.stretch
+                    out.link_strain_energy[i] += 0.5 * el.axial_stiffness * st.stretch * st.stretch
                         / el.length
                         + 2.0 * el.bending_stiffness / el.length * (t1 * t1 + t1 * t2 + t2 * t2);
                 }
             }
         }
+        out.strain_energy = out.link_strain_energy.iter().sum();
         Ok(out)
     }
 
@@ -758,51 +776,5 @@ impl OdeSystem for NonlinearSystem {
         if let Err(e) = self.accelerations(t, y, &frame, dzd) {
             self.fail(e, dy);
         }
-    }
-}
-
-impl SceneModel for NonlinearSystem {
-    fn kind(&self) -> &'static str {
-        "nonlinear"
-    }
-    fn machine(&self) -> &Machine {
-        &self.machine
-    }
-    /// The generalized coordinates (platform pose and every link's nodal coordinates).
-    fn modes(&self) -> usize {
-        self.coordinates()
-    }
-    /// Link `link`'s nodal coordinates (the platform's three come first).
-    fn link_range(&self, link: usize) -> std::ops::Range<usize> {
-        let start = 3 + link * self.per_link;
-        start..start + self.per_link
-    }
-    fn take_failure(&mut self) -> Option<DynamicsError> {
-        NonlinearSystem::take_failure(self)
-    }
-    fn counters(&self) -> ModelCounters {
-        ModelCounters {
-            rhs_evaluations: self.counters.rhs_evaluations,
-            inverse_dynamics_solves: 0,
-        }
-    }
-    /// The rigid state set by [`NonlinearSystem::start_at`] (at `t = 0` when it was not
-    /// called; NaN, which every integrator refuses, when the kinematics fails there).
-    fn initial_state(&self) -> Vec<f64> {
-        if self.initial.len() == self.dim() {
-            return self.initial.clone();
-        }
-        NonlinearSystem::initial_state(self, 0.0).unwrap_or_else(|_| vec![f64::NAN; self.dim()])
-    }
-    /// Not defined without the time (the chord starts at the slider, which is prescribed,
-    /// not in the state): NaN. Use [`NonlinearSystem::deflection_at`].
-    fn deflection(&self, _link: usize, _xi: f64, _y: &[f64]) -> f64 {
-        f64::NAN
-    }
-    fn as_nonlinear(&mut self) -> Option<&mut NonlinearSystem> {
-        Some(self)
-    }
-    fn linear_deflection(&self) -> bool {
-        false
     }
 }

@@ -1,0 +1,299 @@
+//! The dynamical system a scene integrates, whatever its model: one trait that the run
+//! layer, studies and benchmarks see, so that a new model kind (a geometrically nonlinear
+//! link, the machine driven by its actuators) is one more implementation and no edit in the
+//! layers above.
+//!
+//! What the layers above read from a model goes through this trait only: the machine at an
+//! instant ([`MachineSnapshot`]: platform, sliders, axial and driving forces), the deflection
+//! along a link, the energies, and the model's own extra tables. Nothing above asks which
+//! model it holds.
+
+mod coupled;
+mod ked;
+mod nonlinear;
+
+pub use coupled::NONLINEAR_ADVICE_FRACTION;
+
+use flexprr_integrators::{OdeSystem, Solution};
+use flexprr_kinematics::PlatformMotion;
+
+use crate::{DynamicsError, Machine, Table};
+
+/// Work counters every scene model reports.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ModelCounters {
+    /// Right-hand-side evaluations.
+    pub rhs_evaluations: usize,
+    /// Rigid inverse-dynamics solves.
+    pub inverse_dynamics_solves: usize,
+}
+
+/// Position, velocity and acceleration of one slider along its guide (m, m/s, m/s^2).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SliderMotion {
+    /// `rho_i` (m), from the guide's centre along its direction.
+    pub position: f64,
+    /// `rho_i'` (m/s).
+    pub velocity: f64,
+    /// `rho_i''` (m/s^2).
+    pub acceleration: f64,
+}
+
+/// The machine as a model sees it at one `(t, y)`: what outputs, the viewer, studies and
+/// benchmarks read, for any model kind.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MachineSnapshot {
+    /// Time (s).
+    pub t: f64,
+    /// The commanded platform motion (the scene's trajectory).
+    pub nominal: PlatformMotion,
+    /// The platform motion of the model: the commanded one where the model prescribes it
+    /// (KED), else the one that follows from the sliders and the links.
+    pub platform: PlatformMotion,
+    /// The sliders (the commanded ones where the model prescribes them).
+    pub sliders: [SliderMotion; 3],
+    /// Axial force of each link at `B_i` (tension positive, N).
+    pub axial_force_b: [f64; 3],
+    /// Axial force of each link at `C_i`: the chord force (tension positive, N).
+    pub axial_force_c: [f64; 3],
+    /// Force each slider's actuator exerts along its guide (N): the force needed to move it
+    /// on its path where the sliders are prescribed.
+    pub driving_force: [f64; 3],
+}
+
+impl MachineSnapshot {
+    /// Platform pose minus the commanded pose `(dx, dy, dphi)` (m, m, rad).
+    pub fn pose_deviation(&self) -> [f64; 3] {
+        [
+            self.platform.pose.x - self.nominal.pose.x,
+            self.platform.pose.y - self.nominal.pose.y,
+            self.platform.pose.phi - self.nominal.pose.phi,
+        ]
+    }
+}
+
+/// Energies of a model's state (J).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ModelEnergies {
+    /// Kinetic energy of the whole moving machine model (links, platform and, where they are
+    /// degrees of freedom, sliders), when the model has it in closed form.
+    pub kinetic: Option<f64>,
+    /// Strain energy of each link.
+    pub strain: [f64; 3],
+    /// Kinetic energy of each link's elastic motion relative to its chord (modal models:
+    /// `eta'^T M eta' / 2`).
+    pub elastic_kinetic: Option<[f64; 3]>,
+}
+
+/// `v^T m v / 2` for a square matrix `m`.
+fn half_quadratic_form(m: &faer::Mat<f64>, v: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for (a, va) in v.iter().enumerate() {
+        for (b, vb) in v.iter().enumerate() {
+            s += va * m[(a, b)] * vb;
+        }
+    }
+    0.5 * s
+}
+
+/// The dynamical system of a scene: an [`OdeSystem`] whose state holds the links' modal (or
+/// nodal) coordinates, with what the layers above need to read it.
+///
+/// Required: the machine, the state layout per link, the failure a right-hand side met, the
+/// counters, and the machine at an instant ([`SceneModel::snapshot`]). Provided, for models
+/// whose coordinates are the links' assumed modes: the zero initial state, the deflection
+/// through the links' shape functions and the modal energies. A model with other
+/// coordinates overrides them; a model with tables of its own returns them from
+/// [`SceneModel::tables`].
+///
+/// ```
+/// use flexprr_dynamics::{DynamicsError, Machine, MachineSnapshot, ModelCounters, SceneModel, SliderMotion};
+/// use flexprr_integrators::OdeSystem;
+/// use flexprr_kinematics::{PlatformMotion, Pose};
+///
+/// /// A stand-in model: rigid links (one dummy state), the platform at rest at the origin.
+/// struct Rigid(std::sync::Arc<Machine>);
+/// impl OdeSystem for Rigid {
+///     fn dim(&self) -> usize { 2 }
+///     fn rhs(&mut self, _t: f64, _y: &[f64], dy: &mut [f64]) { dy.fill(0.0); }
+/// }
+/// impl SceneModel for Rigid {
+///     fn kind(&self) -> &'static str { "rigid" }
+///     fn machine(&self) -> &Machine { &self.0 }
+///     fn modes(&self) -> usize { 1 }
+///     fn link_range(&self, _link: usize) -> std::ops::Range<usize> { 0..0 }
+///     fn take_failure(&mut self) -> Option<DynamicsError> { None }
+///     fn counters(&self) -> ModelCounters { ModelCounters::default() }
+///     fn snapshot(&mut self, t: f64, _y: &[f64]) -> Result<MachineSnapshot, DynamicsError> {
+///         let rest = PlatformMotion::at_rest(Pose::new(0.0, 0.0, 0.0));
+///         Ok(MachineSnapshot {
+///             t,
+///             nominal: rest,
+///             platform: rest,
+///             sliders: [SliderMotion::default(); 3],
+///             axial_force_b: [0.0; 3],
+///             axial_force_c: [0.0; 3],
+///             driving_force: [0.0; 3],
+///         })
+///     }
+/// }
+/// # let _ = |m: std::sync::Arc<Machine>| Box::new(Rigid(m)) as Box<dyn SceneModel>;
+/// ```
+pub trait SceneModel: OdeSystem + Send {
+    /// The model's name in scene files and outputs (`"ked"`, `"coupled"`).
+    fn kind(&self) -> &'static str;
+    /// The machine.
+    fn machine(&self) -> &Machine;
+    /// Number of generalized coordinates (the state holds them, then their rates).
+    fn modes(&self) -> usize;
+    /// Range of link `link`'s coordinates in the first half of the state.
+    fn link_range(&self, link: usize) -> std::ops::Range<usize>;
+    /// The first failure met inside the right-hand side (which then writes NaN so the
+    /// integrator stops): the real cause of a failed integration.
+    fn take_failure(&mut self) -> Option<DynamicsError>;
+    /// Work counters so far.
+    fn counters(&self) -> ModelCounters;
+    /// The machine at `(t, y)`: platform, sliders, axial and driving forces.
+    ///
+    /// # Errors
+    /// A wrong state length, a kinematic failure or a singular pose, with the time.
+    fn snapshot(&mut self, t: f64, y: &[f64]) -> Result<MachineSnapshot, DynamicsError>;
+
+    /// The initial state: undeflected links at rest (the paper's).
+    fn initial_state(&self) -> Vec<f64> {
+        vec![0.0; self.dim()]
+    }
+    /// Transverse deflection (m) of link `link` at `xi` (0..1 along the link) for the state
+    /// `y` at time `t`, along the chord normal: for modal coordinates
+    /// `w = sum_j psi_j(xi) eta_j` (the paper's eq. 1), which needs no time.
+    ///
+    /// # Errors
+    /// A model that needs the time for it (its chord moves with a prescribed slider) may fail
+    /// kinematically there.
+    fn deflection(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
+        let _ = t;
+        Ok(self.machine().links[link].deflection(&y[self.link_range(link)], xi))
+    }
+    /// Whether [`SceneModel::deflection`] is linear in the coordinates and needs no time
+    /// (true for modal models). When false, the divergence guard, which tabulates the
+    /// deflection once per coordinate, does not apply; such a model checks its own limits.
+    fn linear_deflection(&self) -> bool {
+        true
+    }
+    /// Whether the platform follows the links (coupled and nonlinear models) rather than the
+    /// commanded motion: then its deviation from the commanded pose is a result worth
+    /// showing.
+    fn platform_follows_links(&self) -> bool {
+        false
+    }
+    /// Energies at `(t, y)`: for modal coordinates each link's strain energy
+    /// `eta^T Kf eta / 2` and elastic kinetic energy `eta'^T M eta' / 2`.
+    ///
+    /// # Errors
+    /// A model that needs kinematics for them may fail there.
+    fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
+        let _ = t;
+        let n = self.modes();
+        let mut e = ModelEnergies {
+            elastic_kinetic: Some([0.0; 3]),
+            ..ModelEnergies::default()
+        };
+        for i in 0..3 {
+            let ints = &self.machine().links[i].integrals;
+            let r = self.link_range(i);
+            e.strain[i] = half_quadratic_form(&ints.stiffness, &y[r.clone()]);
+            if let Some(k) = e.elastic_kinetic.as_mut() {
+                k[i] = half_quadratic_form(&ints.mass, &y[n + r.start..n + r.end]);
+            }
+        }
+        Ok(e)
+    }
+    /// The model's own tables at the output times of `solution` (say, the coupled model's
+    /// platform deviation and chord forces); none by default.
+    ///
+    /// # Errors
+    /// A failure at one of the times, with the time.
+    fn tables(&mut self, solution: &Solution) -> Result<Vec<Table>, DynamicsError> {
+        let _ = solution;
+        Ok(Vec::new())
+    }
+    /// Advice about the validity of the model's results given the largest deflection a run
+    /// reached (m), e.g. that a small-deflection model is past its range; none by default.
+    fn deflection_advice(&self, max_deflection: f64) -> Option<String> {
+        let _ = max_deflection;
+        None
+    }
+    /// The link (0-based) and the mode (0-based, within the link) of state component
+    /// `component`, and whether it is a rate: the state holds every link's coordinates,
+    /// then their rates, in [`Self::link_range`] order. `None` for other components.
+    fn component_place(&self, component: usize) -> Option<(usize, usize, bool)> {
+        let modes = self.modes();
+        let (index, rate) = if component < modes {
+            (component, false)
+        } else if component < 2 * modes {
+            (component - modes, true)
+        } else {
+            return None;
+        };
+        (0..3).find_map(|link| {
+            let range = self.link_range(link);
+            range
+                .contains(&index)
+                .then(|| (link, index - range.start, rate))
+        })
+    }
+    /// A reader's name for state component `component`, for messages: the link, the mode and
+    /// whether it is the coordinate `eta` or its rate (see [`Self::component_place`]).
+    fn component_name(&self, component: usize) -> String {
+        match self.component_place(component) {
+            Some((link, mode, rate)) => format!(
+                "{} of link {}, mode {}",
+                if rate {
+                    "modal rate d(eta)/dt"
+                } else {
+                    "modal coordinate eta"
+                },
+                link + 1,
+                mode + 1
+            ),
+            None => format!("state component {component}"),
+        }
+    }
+}
+
+/// The table of the platform's deviation from its commanded pose at the snapshots
+/// (`platform_deviation.csv`: `dx`, `dy`, `dphi`).
+pub fn platform_deviation_table(t: &[f64], snapshots: &[MachineSnapshot]) -> Table {
+    use crate::{Column, Quantity as Q};
+    let mut table = Table::new("platform_deviation", t);
+    for (q, quantity) in [Q::DeviationX, Q::DeviationY, Q::DeviationPhi]
+        .into_iter()
+        .enumerate()
+    {
+        let values = snapshots.iter().map(|s| s.pose_deviation()[q]).collect();
+        table.push(Column::of(quantity), values);
+    }
+    table
+}
+
+/// The table of the actual end forces and driving forces at the snapshots (`name`:
+/// `P_B_i`, `P_C_i`, `F_a_i` per link).
+pub fn force_table(name: &str, t: &[f64], snapshots: &[MachineSnapshot]) -> Table {
+    use crate::{Column, Quantity as Q};
+    let mut table = Table::new(name, t);
+    for i in 0..3 {
+        table.push(
+            Column::link(Q::AxialForceB, i),
+            snapshots.iter().map(|s| s.axial_force_b[i]).collect(),
+        );
+        table.push(
+            Column::link(Q::AxialForceC, i),
+            snapshots.iter().map(|s| s.axial_force_c[i]).collect(),
+        );
+        table.push(
+            Column::link(Q::CoupledDrivingForce, i),
+            snapshots.iter().map(|s| s.driving_force[i]).collect(),
+        );
+    }
+    table
+}

@@ -1,0 +1,97 @@
+//! The geometrically nonlinear model ([`NonlinearSystem`]) as a scene model: its coordinates
+//! are node positions and angles, not modal amplitudes, so its deflection (from the deformed
+//! chord, which needs the time), energies and tables come from the model's own output.
+
+use flexprr_integrators::{OdeSystem, Solution};
+
+use crate::model::{force_table, platform_deviation_table};
+use crate::{
+    Column, DynamicsError, Machine, MachineSnapshot, ModelCounters, ModelEnergies, NonlinearSystem,
+    Quantity as Q, SceneModel, SliderMotion, Table,
+};
+
+impl SceneModel for NonlinearSystem {
+    fn kind(&self) -> &'static str {
+        "nonlinear"
+    }
+    fn machine(&self) -> &Machine {
+        NonlinearSystem::machine(self)
+    }
+    /// The generalized coordinates (platform pose and every link's nodal coordinates).
+    fn modes(&self) -> usize {
+        self.coordinates()
+    }
+    /// Link `link`'s nodal coordinates (the platform's three come first).
+    fn link_range(&self, link: usize) -> std::ops::Range<usize> {
+        NonlinearSystem::link_range(self, link)
+    }
+    fn take_failure(&mut self) -> Option<DynamicsError> {
+        NonlinearSystem::take_failure(self)
+    }
+    fn counters(&self) -> ModelCounters {
+        ModelCounters {
+            rhs_evaluations: NonlinearSystem::counters(self).rhs_evaluations,
+            inverse_dynamics_solves: 0,
+        }
+    }
+    fn snapshot(&mut self, t: f64, y: &[f64]) -> Result<MachineSnapshot, DynamicsError> {
+        let out = self.output(t, y)?;
+        Ok(MachineSnapshot {
+            t,
+            nominal: out.nominal,
+            platform: out.platform,
+            sliders: out.slider.map(|r| SliderMotion {
+                position: r[0],
+                velocity: r[1],
+                acceleration: r[2],
+            }),
+            axial_force_b: out.axial_force_b,
+            axial_force_c: out.axial_force_c,
+            driving_force: out.driving_force,
+        })
+    }
+    /// The rigid state set by [`NonlinearSystem::start_at`] (at `t = 0` when it was not
+    /// called; NaN, which every integrator refuses, when the kinematics fails there).
+    fn initial_state(&self) -> Vec<f64> {
+        let start = self.start_state();
+        if start.len() == self.dim() {
+            return start.to_vec();
+        }
+        NonlinearSystem::initial_state(self, 0.0).unwrap_or_else(|_| vec![f64::NAN; self.dim()])
+    }
+    /// From the chord of the deflected link ([`NonlinearSystem::deflection_at`]).
+    fn deflection(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
+        self.deflection_at(t, link, xi, y)
+    }
+    fn linear_deflection(&self) -> bool {
+        false
+    }
+    fn platform_follows_links(&self) -> bool {
+        true
+    }
+    /// The kinetic energy of the nodes and the platform, the strain energy of each link.
+    fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
+        let out = self.output(t, y)?;
+        Ok(ModelEnergies {
+            kinetic: Some(out.kinetic_energy),
+            strain: out.link_strain_energy,
+            elastic_kinetic: None,
+        })
+    }
+    /// `platform_deviation` (`dx`, `dy`, `dphi`) and `nonlinear_forces` (`P_B`, `P_C`, `F_a`
+    /// per link, the chords' type-II measure).
+    fn tables(&mut self, solution: &Solution) -> Result<Vec<Table>, DynamicsError> {
+        let n_out = solution.len();
+        let mut snapshots = Vec::with_capacity(n_out);
+        let mut measure = Vec::with_capacity(n_out);
+        for k in 0..n_out {
+            let (t, y) = (solution.t[k], solution.y(k));
+            measure.push(self.output(t, y)?.type_ii_measure);
+            snapshots.push(self.snapshot(t, y)?);
+        }
+        let pose = platform_deviation_table(&solution.t, &snapshots);
+        let mut forces = force_table("nonlinear_forces", &solution.t, &snapshots);
+        forces.push(Column::of(Q::TypeIIMeasure), measure);
+        Ok(vec![pose, forces])
+    }
+}
