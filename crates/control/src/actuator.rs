@@ -1,0 +1,363 @@
+//! Actuators: what turns a slider's force command into the force on the slider.
+//!
+//! [`MotorBallScrew`] (a rotary servo motor driving the slider through a ball screw of lead
+//! `p`, transmission ratio `g = 2 pi / p` rad per metre):
+//!
+//! ```text
+//! motor speed        omega = g rho'                                   (rad/s; rev/s = rho' / p)
+//! reflected mass     m_r = J g^2                                      (added to the slider)
+//! torque command     tau_c = F_c / (g eta)                            (eta: screw efficiency)
+//! torque             tau = clamp(tau_c, -tau_peak, tau_peak)          (saturation at the peak)
+//! friction torque    tau_f = b omega + tau_C tanh(omega / omega_s)    (viscous + smoothed Coulomb)
+//! force on slider    F = g eta (tau - tau_f)
+//! ```
+//!
+//! The rotor's inertia torque `J omega'` seen at the slider is `g J omega' = m_r rho''`: the
+//! model adds `m_r` to the slider's mass. The smoothing speed `omega_s` replaces the sign of
+//! the Coulomb friction by `tanh(omega / omega_s)` (a continuous right-hand side; within
+//! 0.1 % of the full Coulomb torque above `4 omega_s`). The efficiency is the same in both
+//! directions of the power flow (a simple model: a back-driven screw is usually less
+//! efficient). The speed limit is not enforced: a run reports when and on which leg the
+//! motor speed exceeds it.
+
+use crate::ControlError;
+use crate::error::check;
+
+/// What an actuator does at one instant.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ActuatorOutput {
+    /// Force on the slider along its guide (N).
+    pub force: f64,
+    /// Motor torque after saturation (N m), where a motor is modelled.
+    pub torque: Option<f64>,
+    /// Motor speed (rev/s), where a motor is modelled.
+    pub motor_speed: Option<f64>,
+    /// Whether the command was beyond the actuator's limit and was clipped.
+    pub saturated: bool,
+}
+
+/// The ratings a motion is checked against.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotorRatings {
+    /// Peak torque (N m): the command saturates here.
+    pub peak_torque: f64,
+    /// Continuous torque (N m): the RMS torque of a motion should stay below it.
+    pub continuous_torque: f64,
+    /// Largest speed (rev/s).
+    pub max_speed: f64,
+}
+
+/// An actuator of one slider.
+///
+/// Required: the force on the slider for a force command at a slider velocity, and a name.
+/// Provided: no reflected mass, no limit, no ratings (an ideal force).
+///
+/// ```
+/// use flexprr_control::{Actuator, ActuatorOutput};
+///
+/// /// An ideal force that clips at 500 N.
+/// #[derive(Debug)]
+/// struct Clipped;
+/// impl Actuator for Clipped {
+///     fn apply(&self, command: f64, _velocity: f64) -> ActuatorOutput {
+///         let force = command.clamp(-500.0, 500.0);
+///         ActuatorOutput { force, saturated: command.abs() > 500.0, ..Default::default() }
+///     }
+///     fn force_limit(&self) -> f64 { 500.0 }
+///     fn name(&self) -> &'static str { "clipped" }
+/// }
+/// assert!(Clipped.apply(800.0, 0.0).saturated);
+/// ```
+pub trait Actuator: std::fmt::Debug + Send + Sync {
+    /// The force on the slider (and the motor's state) for the force command `command` (N)
+    /// at the slider velocity `velocity` (m/s). Must not allocate.
+    fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput;
+    /// The actuator's name in scene files (`force`, `motor_ballscrew`).
+    fn name(&self) -> &'static str;
+    /// Mass the actuator adds to the slider along its guide (kg): the reflected rotor inertia.
+    fn reflected_mass(&self) -> f64 {
+        0.0
+    }
+    /// The largest force it can deliver (N), for anti-windup.
+    fn force_limit(&self) -> f64 {
+        f64::INFINITY
+    }
+    /// The motor ratings, where a motor is modelled.
+    fn ratings(&self) -> Option<MotorRatings> {
+        None
+    }
+    /// The motor torque (N m) and speed (rev/s) needed to deliver the force `force` (N) on
+    /// the slider at the velocity `velocity` (m/s) with no saturation, where a motor is
+    /// modelled (the feasibility check of a commanded motion).
+    fn required(&self, force: f64, velocity: f64) -> Option<(f64, f64)> {
+        let _ = (force, velocity);
+        None
+    }
+}
+
+/// `kind = "force"`: the command is the force.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct IdealForce;
+
+impl Actuator for IdealForce {
+    fn apply(&self, command: f64, _velocity: f64) -> ActuatorOutput {
+        ActuatorOutput {
+            force: command,
+            ..ActuatorOutput::default()
+        }
+    }
+    fn name(&self) -> &'static str {
+        "force"
+    }
+}
+
+/// `kind = "motor_ballscrew"`: a servo motor driving the slider through a ball screw (see
+/// the module documentation for the equations).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotorBallScrew {
+    /// Rotor (plus coupling and screw) inertia `J` (kg m^2).
+    pub rotor_inertia: f64,
+    /// Screw lead `p` (m/rev).
+    pub lead: f64,
+    /// Screw efficiency `eta` (0 < eta <= 1).
+    pub efficiency: f64,
+    /// Ratings: peak and continuous torque, largest speed.
+    pub ratings: MotorRatings,
+    /// Viscous friction `b` at the motor shaft (N m s/rad).
+    pub viscous_friction: f64,
+    /// Coulomb friction torque `tau_C` at the motor shaft (N m).
+    pub coulomb_friction: f64,
+    /// Speed `omega_s` of the Coulomb friction's smoothing (rev/s).
+    pub coulomb_smoothing: f64,
+}
+
+impl MotorBallScrew {
+    /// Checks every parameter.
+    ///
+    /// # Errors
+    /// The first parameter out of its range, by its key.
+    pub fn validated(self) -> Result<Self, ControlError> {
+        check(
+            "rotor_inertia",
+            self.rotor_inertia,
+            0.0,
+            false,
+            "must be finite and >= 0 (kg m^2)",
+        )?;
+        check(
+            "lead",
+            self.lead,
+            0.0,
+            true,
+            "must be finite and > 0 (m/rev)",
+        )?;
+        check(
+            "efficiency",
+            self.efficiency,
+            0.0,
+            true,
+            "must be in (0, 1]",
+        )?;
+        if self.efficiency > 1.0 {
+            return Err(ControlError::InvalidParameter {
+                name: "efficiency",
+                value: self.efficiency,
+                rule: "must be in (0, 1]",
+            });
+        }
+        let r = self.ratings;
+        check(
+            "peak_torque",
+            r.peak_torque,
+            0.0,
+            true,
+            "must be finite and > 0 (N m)",
+        )?;
+        check(
+            "continuous_torque",
+            r.continuous_torque,
+            0.0,
+            true,
+            "must be finite and > 0 (N m)",
+        )?;
+        if r.continuous_torque > r.peak_torque {
+            return Err(ControlError::InvalidParameter {
+                name: "continuous_torque",
+                value: r.continuous_torque,
+                rule: "must not exceed peak_torque",
+            });
+        }
+        check(
+            "max_speed",
+            r.max_speed,
+            0.0,
+            true,
+            "must be finite and > 0 (rev/s)",
+        )?;
+        check(
+            "viscous_friction",
+            self.viscous_friction,
+            0.0,
+            false,
+            "must be finite and >= 0 (N m s/rad)",
+        )?;
+        check(
+            "coulomb_friction",
+            self.coulomb_friction,
+            0.0,
+            false,
+            "must be finite and >= 0 (N m)",
+        )?;
+        check(
+            "coulomb_smoothing",
+            self.coulomb_smoothing,
+            0.0,
+            true,
+            "must be finite and > 0 (rev/s)",
+        )?;
+        Ok(self)
+    }
+
+    /// Transmission ratio `g = 2 pi / p` (rad per metre of slider travel).
+    pub fn ratio(&self) -> f64 {
+        std::f64::consts::TAU / self.lead
+    }
+
+    /// Friction torque at the motor shaft (N m) at the motor speed `omega` (rad/s).
+    pub fn friction_torque(&self, omega: f64) -> f64 {
+        let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
+        self.viscous_friction * omega + self.coulomb_friction * (omega / smoothing).tanh()
+    }
+}
+
+impl Actuator for MotorBallScrew {
+    fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput {
+        let g = self.ratio();
+        let omega = g * velocity;
+        let wanted = command / (g * self.efficiency);
+        let peak = self.ratings.peak_torque;
+        let torque = wanted.clamp(-peak, peak);
+        ActuatorOutput {
+            force: g * self.efficiency * (torque - self.friction_torque(omega)),
+            torque: Some(torque),
+            motor_speed: Some(velocity / self.lead),
+            saturated: wanted.abs() > peak,
+        }
+    }
+    fn name(&self) -> &'static str {
+        "motor_ballscrew"
+    }
+    fn reflected_mass(&self) -> f64 {
+        let g = self.ratio();
+        self.rotor_inertia * g * g
+    }
+    fn force_limit(&self) -> f64 {
+        self.ratio() * self.efficiency * self.ratings.peak_torque
+    }
+    fn ratings(&self) -> Option<MotorRatings> {
+        Some(self.ratings)
+    }
+    /// The torque that delivers `force` against the friction at `velocity`:
+    /// `tau = F / (g eta) + tau_f(g rho')`, and the speed `rho' / p`.
+    fn required(&self, force: f64, velocity: f64) -> Option<(f64, f64)> {
+        let g = self.ratio();
+        let torque = force / (g * self.efficiency) + self.friction_torque(g * velocity);
+        Some((torque, velocity / self.lead))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn motor() -> MotorBallScrew {
+        MotorBallScrew {
+            rotor_inertia: 1.0e-5,
+            lead: 0.01,
+            efficiency: 0.9,
+            ratings: MotorRatings {
+                peak_torque: 3.5,
+                continuous_torque: 1.2,
+                max_speed: 100.0,
+            },
+            viscous_friction: 1.0e-4,
+            coulomb_friction: 0.02,
+            coulomb_smoothing: 0.01,
+        }
+        .validated()
+        .unwrap()
+    }
+
+    #[test]
+    fn the_ball_screw_reflects_inertia_and_force_by_its_ratio() {
+        let m = motor();
+        let g = std::f64::consts::TAU / 0.01;
+        assert!((m.reflected_mass() - 1.0e-5 * g * g).abs() <= 1e-12);
+        // Below the peak and at rest the commanded force arrives (friction tanh(0) = 0).
+        let out = m.apply(100.0, 0.0);
+        assert!((out.force - 100.0).abs() <= 1e-9, "{out:?}");
+        assert!(!out.saturated);
+        // Power balance without friction: F v = eta tau omega.
+        let frictionless = MotorBallScrew {
+            viscous_friction: 0.0,
+            coulomb_friction: 0.0,
+            ..m
+        };
+        let (v, f) = (0.5, 300.0);
+        let out = frictionless.apply(f, v);
+        let (tau, omega) = (out.torque.unwrap(), g * v);
+        assert!((out.force * v - 0.9 * tau * omega).abs() <= 1e-9 * f * v);
+        assert!((out.motor_speed.unwrap() - 50.0).abs() <= 1e-12);
+        // `required` inverts `apply` below the peak.
+        let (torque, _) = m.required(f, v).unwrap();
+        let back = m.apply(g * 0.9 * torque, v);
+        assert!((back.force - f).abs() <= 1e-9 * f, "{back:?}");
+    }
+
+    #[test]
+    fn the_torque_saturates_at_the_peak_and_says_so() {
+        let m = motor();
+        let limit = m.force_limit();
+        let out = m.apply(2.0 * limit, 0.0);
+        assert!(out.saturated);
+        assert!((out.torque.unwrap() - 3.5).abs() <= 1e-12);
+        assert!((out.force - limit).abs() <= 1e-9 * limit);
+    }
+
+    #[test]
+    fn the_coulomb_friction_opposes_the_motion_and_is_smooth() {
+        let m = MotorBallScrew {
+            viscous_friction: 0.0,
+            ..motor()
+        };
+        let g = m.ratio();
+        // Well above the smoothing speed: the full Coulomb torque, opposing the motion.
+        let fast = 4.0 * m.coulomb_smoothing * m.lead;
+        assert!((m.friction_torque(g * fast) / 0.02 - 1.0).abs() < 1e-3);
+        assert!(m.apply(0.0, -fast).force > 0.0);
+        // Continuous through zero speed.
+        assert!(m.friction_torque(0.0).abs() <= 0.0);
+    }
+
+    #[test]
+    fn bad_parameters_are_refused_by_key() {
+        let e = MotorBallScrew {
+            lead: 0.0,
+            ..motor()
+        }
+        .validated()
+        .unwrap_err();
+        assert!(e.to_string().starts_with("lead = 0"), "{e}");
+        let e = MotorBallScrew {
+            efficiency: 1.5,
+            ..motor()
+        }
+        .validated()
+        .unwrap_err();
+        assert!(e.to_string().contains("(0, 1]"), "{e}");
+        let mut bad = motor();
+        bad.ratings.continuous_torque = 5.0;
+        let e = bad.validated().unwrap_err();
+        assert!(e.to_string().contains("peak_torque"), "{e}");
+    }
+}

@@ -1,0 +1,35 @@
+//! Errors of the control layer.
+
+use thiserror::Error;
+
+/// A controller or actuator parameter that cannot work, with its name and the rule.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum ControlError {
+    /// A parameter out of its range.
+    #[error("{name} = {value}: {rule}")]
+    InvalidParameter {
+        /// The parameter's key (`kp`, `lead`, ...).
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        rule: &'static str,
+    },
+}
+
+/// `value` if it is finite and at least `min` (strictly above when `strict`), else the error.
+pub(crate) fn check(
+    name: &'static str,
+    value: f64,
+    min: f64,
+    strict: bool,
+    rule: &'static str,
+) -> Result<f64, ControlError> {
+    let ok = value.is_finite() && if strict { value > min } else { value >= min };
+    if ok {
+        Ok(value)
+    } else {
+        Err(ControlError::InvalidParameter { name, value, rule })
+    }
+}

@@ -1,0 +1,24 @@
+//! Controllers and actuators of the 3-PRR's sliders (docs/control.md). This crate knows no
+//! physics of the machine: a [`Controller`] maps the commanded and measured slider states
+//! (and a feedforward) to force commands, an [`Actuator`] turns a force command into the
+//! force on the slider, with its own inertia, friction and limits. The actuated models of
+//! `flexprr-dynamics` call both through these traits.
+//!
+//! * [`Controller`]: one required method, [`Controller::command`]; continuous
+//!   ([`Controller::period`] = 0) or sampled with a zero-order hold; optional states of its own
+//!   (an integrator) whose rates it writes.
+//! * [`Pid`]: `kind = "pd"` and `kind = "pid"` on each slider's position error, with the
+//!   rigid feedforward and anti-windup by conditional integration.
+//! * [`Actuator`]: [`IdealForce`] (`kind = "force"`) and [`MotorBallScrew`]
+//!   (`kind = "motor_ballscrew"`: reflected rotor inertia, efficiency, torque saturation,
+//!   viscous and smoothed Coulomb friction, speed limit reported).
+
+mod actuator;
+mod controller;
+mod error;
+mod pid;
+
+pub use actuator::{Actuator, ActuatorOutput, IdealForce, MotorBallScrew, MotorRatings};
+pub use controller::{ControlInput, Controller, SliderState};
+pub use error::ControlError;
+pub use pid::Pid;
