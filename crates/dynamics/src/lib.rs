@@ -12,6 +12,7 @@
 //!   nonlinear 3-PRR [`NonlinearSystem`], for large deflection and collapse.
 //! * [`Formulation`]: the named formulations `paper` and `consistent` and their switches.
 
+mod actuation;
 mod axial;
 mod column;
 mod coupled;
@@ -26,6 +27,7 @@ mod model;
 pub mod nonlinear;
 pub mod paper;
 
+pub use actuation::Actuation;
 pub use axial::{
     AxialForceModel, AxialInput, JointReactionAxialForce, NoAxialForce, PaperAxialForce, end_forces,
 };
@@ -41,7 +43,7 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{
-    MachineSnapshot, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION, SceneModel,
+    ActuatorState, MachineSnapshot, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION, SceneModel,
     SliderMotion, force_table, platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};

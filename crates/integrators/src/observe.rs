@@ -286,6 +286,7 @@ pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
     let mut y_start = y0.to_vec();
     for seg in 0..=stops.len() {
         let t_stop = stops.get(seg).copied().unwrap_or(t_end);
+        system.segment_start(t_start, &y_start);
         let mut stepper = match integrator.start(system, t_start, &y_start, t_stop) {
             Ok(s) => s,
             Err(e) => {

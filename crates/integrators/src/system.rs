@@ -78,6 +78,14 @@ pub trait OdeSystem {
     fn linear_form(&mut self) -> Option<&mut dyn LinearSecondOrder> {
         None
     }
+
+    /// Called by the stepping loop at the start of every integration segment (the start
+    /// time and every stop time) with the state there, before the integrator (re)starts: a
+    /// system with discrete updates (a sampled controller's zero-order hold) takes them here,
+    /// at stop times it asked for. Between two such calls the right-hand side must be smooth.
+    fn segment_start(&mut self, t: f64, y: &[f64]) {
+        let _ = (t, y);
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -98,6 +106,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     }
     fn linear_form(&mut self) -> Option<&mut dyn LinearSecondOrder> {
         (**self).linear_form()
+    }
+    fn segment_start(&mut self, t: f64, y: &[f64]) {
+        (**self).segment_start(t, y);
     }
 }
 

@@ -118,7 +118,11 @@ pub fn integrate_model(
         },
         guard: DivergenceGuard::new(model),
     };
-    let stops = stop_times(scene);
+    let mut stops = stop_times(scene);
+    let t_end = t[t.len() - 1];
+    stops.extend(model.stop_times(t0, t_end));
+    stops.sort_by(f64::total_cmp);
+    stops.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end.abs().max(1.0));
     let result = integrator.solve_dyn(model, t0, &y0, t, &stops, &mut observer);
     let mut max_deflection_m = observer.guard.max_deflection();
     if !model.linear_deflection() {

@@ -102,6 +102,7 @@ impl SceneModel for Oscillators {
             axial_force_b: [0.0; 3],
             axial_force_c: [0.0; 3],
             driving_force: [0.0; 3],
+            actuators: None,
         })
     }
 }

@@ -5,10 +5,10 @@
 
 use flexprr_integrators::Solution;
 
-use crate::model::{force_table, platform_deviation_table};
+use crate::model::{force_table, modal_energies, platform_deviation_table};
 use crate::{
-    Column, CoupledSystem, DynamicsError, Machine, MachineSnapshot, ModelCounters, Quantity as Q,
-    SceneModel, SliderMotion, Table,
+    Column, CoupledSystem, DynamicsError, Machine, MachineSnapshot, ModelCounters, ModelEnergies,
+    Quantity as Q, SceneModel, SliderMotion, Table,
 };
 
 /// Largest deflection of a coupled run, as a fraction of the link length, beyond which the
@@ -27,8 +27,9 @@ impl SceneModel for CoupledSystem {
     fn machine(&self) -> &Machine {
         CoupledSystem::machine(self)
     }
+    /// The modal coordinates, and the sliders when they are actuated.
     fn modes(&self) -> usize {
-        CoupledSystem::modes(self)
+        self.coordinates()
     }
     fn link_range(&self, link: usize) -> std::ops::Range<usize> {
         CoupledSystem::link_range(self, link)
@@ -37,9 +38,10 @@ impl SceneModel for CoupledSystem {
         CoupledSystem::take_failure(self)
     }
     fn counters(&self) -> ModelCounters {
+        let c = CoupledSystem::counters(self);
         ModelCounters {
-            rhs_evaluations: CoupledSystem::counters(self).rhs_evaluations,
-            inverse_dynamics_solves: 0,
+            rhs_evaluations: c.rhs_evaluations,
+            inverse_dynamics_solves: c.inverse_dynamics_solves,
         }
     }
     fn snapshot(&mut self, t: f64, y: &[f64]) -> Result<MachineSnapshot, DynamicsError> {
@@ -57,10 +59,65 @@ impl SceneModel for CoupledSystem {
             axial_force_b: out.axial_force_b,
             axial_force_c: out.axial_force_c,
             driving_force: out.driving_force,
+            actuators: out.actuators,
         })
     }
     fn platform_follows_links(&self) -> bool {
         true
+    }
+    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
+        self.sample_times(t0, t1)
+    }
+    /// The modal energies and the kinetic energy of the whole machine: sliders (with the
+    /// actuators' reflected inertia), platform, and each link's
+    /// `int rhoA |r'|^2 / 2 dx` for `r' = rho' u + x b' n + w' n - w b' e` (the velocity of the
+    /// model's link points, foreshortening left out as in its equations):
+    /// `m rho'^2 / 2 + I_B b'^2 / 2 + (m l / 2) rho' b' sin(a - b) + eta'^T M eta' / 2
+    /// + b'^2 eta^T M eta / 2 + rho' sin(a - b) m_psi.eta' - rho' b' cos(a - b) m_psi.eta
+    /// + l b' m_xipsi.eta'`.
+    fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
+        let out = self.output(t, y)?;
+        let mut energies = modal_energies(self, y);
+        let slider_mass = self.slider_masses();
+        let (n, coordinates) = (CoupledSystem::modes(self), self.coordinates());
+        let machine = self.machine();
+        let v = out.platform.velocity;
+        let mut kinetic = 0.5
+            * (machine.platform_mass * (v.x * v.x + v.y * v.y)
+                + machine.platform_inertia * v.z * v.z);
+        for i in 0..3 {
+            let link = &machine.links[i];
+            let ints = &link.integrals;
+            let range = self.link_range(i);
+            let (eta, rate) = (&y[range.clone()], &y[coordinates + range.start..coordinates + range.end]);
+            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+            let (mass, l) = (link.mass(), link.length());
+            let inertia_b = link.centroid_inertia + 0.25 * mass * l * l;
+            let rho_dot = out.slider[i][1];
+            let b_dot = out.chord_angle[i][1];
+            let u = machine.geometry.legs[i].guide.direction.into_inner();
+            let angle = out.chord_angle[i][0];
+            let (e, nrm) = (
+                nalgebra::Vector2::new(angle.cos(), angle.sin()),
+                nalgebra::Vector2::new(-angle.sin(), angle.cos()),
+            );
+            let (sin_ab, cos_ab) = (u.dot(&nrm), u.dot(&e));
+            let m_eta: f64 = (0..eta.len())
+                .map(|j| eta[j] * (0..eta.len()).map(|k| ints.mass[(j, k)] * eta[k]).sum::<f64>())
+                .sum();
+            kinetic += 0.5 * slider_mass[i] * rho_dot * rho_dot
+                + 0.5 * mass * rho_dot * rho_dot
+                + 0.5 * inertia_b * b_dot * b_dot
+                + 0.5 * mass * l * rho_dot * b_dot * sin_ab
+                + energies.elastic_kinetic.map_or(0.0, |k| k[i])
+                + 0.5 * b_dot * b_dot * m_eta
+                + rho_dot * sin_ab * dot(&ints.mass_psi, rate)
+                - rho_dot * b_dot * cos_ab * dot(&ints.mass_psi, eta)
+                + l * b_dot * dot(&ints.mass_xi_psi, rate);
+        }
+        let _ = n;
+        energies.kinetic = Some(kinetic);
+        Ok(energies)
     }
     /// `platform_deviation` (`dx`, `dy`, `dphi`, and the same with the quasi-static axial
     /// stretch) and `coupled_forces` (`P_B`, `P_C`, `F_a` per link, the largest chord

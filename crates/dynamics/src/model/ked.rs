@@ -54,6 +54,7 @@ impl SceneModel for ModalSystem {
             axial_force_b: ends.map(|e| e.0),
             axial_force_c: ends.map(|e| e.1),
             driving_force: reactions.driving_force,
+            actuators: None,
         })
     }
 }

@@ -39,6 +39,16 @@ pub struct SliderMotion {
     pub acceleration: f64,
 }
 
+/// An actuator at one instant: the force command its controller gave and what it did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ActuatorState {
+    /// The controller's force command (N).
+    pub command: f64,
+    /// The force on the slider, and the motor's torque, speed and saturation where a motor
+    /// is modelled.
+    pub output: flexprr_control::ActuatorOutput,
+}
+
 /// The machine as a model sees it at one `(t, y)`: what outputs, the viewer, studies and
 /// benchmarks read, for any model kind.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,6 +69,9 @@ pub struct MachineSnapshot {
     /// Force each slider's actuator exerts along its guide (N): the force needed to move it
     /// on its path where the sliders are prescribed.
     pub driving_force: [f64; 3],
+    /// The actuators' commands and outputs, where the sliders are driven by actuators under
+    /// a controller (`None` where they are prescribed).
+    pub actuators: Option<[ActuatorState; 3]>,
 }
 
 impl MachineSnapshot {
@@ -94,6 +107,25 @@ fn half_quadratic_form(m: &faer::Mat<f64>, v: &[f64]) -> f64 {
         }
     }
     0.5 * s
+}
+
+/// Each link's strain energy `eta^T Kf eta / 2` and elastic kinetic energy
+/// `eta'^T M eta' / 2` of a model whose coordinates are the links' assumed modes.
+pub(crate) fn modal_energies<M: SceneModel + ?Sized>(model: &M, y: &[f64]) -> ModelEnergies {
+    let n = model.modes();
+    let mut strain = [0.0; 3];
+    let mut kinetic = [0.0; 3];
+    for i in 0..3 {
+        let ints = &model.machine().links[i].integrals;
+        let r = model.link_range(i);
+        strain[i] = half_quadratic_form(&ints.stiffness, &y[r.clone()]);
+        kinetic[i] = half_quadratic_form(&ints.mass, &y[n + r.start..n + r.end]);
+    }
+    ModelEnergies {
+        kinetic: None,
+        strain,
+        elastic_kinetic: Some(kinetic),
+    }
 }
 
 /// The dynamical system of a scene: an [`OdeSystem`] whose state holds the links' modal (or
@@ -134,6 +166,7 @@ fn half_quadratic_form(m: &faer::Mat<f64>, v: &[f64]) -> f64 {
 ///             axial_force_b: [0.0; 3],
 ///             axial_force_c: [0.0; 3],
 ///             driving_force: [0.0; 3],
+///             actuators: None,
 ///         })
 ///     }
 /// }
@@ -193,20 +226,13 @@ pub trait SceneModel: OdeSystem + Send {
     /// A model that needs kinematics for them may fail there.
     fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
         let _ = t;
-        let n = self.modes();
-        let mut e = ModelEnergies {
-            elastic_kinetic: Some([0.0; 3]),
-            ..ModelEnergies::default()
-        };
-        for i in 0..3 {
-            let ints = &self.machine().links[i].integrals;
-            let r = self.link_range(i);
-            e.strain[i] = half_quadratic_form(&ints.stiffness, &y[r.clone()]);
-            if let Some(k) = e.elastic_kinetic.as_mut() {
-                k[i] = half_quadratic_form(&ints.mass, &y[n + r.start..n + r.end]);
-            }
-        }
-        Ok(e)
+        Ok(modal_energies(self, y))
+    }
+    /// Times strictly inside `(t0, t1)` where the integration must stop and restart (a
+    /// sampled controller's samples); the trajectory's own breakpoints come from the scene.
+    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
+        let _ = (t0, t1);
+        Vec::new()
     }
     /// The model's own tables at the output times of `solution` (say, the coupled model's
     /// platform deviation and chord forces); none by default.

@@ -48,6 +48,7 @@ impl SceneModel for NonlinearSystem {
             axial_force_b: out.axial_force_b,
             axial_force_c: out.axial_force_c,
             driving_force: out.driving_force,
+            actuators: None,
         })
     }
     /// The rigid state set by [`NonlinearSystem::start_at`] (at `t = 0` when it was not

@@ -1,0 +1,217 @@
+//! The sliders as degrees of freedom, driven by their actuators under a controller
+//! (docs/control.md): the control input of one evaluation, the actuator forces, and the
+//! zero-order hold of a sampled controller.
+
+use std::sync::Arc;
+
+use flexprr_control::{ActuatorOutput, ControlInput, Controller, SliderState};
+use flexprr_kinematics::{LegKinematics, MachineState};
+
+use crate::{DynamicsError, Machine, inverse_dynamics};
+
+pub use flexprr_control::Actuator;
+
+/// The controller and the three actuators of an actuated model.
+#[derive(Debug, Clone)]
+pub struct Actuation {
+    /// The control law (continuous or sampled).
+    pub controller: Arc<dyn Controller>,
+    /// The actuator of each slider.
+    pub actuators: [Arc<dyn Actuator>; 3],
+}
+
+/// One sample of a sampled controller: from `t` on the command `command` is held.
+#[derive(Debug, Clone)]
+struct Sample {
+    t: f64,
+    command: [f64; 3],
+    /// The law's states at the sample (advanced by `rate * period` to the next one).
+    states: Vec<f64>,
+    rates: Vec<f64>,
+}
+
+/// The actuation of a model with its running state.
+#[derive(Debug, Clone)]
+pub(crate) struct Actuated {
+    pub(crate) spec: Actuation,
+    /// Slider mass plus the actuator's reflected mass, per slider (kg).
+    pub(crate) slider_mass: [f64; 3],
+    /// Time of the first sample (the start of the run).
+    start: f64,
+    /// The samples taken so far (sampled law only), in time order.
+    samples: Vec<Sample>,
+    /// Scratch for the law's state rates (continuous law: written into `dy`).
+    rates: Vec<f64>,
+}
+
+/// The commanded sliders at `t` (the closed-form inverse kinematics of the trajectory) and
+/// the feedforward: the rigid-body inverse-dynamics driving force of the commanded motion
+/// plus the actuators' reflected inertia `m_r rho_ref''`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Reference {
+    pub(crate) sliders: [SliderState; 3],
+    pub(crate) feedforward: [f64; 3],
+}
+
+impl Reference {
+    /// The reference of the commanded state `rigid` at `t`.
+    ///
+    /// # Errors
+    /// A singular rigid inverse dynamics (a type-II pose of the commanded motion).
+    pub(crate) fn of<L: AsRef<LegKinematics>>(
+        machine: &Machine,
+        actuated: &Actuated,
+        rigid: &MachineState<L>,
+        t: f64,
+    ) -> Result<Self, DynamicsError> {
+        let forces = inverse_dynamics(machine, rigid, None, t)?;
+        let legs: [&LegKinematics; 3] = std::array::from_fn(|i| rigid.legs[i].as_ref());
+        let sliders = std::array::from_fn(|i| SliderState {
+            position: legs[i].rho,
+            velocity: legs[i].rho_dot,
+            acceleration: legs[i].rho_ddot,
+        });
+        let feedforward = std::array::from_fn(|i| {
+            forces.driving_force[i] + actuated.spec.actuators[i].reflected_mass() * legs[i].rho_ddot
+        });
+        Ok(Self {
+            sliders,
+            feedforward,
+        })
+    }
+}
+
+impl Actuated {
+    /// The actuation of `machine`'s sliders, started at `start`.
+    pub(crate) fn new(spec: Actuation, machine: &Machine, start: f64) -> Self {
+        let slider_mass =
+            std::array::from_fn(|i| machine.slider_mass[i] + spec.actuators[i].reflected_mass());
+        let rates = vec![0.0; spec.controller.states()];
+        Self {
+            spec,
+            slider_mass,
+            start,
+            samples: Vec::new(),
+            rates,
+        }
+    }
+
+    /// Sample period (s), 0 for a continuous law.
+    pub(crate) fn period(&self) -> f64 {
+        self.spec.controller.period()
+    }
+
+    /// Number of the law's states carried in the ODE state (a continuous law's).
+    pub(crate) fn ode_states(&self) -> usize {
+        if self.period() > 0.0 {
+            0
+        } else {
+            self.spec.controller.states()
+        }
+    }
+
+    /// The sample times of a sampled law strictly inside `(t0, t1)`: breakpoints of the
+    /// integration.
+    pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
+        let period = self.period();
+        if period <= 0.0 {
+            return Vec::new();
+        }
+        let first = ((t0 - self.start) / period).floor().max(0.0) as usize + 1;
+        (first..)
+            .map(|k| self.start + k as f64 * period)
+            .take_while(|t| *t < t1)
+            .filter(|t| *t > t0)
+            .collect()
+    }
+
+    /// The control input at `t` for the measured sliders `measured`.
+    pub(crate) fn input<'a>(
+        &self,
+        t: f64,
+        reference: &Reference,
+        measured: [SliderState; 3],
+    ) -> ControlInput<'a> {
+        ControlInput {
+            t,
+            reference: reference.sliders,
+            measured,
+            feedforward: reference.feedforward,
+            force_limit: std::array::from_fn(|i| self.spec.actuators[i].force_limit()),
+            sensors: &[],
+        }
+    }
+
+    /// The force command at `t`: the continuous law now (its state rates into `rates`), or
+    /// the command a sampled law holds at `t`.
+    pub(crate) fn command(
+        &self,
+        input: &ControlInput<'_>,
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> [f64; 3] {
+        let mut force = [0.0; 3];
+        if self.period() > 0.0 {
+            if let Some(sample) = self.held(input.t) {
+                force = sample.command;
+            }
+            return force;
+        }
+        self.spec
+            .controller
+            .command(input, states, &mut force, rates);
+        force
+    }
+
+    /// The sample a sampled law holds at `t` (the last one at or before it).
+    fn held(&self, t: f64) -> Option<&Sample> {
+        let tolerance = 1e-9 * self.period();
+        let k = self.samples.partition_point(|s| s.t <= t + tolerance);
+        k.checked_sub(1).map(|k| &self.samples[k])
+    }
+
+    /// A sample at `t` when `t` is one of the law's sample times (a segment starts there):
+    /// the law's command from the input, held until the next. A sample time already passed
+    /// (the model integrated again from an earlier time) drops the samples from there on.
+    pub(crate) fn sample(&mut self, input: &ControlInput<'_>) {
+        let period = self.period();
+        if period <= 0.0 {
+            return;
+        }
+        let t = input.t;
+        let k = ((t - self.start) / period).round();
+        if k < 0.0 || (t - (self.start + k * period)).abs() > 1e-9 * period {
+            return;
+        }
+        let tolerance = 1e-9 * period;
+        let keep = self.samples.partition_point(|s| s.t < t - tolerance);
+        self.samples.truncate(keep);
+        let states = match self.samples.last() {
+            Some(previous) => previous
+                .states
+                .iter()
+                .zip(&previous.rates)
+                .map(|(x, rate)| x + rate * period)
+                .collect(),
+            None => self.spec.controller.initial_states(),
+        };
+        let mut rates = std::mem::take(&mut self.rates);
+        rates.resize(states.len(), 0.0);
+        let mut command = [0.0; 3];
+        self.spec
+            .controller
+            .command(input, &states, &mut command, &mut rates);
+        self.samples.push(Sample {
+            t,
+            command,
+            states,
+            rates: rates.clone(),
+        });
+        self.rates = rates;
+    }
+
+    /// The actuator outputs for the force commands at the slider velocities.
+    pub(crate) fn apply(&self, command: &[f64; 3], velocity: [f64; 3]) -> [ActuatorOutput; 3] {
+        std::array::from_fn(|i| self.spec.actuators[i].apply(command[i], velocity[i]))
+    }
+}
