@@ -129,12 +129,19 @@ class LegKinematics:
 
 
 def leg_kinematics(scene, i, t):
-    """Closed-form inverse kinematics of leg i at time t (slider behind C_i).
+    """Closed-form inverse kinematics of leg i at time t on the scene's trajectory."""
+    return pose_leg_kinematics(scene, i, *scene.platform_pose(t), t=t)
+
+
+def pose_leg_kinematics(scene, i, pose, vel, acc, t=None):
+    """Closed-form inverse kinematics of leg i for a platform pose (x, y, phi) with its first and
+    second time derivatives (slider behind C_i).
 
     rho = d.u - sqrt(l^2 - (d x u)^2), d = C - A; rho', rho'' from differentiating
     |C - B|^2 = l^2 once and twice; b' = (C' - rho' u).n / l, b'' = (C'' - rho'' u).n / l.
+    Raises ValueError for an unreachable pose (negative discriminant).
     """
-    pose, vel, acc = scene.platform_pose(t)
+    pose, vel, acc = (np.asarray(v, dtype=float) for v in (pose, vel, acc))
     phi, phi_d, phi_dd = pose[2], vel[2], acc[2]
     rc = rotation(phi) @ scene.platform_point(i)
     perp = np.array([-rc[1], rc[0]])
@@ -147,7 +154,8 @@ def leg_kinematics(scene, i, t):
     d = c_pt - a_pt
     disc = l * l - cross2(d, u) ** 2
     if disc < 0.0:
-        raise ValueError(f"leg {i + 1}: pose at t = {t} s is unreachable (discriminant {disc})")
+        where = f"at t = {t} s" if t is not None else f"(x, y, phi) = {tuple(pose)}"
+        raise ValueError(f"leg {i + 1}: pose {where} is unreachable (discriminant {disc})")
     rho = d @ u - np.sqrt(disc)
     b_pt = a_pt + rho * u
     chord = c_pt - b_pt
