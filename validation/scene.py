@@ -237,3 +237,62 @@ def axial_force_coefficients(scene, leg, i, f_b, form):
         raise ValueError(f"unknown axial force form {form!r}")
     rho_a = scene.mass_per_length
     return p0, rho_a * leg.rho_dd * cba, -0.5 * rho_a * leg.beta_d**2
+
+
+def rest_legs(scene, pose):
+    """Rigid inverse kinematics of the three legs at a pose (x, y, phi) at rest."""
+    zero = np.zeros(3)
+    return [pose_leg_kinematics(scene, i, pose, zero, zero) for i in range(3)]
+
+
+def slider_velocity_jacobian(scene, pose):
+    """Rigid-machine velocities per unit slider rate at a pose, by the closure of model.md
+    section 3 and docs/coupled.md: F q' = diag(g_i . u_i) rho', F rows (g_i^T, r_i x g_i),
+    g_i = C_i - B_i, r_i = C_i - p. Then per link B' = rho' u, C' = p' + phi' k x r,
+    b' = (C' - B') . n / l and the centroid velocity v_G = B' + (l/2) b' n.
+
+    Returns J (15 x 3): rows (slider speeds 1-3; link i: v_Gx, v_Gy, b' for i = 1-3; platform
+    x', y', phi'), columns the three slider rates. Raises ValueError at a type-II pose.
+    """
+    legs = rest_legs(scene, pose)
+    p = np.asarray(pose[:2], dtype=float)
+    l = scene.link_length
+    f_mat = np.zeros((3, 3))
+    g_u = np.zeros(3)
+    for i, k in enumerate(legs):
+        g = k.platform_joint - k.slider_point
+        r = k.platform_joint - p
+        f_mat[i] = [g[0], g[1], cross2(r, g)]
+        g_u[i] = g @ scene.guide_direction(i)
+    if abs(np.linalg.det(f_mat)) < 1e-12 * np.linalg.norm(f_mat) ** 3:
+        raise ValueError(f"pose {tuple(pose)} is type-II singular: the platform is not determined by the sliders")
+    jac = np.zeros((15, 3))
+    for col in range(3):
+        rho_d = np.zeros(3)
+        rho_d[col] = 1.0
+        q_d = np.linalg.solve(f_mat, g_u * rho_d)
+        jac[:3, col] = rho_d
+        jac[12:15, col] = q_d
+        for i, k in enumerate(legs):
+            u = scene.guide_direction(i)
+            e = np.array([np.cos(k.beta), np.sin(k.beta)])
+            n = np.array([-e[1], e[0]])
+            r = k.platform_joint - p
+            b_vel = rho_d[i] * u
+            c_vel = q_d[:2] + q_d[2] * np.array([-r[1], r[0]])
+            beta_d = (c_vel - b_vel) @ n / l
+            jac[3 + 3 * i : 5 + 3 * i, col] = b_vel + 0.5 * l * beta_d * n
+            jac[5 + 3 * i, col] = beta_d
+    return jac
+
+
+def slider_mass_matrix(scene, pose):
+    """Mass matrix of the rigid machine in slider coordinates, M_rho = J^T M J (3 x 3), with J of
+    slider_velocity_jacobian and M = diag(m_s (3 sliders); m, m, m l^2/12 (each link, about its
+    centroid); m_p, m_p, I_p): the kinetic energy T = rho'^T M_rho rho' / 2 at rest."""
+    m = scene.link_mass
+    j_link = m * scene.link_length**2 / 12.0
+    diag = [scene.slider_mass] * 3 + [m, m, j_link] * 3
+    diag += [scene.platform_mass, scene.platform_mass, scene.platform_inertia]
+    jac = slider_velocity_jacobian(scene, pose)
+    return jac.T @ np.diag(diag) @ jac
