@@ -232,7 +232,7 @@ def simulate_servo(scene, n_elements=16, step=STEP, kp=KP, kd=KD, spectral_radiu
         raise RuntimeError(f"Exudyn failed: servo f = {scene.frequency} Hz, {n_elements} elements, h = {step}")
     table, extras = collect_servo(scene, mbs, sensors, handles["reference"], kp, kd, feedforward)
     extras["wall_s"] = wall
-    extras["n_steps"] = settings.timeIntegration.numberOfSteps
+    extras["n_steps"] = int(settings.timeIntegration.numberOfSteps)
     return table, extras
 
 
