@@ -154,7 +154,7 @@ def pose_leg_kinematics(scene, i, pose, vel, acc, t=None):
     d = c_pt - a_pt
     disc = l * l - cross2(d, u) ** 2
     if disc < 0.0:
-        where = f"at t = {t} s" if t is not None else f"(x, y, phi) = {tuple(pose)}"
+        where = f"at t = {t} s" if t is not None else f"(x, y, phi) = ({pose[0]:g} m, {pose[1]:g} m, {pose[2]:g} rad)"
         raise ValueError(f"leg {i + 1}: pose {where} is unreachable (discriminant {disc})")
     rho = d @ u - np.sqrt(disc)
     b_pt = a_pt + rho * u
@@ -265,7 +265,10 @@ def slider_velocity_jacobian(scene, pose):
         f_mat[i] = [g[0], g[1], cross2(r, g)]
         g_u[i] = g @ scene.guide_direction(i)
     if abs(np.linalg.det(f_mat)) < 1e-12 * np.linalg.norm(f_mat) ** 3:
-        raise ValueError(f"pose {tuple(pose)} is type-II singular: the platform is not determined by the sliders")
+        raise ValueError(
+            f"pose (x, y, phi) = ({pose[0]:g} m, {pose[1]:g} m, {pose[2]:g} rad) is type-II singular: "
+            "the platform is not determined by the sliders"
+        )
     jac = np.zeros((15, 3))
     for col in range(3):
         rho_d = np.zeros(3)
