@@ -177,8 +177,10 @@ def solve_modes(mass, stiffness, damping, basis, damped):
 def hermite(xi, le):
     """Cable element shape functions and their first and second x-derivatives at xi in [0, 1]
     (positions r0, slope r0', r1, slope r1')."""
-    s = np.array([1 - 3 * xi**2 + 2 * xi**3, le * (xi - 2 * xi**2 + xi**3), 3 * xi**2 - 2 * xi**3, le * (-(xi**2) + xi**3)])
-    ds = np.array([-6 * xi + 6 * xi**2, le * (1 - 4 * xi + 3 * xi**2), 6 * xi - 6 * xi**2, le * (-2 * xi + 3 * xi**2)]) / le
+    s = np.array([1 - 3 * xi**2 + 2 * xi**3, le * (xi - 2 * xi**2 + xi**3),
+                  3 * xi**2 - 2 * xi**3, le * (-(xi**2) + xi**3)])
+    ds = np.array([-6 * xi + 6 * xi**2, le * (1 - 4 * xi + 3 * xi**2),
+                   6 * xi - 6 * xi**2, le * (-2 * xi + 3 * xi**2)]) / le
     dds = np.array([-6 + 12 * xi, le * (-4 + 6 * xi), 6 - 12 * xi, le * (-2 + 6 * xi)]) / le**2
     return s, ds, dds
 
