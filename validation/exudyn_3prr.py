@@ -90,98 +90,137 @@ class SliderPath:
         return self._eval(t)[1]
 
 
-def build_model(scene, n_elements, axial_damping_time=0.0):
-    """Create the Exudyn system. Returns (SC, mbs, handles) with the items needed for output.
+def add_ground(mbs):
+    """Ground object and a ground coordinate marker (for coordinate constraints)."""
+    ground = mbs.AddObject(ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
+    ground_node = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    ground_coordinate = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
+    return ground, ground_coordinate
+
+
+def add_platform(mbs, scene, pose, vel):
+    """The free rigid platform (m_p, I_p) at pose (x, y, phi) with velocity vel. Returns (node, body)."""
+    node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=list(pose), initialVelocities=list(vel)))
+    body = mbs.AddObject(
+        ObjectRigidBody2D(nodeNumber=node, mass=scene.platform_mass, inertia=scene.platform_inertia)
+    )
+    return node, body
+
+
+def add_link(mbs, scene, i, leg, n_elements, axial_damping_time=0.0):
+    """Link i as n_elements ANCF cable elements, straight and unstrained along the rigid chord
+    of `leg` (scene.LegKinematics), with the rigid velocity field B' + x b' n (nodal slope
+    rates b' n). Returns (nodes, elements).
 
     axial_damping_time beta (s): axial damping d = beta EA of the cable elements (stiffness
     proportional, on the axial strain rate only; bending is undamped). 0 = no damping.
     """
+    le = scene.link_length / n_elements
+    e = np.array([np.cos(leg.beta), np.sin(leg.beta)])
+    n = np.array([-e[1], e[0]])
+    u = scene.guide_direction(i)
+    nodes = []
+    for j in range(n_elements + 1):
+        x = j * le
+        pos = leg.slider_point + x * e
+        vel = leg.rho_d * u + x * leg.beta_d * n
+        slope_vel = leg.beta_d * n
+        nodes.append(
+            mbs.AddNode(
+                NodePoint2DSlope1(
+                    referenceCoordinates=[pos[0], pos[1], e[0], e[1]],
+                    initialCoordinates=[0.0, 0.0, 0.0, 0.0],
+                    initialVelocities=[vel[0], vel[1], slope_vel[0], slope_vel[1]],
+                )
+            )
+        )
+    elements = [
+        mbs.AddObject(
+            ObjectANCFCable2D(
+                length=le,
+                massPerLength=scene.mass_per_length,
+                bendingStiffness=scene.bending_stiffness,
+                axialStiffness=scene.axial_stiffness,
+                axialDamping=axial_damping_time * scene.axial_stiffness,
+                nodeNumbers=[nodes[j], nodes[j + 1]],
+            )
+        )
+        for j in range(n_elements)
+    ]
+    return nodes, elements
+
+
+def add_prescribed_slider(mbs, ground_coordinate, node, path=None, b_ref=None):
+    """Coordinate constraints on the x and y coordinates of `node` (a link's first node).
+
+    With a SliderPath, the node follows B_i(t) - B_i(0) (offset user functions; b_ref = B_i(0),
+    the node's reference position); without, it is held at its reference position (locked
+    slider). Position coupling only: a revolute joint at B_i. Returns the two constraints.
+    """
+    constraints = []
+    for c in (0, 1):
+        node_coordinate = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))
+        if path is None:
+            constraints.append(
+                mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[ground_coordinate, node_coordinate]))
+            )
+            continue
+
+        def offset(mbs_, t, item, l_off, c=c, path=path, b_ref=b_ref):
+            return path.position(t)[c] - b_ref[c]
+
+        def offset_t(mbs_, t, item, l_off, c=c, path=path):
+            return path.velocity(t)[c]
+
+        constraints.append(
+            mbs.AddObject(
+                ObjectConnectorCoordinate(
+                    markerNumbers=[ground_coordinate, node_coordinate],
+                    offsetUserFunction=offset,
+                    offsetUserFunction_t=offset_t,
+                )
+            )
+        )
+    return constraints
+
+
+def add_platform_pin(mbs, scene, i, platform, last_element):
+    """Revolute joint (position coupling) between the link's end (x = l_e of its last element)
+    and the platform point c_i. The joint's reaction acts on marker 0, the platform."""
+    le = mbs.GetObjectParameter(last_element, "length")
+    c_loc = scene.platform_point(i)
+    link_end = mbs.AddMarker(MarkerBodyPosition(bodyNumber=last_element, localPosition=[le, 0.0, 0.0]))
+    platform_pt = mbs.AddMarker(
+        MarkerBodyPosition(bodyNumber=platform, localPosition=[c_loc[0], c_loc[1], 0.0])
+    )
+    return mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[platform_pt, link_end]))
+
+
+def check_elements(n_elements):
+    """Elements per link must be even (a node at the mid-point) and at least 2."""
     if n_elements < 2 or n_elements % 2:
         raise ValueError(f"elements per link must be even and >= 2 (mid-point node), got {n_elements}")
+
+
+def build_model(scene, n_elements, axial_damping_time=0.0):
+    """Create the Exudyn system. Returns (SC, mbs, handles) with the items needed for output.
+
+    axial_damping_time beta (s): see add_link.
+    """
+    check_elements(n_elements)
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
-    mbs.AddObject(ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
-    ground_node = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
-    ground_coordinate = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
-
+    _ground, ground_coordinate = add_ground(mbs)
     pose0, vel0, _acc0 = scene.platform_pose(0.0)
-    platform_node = mbs.AddNode(
-        NodeRigidBody2D(referenceCoordinates=list(pose0), initialVelocities=list(vel0))
-    )
-    platform = mbs.AddObject(
-        ObjectRigidBody2D(
-            nodeNumber=platform_node, mass=scene.platform_mass, inertia=scene.platform_inertia
-        )
-    )
-
-    l = scene.link_length
-    le = l / n_elements
+    platform_node, platform = add_platform(mbs, scene, pose0, vel0)
     handles = {"platform_node": platform_node, "links": [], "paths": []}
     for i in range(3):
         k = leg_kinematics(scene, i, 0.0)
-        e = np.array([np.cos(k.beta), np.sin(k.beta)])
-        n = np.array([-e[1], e[0]])
-        u = scene.guide_direction(i)
-        nodes = []
-        for j in range(n_elements + 1):
-            x = j * le
-            pos = k.slider_point + x * e
-            vel = k.rho_d * u + x * k.beta_d * n
-            slope_vel = k.beta_d * n
-            nodes.append(
-                mbs.AddNode(
-                    NodePoint2DSlope1(
-                        referenceCoordinates=[pos[0], pos[1], e[0], e[1]],
-                        initialCoordinates=[0.0, 0.0, 0.0, 0.0],
-                        initialVelocities=[vel[0], vel[1], slope_vel[0], slope_vel[1]],
-                    )
-                )
-            )
-        elements = [
-            mbs.AddObject(
-                ObjectANCFCable2D(
-                    length=le,
-                    massPerLength=scene.mass_per_length,
-                    bendingStiffness=scene.bending_stiffness,
-                    axialStiffness=scene.axial_stiffness,
-                    axialDamping=axial_damping_time * scene.axial_stiffness,
-                    nodeNumbers=[nodes[j], nodes[j + 1]],
-                )
-            )
-            for j in range(n_elements)
-        ]
-
+        nodes, elements = add_link(mbs, scene, i, k, n_elements, axial_damping_time)
         # slider: node coordinates (displacements from the reference B_i(0)) follow B_i(t) - B_i(0)
         path = SliderPath(scene, i)
-        b_ref = k.slider_point.copy()
-        slider_constraints = []
-        for c in (0, 1):
-            node_coordinate = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))
-
-            def offset(mbs_, t, item, l_off, c=c, path=path, b_ref=b_ref):
-                return path.position(t)[c] - b_ref[c]
-
-            def offset_t(mbs_, t, item, l_off, c=c, path=path):
-                return path.velocity(t)[c]
-
-            slider_constraints.append(
-                mbs.AddObject(
-                    ObjectConnectorCoordinate(
-                        markerNumbers=[ground_coordinate, node_coordinate],
-                        offsetUserFunction=offset,
-                        offsetUserFunction_t=offset_t,
-                    )
-                )
-            )
-
-        # platform joint C_i: last point of the last element <-> platform point c_i
-        c_loc = scene.platform_point(i)
-        link_end = mbs.AddMarker(MarkerBodyPosition(bodyNumber=elements[-1], localPosition=[le, 0.0, 0.0]))
-        platform_pt = mbs.AddMarker(
-            MarkerBodyPosition(bodyNumber=platform, localPosition=[c_loc[0], c_loc[1], 0.0])
-        )
-        platform_joint = mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[platform_pt, link_end]))
-
+        slider_constraints = add_prescribed_slider(mbs, ground_coordinate, nodes[0], path, k.slider_point.copy())
+        platform_joint = add_platform_pin(mbs, scene, i, platform, elements[-1])
         handles["paths"].append(path)
         handles["links"].append(
             {
@@ -225,21 +264,15 @@ def add_sensors(mbs, handles, n_elements):
     return s
 
 
-def simulate(scene, n_elements, step, spectral_radius=0.98, solver="alpha", verbose=False,
-             axial_damping_time=0.0, end_time=END_TIME, allow_failure=False):
-    """Run the coupled model from 0 to end_time. Returns (table (rows x COLUMNS), extras dict).
-
-    allow_failure: when the solver stops early (Newton failure near a collapse), keep the data
-    up to that time (extras["solver_ok"] is False) instead of raising.
-    """
-    sc, mbs, handles = build_model(scene, n_elements, axial_damping_time)
-    sensors = add_sensors(mbs, handles, n_elements)
+def solver_settings(end_time, step, spectral_radius=0.98, solver="alpha", verbose=False):
+    """Exudyn simulation settings of the production runs: fixed step, Newton with the Jacobian
+    updated every step, sparse solver, sensors sampled every SAMPLE_PERIOD, no files written.
+    Returns (settings, solver type)."""
     settings = exu.SimulationSettings()
     ti = settings.timeIntegration
     ti.startTime = 0.0
     ti.endTime = end_time
-    n_steps = int(round(end_time / step))
-    ti.numberOfSteps = n_steps
+    ti.numberOfSteps = int(round(end_time / step))
     ti.verboseMode = 1 if verbose else 0
     # Newton with the Jacobian updated every step. The residual has a round-off floor of
     # ~1e-8..1e-7 (forces in N, set by EA/l_e up to 7e8 N/m at 32 elements): the absolute
@@ -262,6 +295,37 @@ def simulate(scene, n_elements, step, spectral_radius=0.98, solver="alpha", verb
         solver_type = exu.DynamicSolverType.TrapezoidalIndex2
     else:
         raise ValueError(f"unknown solver {solver!r}")
+    return settings, solver_type
+
+
+def sample_rows(t):
+    """Indices of the stored sensor rows on the SAMPLE_PERIOD grid (first row per grid point)."""
+    grid = np.round(t / SAMPLE_PERIOD)
+    keep = np.abs(t - grid * SAMPLE_PERIOD) < 1e-9
+    _, first = np.unique(grid[keep], return_index=True)
+    return np.nonzero(keep)[0][first]
+
+
+def chord_frame(b, c):
+    """Unit chord e (B -> C), its normal n = (-e_y, e_x) and the chord length, row-wise."""
+    chord = c - b
+    chord_len = np.linalg.norm(chord, axis=1)
+    e = chord / chord_len[:, None]
+    n = np.stack([-e[:, 1], e[:, 0]], axis=1)
+    return e, n, chord_len
+
+
+def simulate(scene, n_elements, step, spectral_radius=0.98, solver="alpha", verbose=False,
+             axial_damping_time=0.0, end_time=END_TIME, allow_failure=False):
+    """Run the coupled model from 0 to end_time. Returns (table (rows x COLUMNS), extras dict).
+
+    allow_failure: when the solver stops early (Newton failure near a collapse), keep the data
+    up to that time (extras["solver_ok"] is False) instead of raising.
+    """
+    sc, mbs, handles = build_model(scene, n_elements, axial_damping_time)
+    sensors = add_sensors(mbs, handles, n_elements)
+    settings, solver_type = solver_settings(end_time, step, spectral_radius, solver, verbose)
+    n_steps = settings.timeIntegration.numberOfSteps
     t0 = time.time()
     ok = mbs.SolveDynamic(settings, solverType=solver_type, showHints=verbose)
     wall = time.time() - t0
@@ -280,13 +344,8 @@ def collect(scene, mbs, sensors):
         return mbs.GetSensorStoredData(sensors[key])
 
     plat = data("platform")
-    t = plat[:, 0]
-    # keep exactly the samples on the 2.5e-4 s grid
-    grid = np.round(t / SAMPLE_PERIOD)
-    keep = np.abs(t - grid * SAMPLE_PERIOD) < 1e-9
-    _, first = np.unique(grid[keep], return_index=True)
-    idx = np.nonzero(keep)[0][first]
-    t = t[idx]
+    idx = sample_rows(plat[:, 0])
+    t = plat[idx, 0]
     n_rows = len(t)
     out = np.zeros((n_rows, len(COLUMNS)))
     out[:, 0] = t
@@ -299,10 +358,7 @@ def collect(scene, mbs, sensors):
         b = data(f"B{i}")[idx, 1:3]
         m = data(f"M{i}")[idx, 1:3]
         c = data(f"C{i}")[idx, 1:3]
-        chord = c - b
-        chord_len = np.linalg.norm(chord, axis=1)
-        e = chord / chord_len[:, None]
-        n = np.stack([-e[:, 1], e[:, 0]], axis=1)
+        e, n, chord_len = chord_frame(b, c)
         out[:, 1 + i] = np.sum((m - b) * n, axis=1)
         # slider constraints: Lagrange multiplier lambda of g = q_node - offset; the force
         # of the slider on the link node is -lambda (sign confirmed by the independent axial

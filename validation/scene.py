@@ -129,12 +129,19 @@ class LegKinematics:
 
 
 def leg_kinematics(scene, i, t):
-    """Closed-form inverse kinematics of leg i at time t (slider behind C_i).
+    """Closed-form inverse kinematics of leg i at time t on the scene's trajectory."""
+    return pose_leg_kinematics(scene, i, *scene.platform_pose(t), t=t)
+
+
+def pose_leg_kinematics(scene, i, pose, vel, acc, t=None):
+    """Closed-form inverse kinematics of leg i for a platform pose (x, y, phi) with its first and
+    second time derivatives (slider behind C_i).
 
     rho = d.u - sqrt(l^2 - (d x u)^2), d = C - A; rho', rho'' from differentiating
     |C - B|^2 = l^2 once and twice; b' = (C' - rho' u).n / l, b'' = (C'' - rho'' u).n / l.
+    Raises ValueError for an unreachable pose (negative discriminant).
     """
-    pose, vel, acc = scene.platform_pose(t)
+    pose, vel, acc = (np.asarray(v, dtype=float) for v in (pose, vel, acc))
     phi, phi_d, phi_dd = pose[2], vel[2], acc[2]
     rc = rotation(phi) @ scene.platform_point(i)
     perp = np.array([-rc[1], rc[0]])
@@ -147,7 +154,8 @@ def leg_kinematics(scene, i, t):
     d = c_pt - a_pt
     disc = l * l - cross2(d, u) ** 2
     if disc < 0.0:
-        raise ValueError(f"leg {i + 1}: pose at t = {t} s is unreachable (discriminant {disc})")
+        where = f"at t = {t} s" if t is not None else f"(x, y, phi) = ({pose[0]:g} m, {pose[1]:g} m, {pose[2]:g} rad)"
+        raise ValueError(f"leg {i + 1}: pose {where} is unreachable (discriminant {disc})")
     rho = d @ u - np.sqrt(disc)
     b_pt = a_pt + rho * u
     chord = c_pt - b_pt
@@ -229,3 +237,65 @@ def axial_force_coefficients(scene, leg, i, f_b, form):
         raise ValueError(f"unknown axial force form {form!r}")
     rho_a = scene.mass_per_length
     return p0, rho_a * leg.rho_dd * cba, -0.5 * rho_a * leg.beta_d**2
+
+
+def rest_legs(scene, pose):
+    """Rigid inverse kinematics of the three legs at a pose (x, y, phi) at rest."""
+    zero = np.zeros(3)
+    return [pose_leg_kinematics(scene, i, pose, zero, zero) for i in range(3)]
+
+
+def slider_velocity_jacobian(scene, pose):
+    """Rigid-machine velocities per unit slider rate at a pose, by the closure of model.md
+    section 3 and docs/coupled.md: F q' = diag(g_i . u_i) rho', F rows (g_i^T, r_i x g_i),
+    g_i = C_i - B_i, r_i = C_i - p. Then per link B' = rho' u, C' = p' + phi' k x r,
+    b' = (C' - B') . n / l and the centroid velocity v_G = B' + (l/2) b' n.
+
+    Returns J (15 x 3): rows (slider speeds 1-3; link i: v_Gx, v_Gy, b' for i = 1-3; platform
+    x', y', phi'), columns the three slider rates. Raises ValueError at a type-II pose.
+    """
+    legs = rest_legs(scene, pose)
+    p = np.asarray(pose[:2], dtype=float)
+    l = scene.link_length
+    f_mat = np.zeros((3, 3))
+    g_u = np.zeros(3)
+    for i, k in enumerate(legs):
+        g = k.platform_joint - k.slider_point
+        r = k.platform_joint - p
+        f_mat[i] = [g[0], g[1], cross2(r, g)]
+        g_u[i] = g @ scene.guide_direction(i)
+    if abs(np.linalg.det(f_mat)) < 1e-12 * np.linalg.norm(f_mat) ** 3:
+        raise ValueError(
+            f"pose (x, y, phi) = ({pose[0]:g} m, {pose[1]:g} m, {pose[2]:g} rad) is type-II singular: "
+            "the platform is not determined by the sliders"
+        )
+    jac = np.zeros((15, 3))
+    for col in range(3):
+        rho_d = np.zeros(3)
+        rho_d[col] = 1.0
+        q_d = np.linalg.solve(f_mat, g_u * rho_d)
+        jac[:3, col] = rho_d
+        jac[12:15, col] = q_d
+        for i, k in enumerate(legs):
+            u = scene.guide_direction(i)
+            e = np.array([np.cos(k.beta), np.sin(k.beta)])
+            n = np.array([-e[1], e[0]])
+            r = k.platform_joint - p
+            b_vel = rho_d[i] * u
+            c_vel = q_d[:2] + q_d[2] * np.array([-r[1], r[0]])
+            beta_d = (c_vel - b_vel) @ n / l
+            jac[3 + 3 * i : 5 + 3 * i, col] = b_vel + 0.5 * l * beta_d * n
+            jac[5 + 3 * i, col] = beta_d
+    return jac
+
+
+def slider_mass_matrix(scene, pose):
+    """Mass matrix of the rigid machine in slider coordinates, M_rho = J^T M J (3 x 3), with J of
+    slider_velocity_jacobian and M = diag(m_s (3 sliders); m, m, m l^2/12 (each link, about its
+    centroid); m_p, m_p, I_p): the kinetic energy T = rho'^T M_rho rho' / 2 at rest."""
+    m = scene.link_mass
+    j_link = m * scene.link_length**2 / 12.0
+    diag = [scene.slider_mass] * 3 + [m, m, j_link] * 3
+    diag += [scene.platform_mass, scene.platform_mass, scene.platform_inertia]
+    jac = slider_velocity_jacobian(scene, pose)
+    return jac.T @ np.diag(diag) @ jac
