@@ -103,6 +103,49 @@ impl CoupledSystem {
     ///
     /// For link `i`, `M eta_i'' = g_i - l m_xipsi_i b_i'' - (G0 eta_i / l) T_i` with
     /// `b'' = beta_0 + Bs s + Br r` and `T = T_0 + Ts s + Tm m + Tr r`, so
+    /// The configuration-dependent mass matrix `A(eta, t)` of `A eta'' = g` (row-major
+    /// `n x n`; allocating, for inspection and tests): block `(i, j)` is
+    /// `delta_ij M + l m_xipsi_i (Bs_ij dL_j^T) + (G0 eta_i / l)(Ts_ij dL_j^T + Tm_ij m_xipsi_j^T)`
+    /// (docs/coupled.md). Lagrange's equations make it symmetric: the platform's and chords'
+    /// inertia enter through `dq / d eta` and `d b / d eta` on both sides.
+    ///
+    /// # Errors
+    /// As [`CoupledSystem::modal_accelerations`].
+    pub fn mass_matrix(&mut self, t: f64, y: &[f64]) -> Result<Vec<f64>, DynamicsError> {
+        self.check_state(y)?;
+        if self.actuated.is_some() {
+            return Err(DynamicsError::Inconsistent(
+                "the modal mass matrix is that of prescribed sliders; this model's sliders are actuated".into(),
+            ));
+        }
+        let kin = self.kinetics(t, y)?;
+        let n = self.modes;
+        let mut a = vec![0.0; n * n];
+        for (i, link) in self.links.iter().enumerate() {
+            let (off, r) = (self.offsets[i], link.r);
+            let mass = &self.machine.links[i].integrals.mass;
+            for j in 0..r {
+                let row = (off + j) * n;
+                for k in 0..r {
+                    a[row + off + k] = mass[(j, k)];
+                }
+                let lx = link.length * link.mass_xi_psi[j];
+                let kj = self.scratch.g0_eta[off + j];
+                for (c, other) in self.links.iter().enumerate() {
+                    let oc = self.offsets[c];
+                    let ws = lx * kin.beta_s[(i, c)] + kj * kin.tension_s[(i, c)];
+                    let wm = kj * kin.tension_m[(i, c)];
+                    for k in 0..other.r {
+                        a[row + oc + k] +=
+                            ws * self.scratch.length_gradient[oc + k] + wm * other.mass_xi_psi[k];
+                    }
+                }
+            }
+        }
+        Ok(a)
+    }
+
+
     /// `eta_i'' = a_i + h_i r_i - l p_i (Bs s + Br r)_i - q_i (Ts s + Tm m + Tr r)_i` with
     /// `p_i = M^-1 m_xipsi_i` and `q_i = M^-1 G0 eta_i / l`. Projecting on `dL_i` and
     /// `m_xipsi_i` gives 6 equations for `(s, m)` (the Sherman-Morrison-Woodbury reduction of
