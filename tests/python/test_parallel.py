@@ -54,8 +54,10 @@ def test_run_many_on_a_process_pool_executor(scenes, in_process):
 
 
 def test_run_many_refuses_contradictory_options(scenes):
-    with pytest.raises(ValueError, match="processes"):
-        flexprr.run_many(scenes, processes=0)
+    for bad in (0, 10_000, True, 2.0):
+        with pytest.raises(ValueError, match="processes"):
+            flexprr.run_many(scenes, processes=bad)
+    assert flexprr.run_many([], processes=2) == []
     with pytest.raises(ValueError, match="not both"):
         flexprr.run_many(scenes, processes=2, executor=object())
     with pytest.raises(ValueError, match="threads"):

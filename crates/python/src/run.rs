@@ -454,7 +454,14 @@ pub fn run(
     let owned = PyScene::from_any(scene)?;
     let name = owned.name_or_default();
     let outcome = detached(py, progress, 0.01, move |report| {
-        run_one(&owned, &mut |f| report(f))
+        // Only fractions the caller will use cross the channel (the run reports every step).
+        let mut last = f64::NEG_INFINITY;
+        run_one(&owned, &mut |f| {
+            if f >= last + 0.01 || (f >= 1.0 && last < 1.0) {
+                last = f;
+                report(f);
+            }
+        })
     })?;
     outcome_to_py(py, &name, outcome)?
 }

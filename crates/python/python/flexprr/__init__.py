@@ -49,6 +49,10 @@ __all__ = [
 ]
 
 
+# Most worker processes run_many starts (as for threads: far more than any machine's cores).
+_MAX_WORKERS = 256
+
+
 def _process_pool(processes):
     """A process pool whose workers start clean (forkserver, or spawn where there is none).
 
@@ -128,11 +132,13 @@ def run_many(scenes, threads=None, return_exceptions=False, progress=None, proce
         loaded = [s if isinstance(s, Scene) else Scene.load(s) for s in scenes]
         return _run_on_executor(loaded, executor, return_exceptions, progress)
     if processes is not None:
-        if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
-            raise ValueError(f"processes = {processes!r}: expected a positive integer")
+        if isinstance(processes, bool) or not isinstance(processes, int) or not 1 <= processes <= _MAX_WORKERS:
+            raise ValueError(f"processes = {processes!r}: expected 1 to {_MAX_WORKERS}")
         if threads is not None:
             raise ValueError("threads applies to runs in this process; with processes, each worker runs one scene")
         loaded = [s if isinstance(s, Scene) else Scene.load(s) for s in scenes]
-        with _process_pool(processes) as pool:
+        if not loaded:
+            return []
+        with _process_pool(min(processes, len(loaded))) as pool:
             return _run_on_executor(loaded, pool, return_exceptions, progress)
     return _run_many_threads(scenes, threads=threads, return_exceptions=return_exceptions, progress=progress)
