@@ -75,3 +75,39 @@ def test_unreachable_pose_raises_with_its_index():
 def test_bad_shape_is_a_value_error():
     with pytest.raises(ValueError, match=r"\(n, 3\)"):
         flexprr.inverse_kinematics(np.zeros((4, 2)))
+
+
+def scattered_poses():
+    """Poses across the paper's workspace, away from singularities: a grid of centres within
+    6 cm of the home position and orientations from 20 to 70 degrees."""
+    xs, ys, phis = np.meshgrid(np.linspace(-0.06, 0.04, 4), np.linspace(-0.05, 0.05, 3), np.radians([20.0, 45.0, 70.0]))
+    poses = np.column_stack([xs.ravel(), ys.ravel(), phis.ravel()])
+    keep = []
+    for p in poses:
+        try:
+            flexprr.inverse_kinematics(p)
+        except flexprr.KinematicsError:
+            continue
+        keep.append(p)
+    return np.array(keep)
+
+
+def test_forward_kinematics_without_a_guess_inverts_the_inverse():
+    """pose -> rho -> forward_kinematics(rho) -> pose with no guess: one row at a time from
+    the nominal pose, and as a path by continuation from the previous row."""
+    poses = scattered_poses()
+    assert len(poses) >= 20
+    for p in poses:
+        back = flexprr.forward_kinematics(flexprr.inverse_kinematics(p)["rho"])
+        np.testing.assert_allclose(back, p, atol=1e-10)
+    path = circle_poses(np.linspace(0.0, 0.05, 101))
+    np.testing.assert_allclose(flexprr.forward_kinematics(flexprr.inverse_kinematics(path)["rho"]), path, atol=1e-10)
+
+
+def test_forward_kinematics_uses_the_scenes_nominal_pose(root):
+    """A scene whose motion starts far from the paper's start: its own start is the guess."""
+    scene = flexprr.Scene.load(root / "configs" / "pick_and_place.toml")
+    start = scene["trajectory.from"]
+    pose = np.array([start[0], start[1], np.radians(start[2])])
+    rho = flexprr.inverse_kinematics(pose, scene=scene)["rho"]
+    np.testing.assert_allclose(flexprr.forward_kinematics(rho, scene=scene), pose, atol=1e-10)

@@ -2,55 +2,36 @@
 //! `P(x) = p0 + p1 x + p2 x^2` (model.md section 7), from a link description with the schema
 //! of the CLI's `flexprr beam` link files.
 
-use flexprr_beam::{AxialLoad, Coupling, ModalIntegrals, frequencies};
-use flexprr_scene::link::{BasisConfig, MaterialConfig, SectionConfig, build_basis, build_section};
+use flexprr_beam::frequencies;
+use flexprr_scene::ScenarioError;
+use flexprr_scene::link_file::LinkFile;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use serde::Deserialize;
 
 use crate::convert::dict_to_table;
-use crate::errors::{key_error, scene_error};
+use crate::errors::scene_error;
+use crate::progress::detached;
 
-/// A link file (the schema of `flexprr beam`, `docs/beam.md`).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct LinkFile {
-    length: f64,
-    modes: usize,
-    #[serde(default)]
-    coupling: CouplingConfig,
-    material: MaterialConfig,
-    section: SectionConfig,
-    basis: BasisConfig,
-    #[serde(default)]
-    load: LoadConfig,
+/// A link error found in text generated from a dict: the key, without the generated line.
+fn unlocated(error: ScenarioError) -> ScenarioError {
+    match error {
+        ScenarioError::Input { key, message, .. } => ScenarioError::Input {
+            location: None,
+            key,
+            message: format!("link: {message}"),
+        },
+        other => other,
+    }
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, Default)]
-#[serde(rename_all = "kebab-case")]
-enum CouplingConfig {
-    #[default]
-    Full,
-    Diagonal,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-struct LoadConfig {
-    #[serde(default)]
-    p0: f64,
-    #[serde(default)]
-    p1: f64,
-    #[serde(default)]
-    p2: f64,
-}
-
-/// Natural frequencies of one link. `link` is a path to a link file (TOML) or a dict with
-/// its keys (`length`, `modes`, `material`, `section`, `basis`, optional `coupling` and
-/// `load`); `load = (p0, p1, p2)` (N, N/m, N/m^2, tension positive) replaces the file's
-/// load. Returns a dict: `frequencies_hz` and `omega_squared` (arrays, one per mode),
-/// `states`, `buckled`, `critical_load_factor`, `total_mass`.
+/// Natural frequencies of one link. `link` is the path of a link file (TOML, str or
+/// `os.PathLike`; read with the CLI's input checks) or a dict with its keys (`length`,
+/// `modes`, `material`, `section`, `basis`, optional `coupling` and `load`); the schema and
+/// checks are `flexprr beam`'s (`flexprr_scene::link_file`). `load = (p0, p1, p2)` (N, N/m,
+/// N/m^2, tension positive) replaces the file's load. Returns a dict: `frequencies_hz` and
+/// `omega_squared` (arrays, one per mode), `states`, `buckled`, `critical_load_factor`,
+/// `total_mass`, `coupling`.
 #[pyfunction]
 #[pyo3(signature = (link, load = None))]
 pub fn link_frequencies<'py>(
@@ -58,57 +39,51 @@ pub fn link_frequencies<'py>(
     link: &Bound<'py, PyAny>,
     load: Option<(f64, f64, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (file, text) = if let Ok(d) = link.cast::<PyDict>() {
+    let (file, text, from_dict) = if let Ok(d) = link.cast::<PyDict>() {
         let table = dict_to_table(d, "")?;
-        (
-            "<link>".to_string(),
-            toml::to_string(&table).map_err(|e| key_error("", e.to_string()))?,
-        )
-    } else {
-        let path: std::path::PathBuf = link.extract()?;
-        let name = path.display().to_string();
-        let text = std::fs::read_to_string(&path).map_err(|source| {
-            scene_error(flexprr_scene::ScenarioError::Io {
-                path: name.clone(),
-                source,
-            })
+        let text = toml::to_string(&table).map_err(|e| {
+            crate::errors::key_error("", format!("link: cannot be written as TOML: {e}"))
         })?;
-        (name, text)
+        ("<link>".to_string(), text, true)
+    } else {
+        let path: std::path::PathBuf = link.extract().map_err(|_| {
+            pyo3::exceptions::PyTypeError::new_err(
+                "link: expected the path of a link file (str or os.PathLike) or a dict of its keys",
+            )
+        })?;
+        let name = path.display().to_string();
+        let text = py
+            .detach(|| flexprr_scene::read_input_file(&path))
+            .map_err(scene_error)?;
+        (name, text, false)
     };
-    let parsed: LinkFile = flexprr_scene::parse_toml(&file, &text).map_err(scene_error)?;
-    let load = load.map_or(
-        AxialLoad {
-            p0: parsed.load.p0,
-            p1: parsed.load.p1,
-            p2: parsed.load.p2,
-        },
-        |(p0, p1, p2)| AxialLoad { p0, p1, p2 },
-    );
-    let coupling = match parsed.coupling {
-        CouplingConfig::Full => Coupling::Full,
-        CouplingConfig::Diagonal => Coupling::Diagonal,
-    };
-    let computed = py.detach(move || -> Result<_, (String, String)> {
-        let section = build_section(&parsed.material, &parsed.section)?;
-        let basis = build_basis(&parsed.basis, parsed.modes)?;
-        if parsed.modes == 0 || parsed.modes > basis.len() {
-            return Err((
-                "modes".to_string(),
-                format!(
-                    "modes = {} must be between 1 and the {} functions of the basis",
-                    parsed.modes,
-                    basis.len()
-                ),
-            ));
+    let place = |e: ScenarioError| if from_dict { unlocated(e) } else { e };
+    let parsed = LinkFile::parse(&file, &text).map_err(|e| scene_error(place(e)))?;
+    if let Some((p0, p1, p2)) = load {
+        for (key, value) in [("load.p0", p0), ("load.p1", p1), ("load.p2", p2)] {
+            if !value.is_finite() {
+                return Err(crate::errors::key_error(
+                    key,
+                    format!("expected a finite number, got {value:?}"),
+                ));
+            }
         }
-        let integrals = ModalIntegrals::compute(basis.as_ref(), section.as_ref(), parsed.length)
-            .map_err(|e| ("length".to_string(), format!("modal integrals: {e}")))?;
-        let result = frequencies(&integrals, &load, coupling)
-            .map_err(|e| ("load".to_string(), e.to_string()))?;
-        Ok((result, integrals.total_mass, parsed.modes))
+    }
+    let load = load.map_or(parsed.load.axial_load(), |(p0, p1, p2)| {
+        flexprr_beam::AxialLoad { p0, p1, p2 }
     });
-    let (result, mass, reported) =
-        computed.map_err(|(key, message)| key_error(&key, format!("{file}: {message}")))?;
+    let coupling = parsed.coupling.coupling();
+    let computed = detached(py, None, 1.0, move |_| {
+        let link = parsed.build(&file, &text).map_err(place)?;
+        let result =
+            frequencies(&link.integrals, &load, coupling).map_err(|e| ScenarioError::Input {
+                location: None,
+                key: "load".to_string(),
+                message: format!("{file}: {e}"),
+            })?;
+        Ok::<_, ScenarioError>((result, link.integrals.total_mass, link.reported))
+    })?;
+    let (result, mass, reported) = computed.map_err(scene_error)?;
     let modes = &result.modes[..reported];
     let d = PyDict::new(py);
     let hz: Vec<f64> = modes.iter().map(|m| m.frequency_hz).collect();

@@ -1,65 +1,196 @@
 //! Conversions between Python objects, TOML values and JSON values.
+//!
+//! A Python value can be anything: nested without end (a list that contains itself), a
+//! hundred thousand levels deep, a million items long, or an object whose `tolist()` returns
+//! another such object. The conversion walks it with an explicit depth and item budget and
+//! a record of the containers on the current path, so it ends with a [`crate::errors::SceneError`]
+//! naming the key instead of overflowing the stack (which would kill the interpreter).
+//! The TOML and JSON values converted back to Python come from parsed scene files and
+//! `summary.json`, whose depth the TOML parser and the limits below already bound.
 
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
-/// A Python value as a TOML value: `bool`, `int`, `float`, `str`, `dict` (string keys),
-/// `list`/`tuple` and anything NumPy can turn into those through `tolist()`.
+use crate::errors::key_error;
+
+/// Deepest nesting of a value written into a scene (tables and arrays): a scene file needs
+/// at most five levels (`machine.legs.0.anchor.1`), so 32 leaves room and stays far from the
+/// stack's limit.
+pub const MAX_VALUE_DEPTH: usize = 32;
+
+/// Most items (scalars, tables and arrays together) in one value written into a scene:
+/// a long waypoint list has some thousands.
+pub const MAX_VALUE_ITEMS: usize = 1_000_000;
+
+/// Walk state: containers on the current path (by identity) and items seen.
+struct Walk {
+    path: Vec<usize>,
+    items: usize,
+}
+
+/// A Python value as a TOML value: `bool`, `int` (64-bit), `float`, `str`, `dict` (string
+/// keys), `list`/`tuple` and anything with a `tolist()` (NumPy scalars and arrays). `key`
+/// names the value in errors.
+///
+/// # Errors
+/// `SceneError` at `key` for an unsupported type, a cycle, nesting deeper than
+/// [`MAX_VALUE_DEPTH`] or more than [`MAX_VALUE_ITEMS`] items.
 pub fn py_to_toml(value: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+    let mut walk = Walk {
+        path: Vec::new(),
+        items: 0,
+    };
+    convert(value, key, &mut walk)
+}
+
+/// A Python dict with string keys as a TOML table (see [`py_to_toml`]); `prefix` is the
+/// dotted key of the dict, empty for a whole scene.
+///
+/// # Errors
+/// As [`py_to_toml`].
+pub fn dict_to_table(dict: &Bound<'_, PyDict>, prefix: &str) -> PyResult<toml::Table> {
+    let mut walk = Walk {
+        path: Vec::new(),
+        items: 0,
+    };
+    match convert(dict.as_any(), prefix, &mut walk)? {
+        toml::Value::Table(t) => Ok(t),
+        _ => Err(key_error(prefix, "expected a dict".to_string())),
+    }
+}
+
+fn convert(value: &Bound<'_, PyAny>, key: &str, walk: &mut Walk) -> PyResult<toml::Value> {
+    walk.items += 1;
+    if walk.items > MAX_VALUE_ITEMS {
+        return Err(key_error(
+            key,
+            format!("holds more than {MAX_VALUE_ITEMS} items; a scene value is far smaller"),
+        ));
+    }
     if value.is_instance_of::<PyBool>() {
-        return Ok(toml::Value::Boolean(value.extract()?));
+        return Ok(toml::Value::Boolean(value.is_truthy()?));
     }
     if value.is_instance_of::<PyInt>() {
-        return Ok(toml::Value::Integer(value.extract()?));
+        return value
+            .extract::<i64>()
+            .map(toml::Value::Integer)
+            .map_err(|_| {
+                key_error(
+                    key,
+                    format!("the integer {} does not fit in 64 bits", short_repr(value)),
+                )
+            });
     }
     if value.is_instance_of::<PyFloat>() {
         return Ok(toml::Value::Float(value.extract()?));
     }
     if value.is_instance_of::<PyString>() {
-        return Ok(toml::Value::String(value.extract()?));
+        return value
+            .extract::<String>()
+            .map(toml::Value::String)
+            .map_err(|_| {
+                key_error(
+                    key,
+                    "a string that is not valid Unicode text (lone surrogates)".to_string(),
+                )
+            });
     }
-    if let Ok(dict) = value.cast::<PyDict>() {
-        return Ok(toml::Value::Table(dict_to_table(dict, key)?));
+    let is_dict = value.is_instance_of::<PyDict>();
+    let is_seq = value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>();
+    let has_tolist = !is_dict && !is_seq && value.hasattr("tolist").unwrap_or(false);
+    if !(is_dict || is_seq || has_tolist) {
+        return Err(key_error(
+            key,
+            format!(
+                "a value of type {} cannot be written into a scene (expected bool, int, float, str, dict or list)",
+                value
+                    .get_type()
+                    .name()
+                    .map_or_else(|_| "?".to_string(), |n| n.to_string())
+            ),
+        ));
     }
-    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
-        let mut items = Vec::new();
-        for (i, item) in value.try_iter()?.enumerate() {
-            items.push(py_to_toml(&item?, &format!("{key}.{i}"))?);
-        }
-        return Ok(toml::Value::Array(items));
+    // A container (or an object standing for one): check the path for a cycle and the depth.
+    let id = value.as_ptr() as usize;
+    if walk.path.contains(&id) {
+        return Err(key_error(
+            key,
+            "the value contains itself (a cycle); a scene value must be a tree".to_string(),
+        ));
     }
-    // NumPy scalars and arrays.
-    if value.hasattr("tolist")? {
+    if walk.path.len() >= MAX_VALUE_DEPTH {
+        return Err(key_error(
+            key,
+            format!("nested deeper than {MAX_VALUE_DEPTH} levels; a scene needs at most a few"),
+        ));
+    }
+    walk.path.push(id);
+    let out = if is_dict {
+        convert_dict(value, key, walk)
+    } else if is_seq {
+        convert_seq(value, key, walk)
+    } else {
+        // NumPy scalars and arrays: their plain Python form.
         let plain = value.call_method0("tolist")?;
-        if !plain.is(value) {
-            return py_to_toml(&plain, key);
+        if plain.is(value) {
+            Err(key_error(
+                key,
+                "an object whose tolist() returns itself".to_string(),
+            ))
+        } else {
+            convert(&plain, key, walk)
         }
-    }
-    Err(PyTypeError::new_err(format!(
-        "{key}: a value of type {} cannot be written into a scene (expected bool, int, float, str, dict or list)",
-        value.get_type().name()?
-    )))
+    };
+    walk.path.pop();
+    out
 }
 
-/// A Python dict with string keys as a TOML table.
-pub fn dict_to_table(dict: &Bound<'_, PyDict>, prefix: &str) -> PyResult<toml::Table> {
+fn convert_dict(value: &Bound<'_, PyAny>, key: &str, walk: &mut Walk) -> PyResult<toml::Value> {
+    // A snapshot of the items: converting a value may run Python code (tolist) that
+    // changes the dict.
+    let items = value.cast::<PyDict>()?.items();
     let mut table = toml::Table::new();
-    for (k, v) in dict.iter() {
+    for item in items.iter() {
+        let (k, v): (Bound<'_, PyAny>, Bound<'_, PyAny>) = item.extract()?;
         let name: String = k.extract().map_err(|_| {
-            PyTypeError::new_err(format!(
-                "{}: dict keys must be strings",
-                if prefix.is_empty() { "scene" } else { prefix }
-            ))
+            key_error(
+                key,
+                format!(
+                    "dict keys must be strings, got {}",
+                    k.get_type()
+                        .name()
+                        .map_or_else(|_| "?".to_string(), |n| n.to_string())
+                ),
+            )
         })?;
-        let path = if prefix.is_empty() {
+        let path = if key.is_empty() {
             name.clone()
         } else {
-            format!("{prefix}.{name}")
+            format!("{key}.{name}")
         };
-        table.insert(name, py_to_toml(&v, &path)?);
+        table.insert(name, convert(&v, &path, walk)?);
     }
-    Ok(table)
+    Ok(toml::Value::Table(table))
+}
+
+fn convert_seq(value: &Bound<'_, PyAny>, key: &str, walk: &mut Walk) -> PyResult<toml::Value> {
+    let mut items = Vec::new();
+    for (i, item) in value.try_iter()?.enumerate() {
+        items.push(convert(&item?, &format!("{key}.{i}"), walk)?);
+    }
+    Ok(toml::Value::Array(items))
+}
+
+/// `repr(value)` cut to 40 characters (a huge integer prints thousands of digits).
+fn short_repr(value: &Bound<'_, PyAny>) -> String {
+    let text = value
+        .repr()
+        .map_or_else(|_| "?".to_string(), |r| r.to_string());
+    if text.chars().count() > 40 {
+        format!("{}...", text.chars().take(37).collect::<String>())
+    } else {
+        text
+    }
 }
 
 /// A TOML value as a Python value (tables become dicts, arrays lists, datetimes strings).
@@ -120,4 +251,60 @@ pub fn json_to_py<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<B
             dict.into_any()
         }
     })
+}
+
+/// A Python value made of `None`, `bool`, `int`, `float`, `str`, `list` and `dict` (string
+/// keys) as a JSON value, exactly (floats keep every bit; the inverse of [`json_to_py`]).
+/// Non-finite floats become `null`, as JSON has no other form for them.
+///
+/// # Errors
+/// `ValueError` for another type or nesting deeper than [`MAX_VALUE_DEPTH`].
+pub fn py_to_json(value: &Bound<'_, PyAny>, depth: usize) -> PyResult<serde_json::Value> {
+    use pyo3::exceptions::PyValueError;
+    if depth > MAX_VALUE_DEPTH {
+        return Err(PyValueError::new_err(format!(
+            "nested deeper than {MAX_VALUE_DEPTH} levels"
+        )));
+    }
+    if value.is_none() {
+        return Ok(serde_json::Value::Null);
+    }
+    if value.is_instance_of::<PyBool>() {
+        return Ok(serde_json::Value::Bool(value.is_truthy()?));
+    }
+    if value.is_instance_of::<PyInt>() {
+        if let Ok(i) = value.extract::<i64>() {
+            return Ok(i.into());
+        }
+        return Ok(value.extract::<u64>()?.into());
+    }
+    if value.is_instance_of::<PyFloat>() {
+        let x: f64 = value.extract()?;
+        return Ok(serde_json::Number::from_f64(x).map_or(serde_json::Value::Null, Into::into));
+    }
+    if value.is_instance_of::<PyString>() {
+        return Ok(serde_json::Value::String(value.extract()?));
+    }
+    if let Ok(list) = value.cast::<PyList>() {
+        return list
+            .iter()
+            .map(|item| py_to_json(&item, depth + 1))
+            .collect::<PyResult<Vec<_>>>()
+            .map(serde_json::Value::Array);
+    }
+    if let Ok(dict) = value.cast::<PyDict>() {
+        let mut map = serde_json::Map::new();
+        for item in dict.items().iter() {
+            let (k, v): (String, Bound<'_, PyAny>) = item.extract()?;
+            map.insert(k, py_to_json(&v, depth + 1)?);
+        }
+        return Ok(serde_json::Value::Object(map));
+    }
+    Err(PyValueError::new_err(format!(
+        "a value of type {} has no JSON form",
+        value
+            .get_type()
+            .name()
+            .map_or_else(|_| "?".to_string(), |n| n.to_string())
+    )))
 }

@@ -2,7 +2,7 @@
 //! (closure `|C_i - B_i| = l_i`, Gosselin & Angeles 1990), forward kinematics (Newton on the
 //! closure equations) and the singularity measures (`flexprr_kinematics`).
 
-use flexprr_kinematics::{Geometry, PlatformMotion, Pose};
+use flexprr_kinematics::{Circle, Geometry, PlatformMotion, Pose, Trajectory};
 use numpy::ndarray::{Array1, Array2, ArrayViewD, Axis, Ix1};
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLikeDyn};
 use pyo3::exceptions::PyValueError;
@@ -10,16 +10,23 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::{KinematicsError, scene_error};
+use crate::progress::detached;
 use crate::scene::PyScene;
 
-/// The scene's geometry, or the paper's.
-fn geometry(py: Python<'_>, scene: Option<&PyScene>) -> PyResult<Geometry> {
+/// The scene's geometry and nominal pose (its trajectory's pose at the first output time),
+/// or the paper's machine and the start of the paper's circle, `(0, 0, 45 deg)`.
+fn machine(py: Python<'_>, scene: Option<&PyScene>) -> PyResult<(Geometry, Pose)> {
     match scene {
-        None => Ok(Geometry::paper()),
+        None => {
+            let circle = Circle::paper(1.0).map_err(|e| PyValueError::new_err(e.to_string()))?;
+            Ok((Geometry::paper(), circle.motion(0.0).pose))
+        }
         Some(s) => {
             let s = s.clone();
-            let built = py.detach(move || s.build()).map_err(scene_error)?;
-            Ok(built.machine.geometry)
+            let built = detached(py, None, 1.0, move |_| s.build())?.map_err(scene_error)?;
+            let t0 = built.output_times.first().copied().unwrap_or(0.0);
+            let nominal = built.trajectory.motion(t0).pose;
+            Ok((built.machine.geometry, nominal))
         }
     }
 }
@@ -80,9 +87,9 @@ pub fn inverse_kinematics<'py>(
     poses: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
     scene: Option<PyRef<'py, PyScene>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let g = geometry(py, scene.as_deref())?;
+    let (g, _) = machine(py, scene.as_deref())?;
     let (rows, single) = rows3("poses", &poses.as_array())?;
-    let solved = py.detach(|| {
+    let solved = detached(py, None, 1.0, |_| {
         let mut rho = Vec::with_capacity(rows.len());
         let mut beta = Vec::with_capacity(rows.len());
         for (i, p) in rows.iter().enumerate() {
@@ -92,7 +99,7 @@ pub fn inverse_kinematics<'py>(
             beta.push(std::array::from_fn::<f64, 3, _>(|k| state.legs[k].beta));
         }
         Ok((rho, beta))
-    });
+    })?;
     let (rho, beta) = solved.map_err(|(i, e)| kin_error(i, single, &e))?;
     let d = PyDict::new(py);
     d.set_item("rho", out3(py, rho, single)?)?;
@@ -101,8 +108,13 @@ pub fn inverse_kinematics<'py>(
 }
 
 /// Forward kinematics: the pose `(x, y, phi)` from slider positions `rho` (m), shape `(3,)`
-/// or `(n, 3)`, by Newton's method from `guess` (a pose, or one per row; default the origin
-/// with phi = 0). Returns poses of the same shape.
+/// or `(n, 3)`, by Newton's method on the closure equations. Newton finds the assembly mode
+/// its start leads to; the start is `guess` (one pose, or one per row) when given. Without a
+/// guess, the first row starts from the scene's nominal pose (its trajectory at the first
+/// output time; for the paper's machine the start of its circle, `(0, 0, 45 deg)`), and
+/// each further row from the previous row's solution (continuation along a path), then
+/// from the nominal pose if that fails. Returns poses of the same shape; raises
+/// `KinematicsError` (with `index`) at the first row that fails.
 #[pyfunction]
 #[pyo3(signature = (rho, guess = None, scene = None))]
 pub fn forward_kinematics<'py>(
@@ -111,30 +123,37 @@ pub fn forward_kinematics<'py>(
     guess: Option<PyArrayLikeDyn<'py, f64, AllowTypeChange>>,
     scene: Option<PyRef<'py, PyScene>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let g = geometry(py, scene.as_deref())?;
+    let (g, nominal) = machine(py, scene.as_deref())?;
     let (rows, single) = rows3("rho", &rho.as_array())?;
     let guesses = match &guess {
-        None => vec![[0.0; 3]],
+        None => Vec::new(),
         Some(a) => rows3("guess", &a.as_array())?.0,
     };
-    if guesses.len() != 1 && guesses.len() != rows.len() {
+    if guess.is_some() && guesses.len() != 1 && guesses.len() != rows.len() {
         return Err(PyValueError::new_err(format!(
             "guess: {} rows for {} rows of rho (give one guess or one per row)",
             guesses.len(),
             rows.len()
         )));
     }
-    let solved = py.detach(|| {
-        rows.iter()
-            .enumerate()
-            .map(|(i, r)| {
-                let q = guesses[if guesses.len() == 1 { 0 } else { i }];
-                g.forward_kinematics(*r, &Pose::new(q[0], q[1], q[2]))
-                    .map(|p| [p.x, p.y, p.phi])
-                    .map_err(|e| (i, e))
-            })
-            .collect::<Result<Vec<_>, _>>()
-    });
+    let solved = detached(py, None, 1.0, |_| {
+        let mut poses: Vec<[f64; 3]> = Vec::with_capacity(rows.len());
+        for (i, r) in rows.iter().enumerate() {
+            let solve = |q: &Pose| g.forward_kinematics(*r, q).map(|p| [p.x, p.y, p.phi]);
+            let pose = match (guesses.len(), poses.last()) {
+                (0, None) => solve(&nominal),
+                (0, Some(prev)) => {
+                    solve(&Pose::new(prev[0], prev[1], prev[2])).or_else(|_| solve(&nominal))
+                }
+                (n, _) => {
+                    let q = guesses[if n == 1 { 0 } else { i }];
+                    solve(&Pose::new(q[0], q[1], q[2]))
+                }
+            };
+            poses.push(pose.map_err(|e| (i, e))?);
+        }
+        Ok(poses)
+    })?;
     let poses = solved.map_err(|(i, e)| kin_error(i, single, &e))?;
     out3(py, poses, single)
 }
@@ -149,9 +168,9 @@ pub fn singularity<'py>(
     poses: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
     scene: Option<PyRef<'py, PyScene>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let g = geometry(py, scene.as_deref())?;
+    let (g, _) = machine(py, scene.as_deref())?;
     let (rows, single) = rows3("poses", &poses.as_array())?;
-    let solved = py.detach(|| {
+    let solved = detached(py, None, 1.0, |_| {
         rows.iter()
             .enumerate()
             .map(|(i, p)| {
@@ -159,7 +178,7 @@ pub fn singularity<'py>(
                     .map_err(|e| (i, e))
             })
             .collect::<Result<Vec<_>, _>>()
-    });
+    })?;
     let measures = solved.map_err(|(i, e)| kin_error(i, single, &e))?;
     let d = PyDict::new(py);
     let type_ii: Vec<f64> = measures.iter().map(|m| m.type_ii).collect();

@@ -4,12 +4,16 @@
 //! Scenes load from a TOML path, a TOML string or a dict, change by dotted keys and
 //! validate with the CLI's checker; `run` returns the run layer's tables as NumPy arrays
 //! under the CLI's CSV column names, the `summary.json` contents and the statistics.
-//! Every call that does real work releases the GIL.
+//! Every call that does real work releases the GIL; progress callbacks are called back in
+//! the caller's thread (`progress`). Scenes, results and exceptions pickle, so they cross
+//! process boundaries. Nothing here may crash the interpreter: Python values are converted
+//! with depth, cycle and size limits (`convert`), and a panic becomes a `RuntimeError`.
 
 mod beam;
 mod convert;
 mod errors;
 mod kinematics;
+mod progress;
 mod run;
 mod scene;
 mod study;
@@ -26,7 +30,7 @@ fn flexprr_native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<run::PyRunResult>()?;
     m.add_class::<run::PyTable>()?;
     m.add_function(wrap_pyfunction!(run::run, m)?)?;
-    m.add_function(wrap_pyfunction!(run::run_many, m)?)?;
+    m.add_function(wrap_pyfunction!(run::run_many_threads, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::inverse_kinematics, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::forward_kinematics, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::singularity, m)?)?;

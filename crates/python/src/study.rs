@@ -1,5 +1,6 @@
 //! `flexprr.run_study`: a study file (`docs/studies.md`) run in parallel with the GIL
-//! released, as `flexprr study` does.
+//! released, as `flexprr study` does (the studies crate loads the file with the CLI's input
+//! checks and writes `out` with its own output policy).
 
 use std::path::PathBuf;
 
@@ -8,13 +9,30 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::StudyError;
+use crate::progress::detached;
 
-/// Runs a study file into the directory `out` (its `results.csv`, `study.json` and, with
-/// `case_outputs`, each case's outputs) on `threads` worker threads (default: all cores),
-/// skipping recorded cases when `resume`. Returns a dict: `name`, `total`, `ran`, `resumed`,
+/// Most worker threads a call may ask for: far more than any machine's cores, few enough
+/// that asking cannot exhaust the system.
+pub const MAX_THREADS: usize = 256;
+
+/// `threads` checked: `None` (all cores) or 1 to [`MAX_THREADS`].
+pub fn check_threads(threads: Option<usize>) -> PyResult<Option<usize>> {
+    match threads {
+        Some(n) if n == 0 || n > MAX_THREADS => Err(pyo3::exceptions::PyValueError::new_err(
+            format!("threads = {n}: expected 1 to {MAX_THREADS} (or None for all cores)"),
+        )),
+        other => Ok(other),
+    }
+}
+
+/// Runs a study file (str or `os.PathLike`) into the directory `out` (its `results.csv`,
+/// `study.json` and, with `case_outputs`, each case's outputs) on `threads` worker threads
+/// (default: all cores), skipping recorded cases when `resume`. `progress(fraction)` is
+/// called in the calling thread after each finished case with the fraction of cases done
+/// (resumed cases count as done). Returns a dict: `name`, `total`, `ran`, `resumed`,
 /// `failed` and `results` (the path of `results.csv`). Raises `StudyError`.
 #[pyfunction]
-#[pyo3(signature = (path, out, threads = None, resume = false, case_outputs = false))]
+#[pyo3(signature = (path, out, threads = None, resume = false, case_outputs = false, progress = None))]
 pub fn run_study<'py>(
     py: Python<'py>,
     path: PathBuf,
@@ -22,8 +40,10 @@ pub fn run_study<'py>(
     threads: Option<usize>,
     resume: bool,
     case_outputs: bool,
+    progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let outcome = py.detach(move || {
+    let threads = check_threads(threads)?;
+    let outcome = detached(py, progress, 0.0, move |report| {
         let study = Study::load(&path)?;
         let options = StudyOptions {
             threads,
@@ -31,9 +51,15 @@ pub fn run_study<'py>(
             resume,
             case_outputs,
         };
-        let summary = run_rust_study(&study, &out, &options, &|_, _| {})?;
+        let on_case = |p: &flexprr_studies::study::StudyProgress, _: &_| {
+            if p.total > 0 {
+                report(p.done as f64 / p.total as f64);
+            }
+        };
+        let summary = run_rust_study(&study, &out, &options, &on_case)?;
+        report(1.0);
         Ok::<_, flexprr_studies::StudyError>((study.name, summary))
-    });
+    })?;
     let (name, summary) = outcome.map_err(|e| StudyError::new_err(e.to_string()))?;
     let d = PyDict::new(py);
     d.set_item("name", name)?;

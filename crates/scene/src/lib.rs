@@ -12,12 +12,14 @@
 mod error;
 mod input;
 pub mod link;
+pub mod link_file;
 mod locate;
 mod model;
 mod parse;
 mod registry;
 mod scene;
 mod schema;
+pub mod setting;
 
 pub use flexprr_integrators::DynIntegrator;
 

@@ -1,7 +1,8 @@
 """Type stubs of flexprr (the native module flexprr._flexprr, re-exported)."""
 
+from concurrent.futures import Executor
 from os import PathLike
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -10,6 +11,7 @@ __version__: str
 
 _Path = Union[str, "PathLike[str]"]
 _Poses = npt.ArrayLike
+_Progress = Callable[[float], Any]
 
 class SceneError(ValueError):
     """An invalid scene, link or key; the text is the CLI's message."""
@@ -37,7 +39,9 @@ class StudyError(RuntimeError):
     """A study that could not be read or run."""
 
 class Scene:
-    """A scene file's TOML table, editable by dotted keys."""
+    """A scene file's TOML table, editable by dotted keys checked at once against the schema.
+
+    Pickles (multiprocessing, concurrent.futures, Dask)."""
 
     @staticmethod
     def load(path: _Path) -> "Scene": ...
@@ -55,6 +59,9 @@ class Scene:
     def to_toml(self) -> str: ...
     @property
     def name(self) -> str: ...
+    @property
+    def changed_keys(self) -> List[str]: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
 
 class Table:
     """One time-series table of a run, columns under the CLI's CSV headers."""
@@ -71,7 +78,7 @@ class Table:
     def to_pandas(self) -> Any: ...
 
 class RunResult:
-    """What a run produced."""
+    """What a run produced (plain data: pickles whole)."""
 
     @property
     def scene(self) -> str: ...
@@ -85,10 +92,16 @@ class RunResult:
     def stats(self) -> Dict[str, Any]: ...
     @property
     def table_one(self) -> Optional[str]: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
 
-def run(scene: Scene) -> RunResult: ...
+def run(scene: Union[Scene, _Path], progress: Optional[_Progress] = None) -> RunResult: ...
 def run_many(
-    scenes: Sequence[Scene], threads: Optional[int] = None, return_exceptions: bool = False
+    scenes: Iterable[Union[Scene, _Path]],
+    threads: Optional[int] = None,
+    return_exceptions: bool = False,
+    progress: Optional[_Progress] = None,
+    processes: Optional[int] = None,
+    executor: Optional[Executor] = None,
 ) -> List[Union[RunResult, SceneError, RunError]]: ...
 def inverse_kinematics(
     poses: _Poses, scene: Optional[Scene] = None
@@ -106,4 +119,5 @@ def run_study(
     threads: Optional[int] = None,
     resume: bool = False,
     case_outputs: bool = False,
+    progress: Optional[_Progress] = None,
 ) -> Dict[str, Any]: ...
