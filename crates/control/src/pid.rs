@@ -156,7 +156,12 @@ mod tests {
         assert!(rates.iter().all(|r| (*r - 1e-3).abs() <= 1e-18));
         // Beyond the limit, but the error pulls back: integrate (it unwinds): command
         // 100 - 1000 = -900 N with an error of +1 mm.
-        pid.command(&input(1e-3, 0.0, 500.0), &[-1e-3; 3], &mut force, &mut rates);
+        pid.command(
+            &input(1e-3, 0.0, 500.0),
+            &[-1e-3; 3],
+            &mut force,
+            &mut rates,
+        );
         assert!(force[0] < -500.0);
         assert!(rates.iter().all(|r| (*r - 1e-3).abs() <= 1e-18));
     }

@@ -43,8 +43,8 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{
-    ActuatorState, MachineSnapshot, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION, SceneModel,
-    SliderMotion, force_table, platform_deviation_table,
+    ActuatorState, MachineSnapshot, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION,
+    SceneModel, SliderMotion, force_table, platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
 

@@ -508,5 +508,4 @@ impl CoupledSystem {
             type_ii_measure: measure,
         }
     }
-
 }

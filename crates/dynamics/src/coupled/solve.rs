@@ -145,7 +145,6 @@ impl CoupledSystem {
         Ok(a)
     }
 
-
     /// `eta_i'' = a_i + h_i r_i - l p_i (Bs s + Br r)_i - q_i (Ts s + Tm m + Tr r)_i` with
     /// `p_i = M^-1 m_xipsi_i` and `q_i = M^-1 G0 eta_i / l`. Projecting on `dL_i` and
     /// `m_xipsi_i` gives 6 equations for `(s, m)` (the Sherman-Morrison-Woodbury reduction of
@@ -202,8 +201,24 @@ impl CoupledSystem {
             let (row_s, row_m) = (i * unknowns, (3 + i) * unknowns);
             w[row_s + i] = 1.0;
             w[row_m + 3 + i] = 1.0;
-            projection_row(&mut w[row_s..row_s + unknowns], unknowns, kin, i, link.length, &along, 1.0);
-            projection_row(&mut w[row_m..row_m + unknowns], unknowns, kin, i, link.length, &moment, 1.0);
+            projection_row(
+                &mut w[row_s..row_s + unknowns],
+                unknowns,
+                kin,
+                i,
+                link.length,
+                &along,
+                1.0,
+            );
+            projection_row(
+                &mut w[row_m..row_m + unknowns],
+                unknowns,
+                kin,
+                i,
+                link.length,
+                &moment,
+                1.0,
+            );
             c[i] = along.a;
             c[3 + i] = moment.a;
             if let Some(forces) = forces {
@@ -214,7 +229,15 @@ impl CoupledSystem {
                     mass: slider_mass[i],
                     elastic_reactions: self.options.elastic_reactions,
                 };
-                c[6 + i] = slider.row(&mut w[row..row + unknowns], kin, i, e, ed, &inertia, forces[i]);
+                c[6 + i] = slider.row(
+                    &mut w[row..row + unknowns],
+                    kin,
+                    i,
+                    e,
+                    ed,
+                    &inertia,
+                    forces[i],
+                );
             }
         }
         self.counters.acceleration_solves += 1;
@@ -315,10 +338,7 @@ impl Slider<'_> {
                 - sin_ab * kin.moment_r[(i, col)];
         }
         w[3 + i] -= sin_ab * elastic;
-        force
-            - c_0
-            - c_b * kin.beta0[i]
-            - sin_ab * inertia.a
+        force - c_0 - c_b * kin.beta0[i] - sin_ab * inertia.a
             + cos_ab * kin.tension0[i]
             + sin_ab * kin.moment0[i]
     }

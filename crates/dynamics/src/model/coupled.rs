@@ -44,6 +44,9 @@ impl SceneModel for CoupledSystem {
             inverse_dynamics_solves: c.inverse_dynamics_solves,
         }
     }
+    fn initial_state(&self) -> Vec<f64> {
+        CoupledSystem::initial_state(self)
+    }
     fn snapshot(&mut self, t: f64, y: &[f64]) -> Result<MachineSnapshot, DynamicsError> {
         let out = self.output(t, y)?;
         let rho = out.slider;
@@ -89,7 +92,10 @@ impl SceneModel for CoupledSystem {
             let link = &machine.links[i];
             let ints = &link.integrals;
             let range = self.link_range(i);
-            let (eta, rate) = (&y[range.clone()], &y[coordinates + range.start..coordinates + range.end]);
+            let (eta, rate) = (
+                &y[range.clone()],
+                &y[coordinates + range.start..coordinates + range.end],
+            );
             let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
             let (mass, l) = (link.mass(), link.length());
             let inertia_b = link.centroid_inertia + 0.25 * mass * l * l;
@@ -103,7 +109,12 @@ impl SceneModel for CoupledSystem {
             );
             let (sin_ab, cos_ab) = (u.dot(&nrm), u.dot(&e));
             let m_eta: f64 = (0..eta.len())
-                .map(|j| eta[j] * (0..eta.len()).map(|k| ints.mass[(j, k)] * eta[k]).sum::<f64>())
+                .map(|j| {
+                    eta[j]
+                        * (0..eta.len())
+                            .map(|k| ints.mass[(j, k)] * eta[k])
+                            .sum::<f64>()
+                })
                 .sum();
             kinetic += 0.5 * slider_mass[i] * rho_dot * rho_dot
                 + 0.5 * mass * rho_dot * rho_dot
