@@ -369,6 +369,23 @@ impl NonlinearSystem {
         Ok(y)
     }
 
+    /// The same model with the sliders as degrees of freedom, driven along their guides by
+    /// `actuation`'s actuators under its controller (docs/control.md), started at `t0` on
+    /// the commanded path.
+    ///
+    /// # Errors
+    /// The commanded motion's inverse kinematics fails at `t0`.
+    pub fn with_actuation(
+        self,
+        actuation: crate::Actuation,
+        t0: f64,
+    ) -> Result<Self, DynamicsError> {
+        let _ = (actuation, t0);
+        Err(DynamicsError::Inconsistent(
+            "the nonlinear model with actuated sliders is not available yet".into(),
+        ))
+    }
+
     /// Sets the initial state of the integration to the rigid state at `t0`
     /// ([`NonlinearSystem::initial_state`]); [`crate::SceneModel::initial_state`] returns it.
     ///
