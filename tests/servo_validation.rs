@@ -10,7 +10,10 @@
 use std::sync::Arc;
 
 use flexprr_control::{Actuator, IdealForce, Pid};
-use flexprr_dynamics::{Actuation, CoupledOptions, CoupledSystem, ModalDamping, SceneModel, paper};
+use flexprr_dynamics::{
+    Actuation, CoupledOptions, CoupledSystem, ModalDamping, NonlinearOptions, NonlinearSystem,
+    SceneModel, paper,
+};
 use flexprr_integrators::{Integrator, Options, Rk45};
 use flexprr_kinematics::Trajectory;
 
@@ -63,34 +66,57 @@ fn rel_l2(ours: &[Vec<f64>], theirs: &[Vec<f64>]) -> f64 {
     (num / den).sqrt()
 }
 
-/// The servo scene of `validation/exudyn_servo.py`: the paper's machine and circle at `f`,
-/// PD `kp = 2e5 N/m`, `kd = 400 N s/m` with the rigid feedforward, ideal force actuators.
-fn servo(f: f64) -> CoupledSystem {
-    let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
-    let trajectory: Arc<dyn Trajectory + Send + Sync> = Arc::new(paper::trajectory(f).unwrap());
+/// The control of `validation/exudyn_servo.py`: PD `kp = 2e5 N/m`, `kd = 400 N s/m` with
+/// the rigid feedforward, ideal force actuators.
+fn actuation() -> Actuation {
     let force: Arc<dyn Actuator> = Arc::new(IdealForce);
-    let actuation = Actuation {
+    Actuation {
         controller: Arc::new(Pid::pd(2.0e5, 400.0, true, 0.0).unwrap()),
         actuators: [force.clone(), force.clone(), force],
-    };
-    CoupledSystem::new(
-        machine,
-        trajectory,
-        ModalDamping::none(),
-        CoupledOptions::full(),
-    )
-    .unwrap()
-    .with_actuation(actuation, 0.0)
-    .unwrap()
+    }
 }
 
-fn compare(f: u32) -> (f64, f64) {
+/// The servo scene of `validation/exudyn_servo.py` with the coupled model: the paper's
+/// machine and circle at `f`.
+fn servo(f: f64) -> Box<dyn SceneModel> {
+    let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
+    let trajectory: Arc<dyn Trajectory + Send + Sync> = Arc::new(paper::trajectory(f).unwrap());
+    let actuation = actuation();
+    Box::new(
+        CoupledSystem::new(
+            machine,
+            trajectory,
+            ModalDamping::none(),
+            CoupledOptions::full(),
+        )
+        .unwrap()
+        .with_actuation(actuation, 0.0)
+        .unwrap(),
+    )
+}
+
+/// The same with geometrically nonlinear links of `elements` co-rotational elements.
+fn servo_nonlinear(f: f64, elements: usize) -> Box<dyn SceneModel> {
+    let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
+    let trajectory: Arc<dyn Trajectory + Send + Sync> = Arc::new(paper::trajectory(f).unwrap());
+    let options = NonlinearOptions {
+        elements,
+        ..NonlinearOptions::paper(paper::YOUNGS_MODULUS)
+    };
+    Box::new(
+        NonlinearSystem::new(machine, trajectory, options)
+            .unwrap()
+            .with_actuation(actuation(), 0.0)
+            .unwrap(),
+    )
+}
+
+fn compare(f: u32, mut system: Box<dyn SceneModel>) -> (f64, f64) {
     let external = External::load(&format!("servo_f{f}"));
     let t = external.column("t_s");
-    let mut system = servo(f64::from(f));
-    let y0 = SceneModel::initial_state(&system);
+    let y0 = system.initial_state();
     let solution = Rk45::new(Options::default().rtol(1e-9).atol(1e-12))
-        .solve(&mut system, 0.0, &y0, &t)
+        .solve(system.as_mut(), 0.0, &y0, &t)
         .expect("solves");
     // Mid-point deflections, and the slider errors rho_ref - rho with rho_ref from the
     // commanded inverse kinematics.
@@ -119,7 +145,7 @@ fn compare(f: u32) -> (f64, f64) {
 
 #[test]
 fn servo_model_matches_external_at_20_hz() {
-    let (w, e) = compare(20);
+    let (w, e) = compare(20, servo(20.0));
     println!(
         "20 Hz: mid-point deflections {:.2} %, slider errors {:.2} %",
         100.0 * w,
@@ -131,9 +157,21 @@ fn servo_model_matches_external_at_20_hz() {
 
 #[test]
 fn servo_model_matches_external_at_10_hz() {
-    let (w, e) = compare(10);
+    let (w, e) = compare(10, servo(10.0));
     println!(
         "10 Hz: mid-point deflections {:.2} %, slider errors {:.2} %",
+        100.0 * w,
+        100.0 * e
+    );
+    assert!(w < 0.02, "deflections {w}");
+    assert!(e < 0.05, "slider errors {e}");
+}
+
+#[test]
+fn nonlinear_servo_model_matches_external_at_20_hz() {
+    let (w, e) = compare(20, servo_nonlinear(20.0, 16));
+    println!(
+        "nonlinear, 16 elements, 20 Hz: mid-point deflections {:.2} %, slider errors {:.2} %",
         100.0 * w,
         100.0 * e
     );

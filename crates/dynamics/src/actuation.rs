@@ -210,6 +210,55 @@ impl Actuated {
         self.rates = rates;
     }
 
+    /// The force commands and the actuators' outputs at `t` for the commanded state `rigid`
+    /// and the measured sliders, with the continuous law's states `states` (their rates into
+    /// `rates`; a sampled law holds its command).
+    ///
+    /// # Errors
+    /// A singular rigid inverse dynamics of the commanded motion (the feedforward).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn forces<L: AsRef<LegKinematics>>(
+        &self,
+        machine: &Machine,
+        rigid: &MachineState<L>,
+        t: f64,
+        measured: [SliderState; 3],
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> Result<([f64; 3], [ActuatorOutput; 3]), DynamicsError> {
+        let reference = Reference::of(machine, self, rigid, t)?;
+        let input = self.input(t, &reference, measured);
+        let command = self.command(&input, states, rates);
+        Ok((command, self.apply(&command, measured.map(|m| m.velocity))))
+    }
+
+    /// Takes a sampled law's sample when `t` is one of its sample times (see
+    /// [`Actuated::sample`]), for the commanded motion `trajectory` and the measured
+    /// sliders; a kinematic failure there is left to the right-hand side, which meets and
+    /// reports it.
+    pub(crate) fn sample_at(
+        &mut self,
+        machine: &Machine,
+        trajectory: &dyn flexprr_kinematics::Trajectory,
+        t: f64,
+        measured: [SliderState; 3],
+    ) {
+        if self.period() <= 0.0 {
+            return;
+        }
+        let Ok(rigid) = machine
+            .geometry
+            .inverse_kinematics_unchecked(&trajectory.motion(t))
+        else {
+            return;
+        };
+        let Ok(reference) = Reference::of(machine, self, &rigid, t) else {
+            return;
+        };
+        let input = self.input(t, &reference, measured);
+        self.sample(&input);
+    }
+
     /// The actuator outputs for the force commands at the slider velocities.
     pub(crate) fn apply(&self, command: &[f64; 3], velocity: [f64; 3]) -> [ActuatorOutput; 3] {
         std::array::from_fn(|i| self.spec.actuators[i].apply(command[i], velocity[i]))

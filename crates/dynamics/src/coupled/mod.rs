@@ -50,7 +50,7 @@ use flexprr_integrators::OdeSystem;
 use flexprr_kinematics::{PlatformMotion, Trajectory};
 use nalgebra::Vector2;
 
-use crate::actuation::{Actuated, Actuation, Reference};
+use crate::actuation::{Actuated, Actuation};
 use crate::{DynamicsError, Machine, ModalDamping};
 use flexprr_control::{ActuatorOutput, SliderState};
 
@@ -471,6 +471,16 @@ impl CoupledSystem {
             .map_or_else(Vec::new, |a| a.sample_times(t0, t1))
     }
 
+    /// The measured sliders of `y` (actuated sliders).
+    fn measured_sliders(&self, y: &[f64]) -> [SliderState; 3] {
+        let (n, coordinates) = (self.modes, self.modes + 3);
+        std::array::from_fn(|i| SliderState {
+            position: y[n + i],
+            velocity: y[coordinates + n + i],
+            acceleration: 0.0,
+        })
+    }
+
     /// The actuators' force commands and outputs at `(t, y)` (the control law's state rates
     /// into `rates`), for the commanded state `rigid` at `t`.
     fn actuator_forces(
@@ -483,19 +493,12 @@ impl CoupledSystem {
         let Some(actuated) = self.actuated.as_ref() else {
             return Ok(None);
         };
-        let reference = Reference::of(&self.machine, actuated, rigid, t)?;
         self.counters.inverse_dynamics_solves += 1;
-        let (n, coordinates) = (self.modes, self.modes + 3);
-        let measured = std::array::from_fn(|i| SliderState {
-            position: y[n + i],
-            velocity: y[coordinates + n + i],
-            acceleration: 0.0,
-        });
-        let input = actuated.input(t, &reference, measured);
-        let states = &y[2 * coordinates..];
-        let command = actuated.command(&input, states, rates);
-        let outputs = actuated.apply(&command, measured.map(|m| m.velocity));
-        Ok(Some((command, outputs)))
+        let measured = self.measured_sliders(y);
+        let states = &y[2 * self.coordinates()..];
+        actuated
+            .forces(&self.machine, rigid, t, measured, states, rates)
+            .map(Some)
     }
 
     /// The machine.
@@ -514,7 +517,8 @@ impl CoupledSystem {
     pub fn options(&self) -> CoupledOptions {
         self.options
     }
-    /// Total number of modal coordinates (half the state dimension).
+    /// Number of modal coordinates (the first entries of the state; half of it unless the
+    /// sliders are actuated).
     pub fn modes(&self) -> usize {
         self.modes
     }
@@ -606,30 +610,12 @@ impl OdeSystem for CoupledSystem {
     /// A sampled controller takes its sample when a segment starts at one of its sample
     /// times (they are stop times: [`CoupledSystem::sample_times`]).
     fn segment_start(&mut self, t: f64, y: &[f64]) {
-        let Some(actuated) = self.actuated.as_ref() else {
-            return;
-        };
-        if actuated.period() <= 0.0 || y.len() != self.dim() {
+        if self.actuated.is_none() || y.len() != self.dim() {
             return;
         }
-        let rigid = self
-            .machine
-            .geometry
-            .inverse_kinematics_unchecked(&self.trajectory.motion(t));
-        let reference = match rigid.map(|r| Reference::of(&self.machine, actuated, &r, t)) {
-            Ok(Ok(reference)) => reference,
-            // The right-hand side meets and reports the same failure.
-            _ => return,
-        };
-        let (n, coordinates) = (self.modes, self.coordinates());
-        let measured = std::array::from_fn(|i| SliderState {
-            position: y[n + i],
-            velocity: y[coordinates + n + i],
-            acceleration: 0.0,
-        });
-        let input = actuated.input(t, &reference, measured);
+        let measured = self.measured_sliders(y);
         if let Some(actuated) = self.actuated.as_mut() {
-            actuated.sample(&input);
+            actuated.sample_at(&self.machine, self.trajectory.as_ref(), t, measured);
         }
     }
 }

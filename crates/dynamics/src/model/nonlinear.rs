@@ -48,7 +48,7 @@ impl SceneModel for NonlinearSystem {
             axial_force_b: out.axial_force_b,
             axial_force_c: out.axial_force_c,
             driving_force: out.driving_force,
-            actuators: None,
+            actuators: out.actuators,
         })
     }
     /// The rigid state set by [`NonlinearSystem::start_at`] (at `t = 0` when it was not
@@ -69,6 +69,9 @@ impl SceneModel for NonlinearSystem {
     }
     fn platform_follows_links(&self) -> bool {
         true
+    }
+    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
+        self.sample_times(t0, t1)
     }
     /// The kinetic energy of the nodes and the platform, the strain energy of each link.
     fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {

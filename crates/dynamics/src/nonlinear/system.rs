@@ -34,7 +34,11 @@ use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 use super::element::{CorotationalElement, wrap_angle};
+use crate::actuation::{Actuated, Actuation};
+use crate::model::ActuatorState;
 use crate::{DynamicsError, Machine};
+use flexprr_control::{ActuatorOutput, SliderState};
+use flexprr_kinematics::MachineState;
 
 /// Model switches of a [`NonlinearSystem`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -124,7 +128,8 @@ pub struct NonlinearOutput {
     pub driving_force: [f64; 3],
     /// Type-II measure of the chords ([`crate::equilibrium_measure`]'s definition).
     pub type_ii_measure: f64,
-    /// Kinetic energy of the links' nodes and the platform (J).
+    /// Kinetic energy of the links' nodes and the platform, and of the sliders (with the
+    /// actuators' reflected inertia) when they are actuated (J).
     pub kinetic_energy: f64,
     /// Strain energy of the links (J).
     pub strain_energy: f64,
@@ -133,6 +138,8 @@ pub struct NonlinearOutput {
     /// Power the sliders deliver to the links, `sum_i F_B_i . B_i'` (W): the rate of change
     /// of the total energy when there is no damping.
     pub slider_power: f64,
+    /// The actuators' commands and outputs, when the sliders are actuated.
+    pub actuators: Option<[ActuatorState; 3]>,
 }
 
 impl NonlinearOutput {
@@ -160,6 +167,8 @@ struct LinkData {
 #[derive(Debug, Clone, Copy)]
 struct Frame {
     nominal: PlatformMotion,
+    /// The commanded machine (inverse kinematics of the trajectory).
+    rigid: MachineState,
     rho: [[f64; 3]; 3],
     /// `B_i`, `B_i'`, `B_i''`.
     b: [[Vector2<f64>; 3]; 3],
@@ -186,6 +195,10 @@ pub struct NonlinearSystem {
     failure: Option<DynamicsError>,
     /// The initial state set by [`NonlinearSystem::start_at`].
     initial: Vec<f64>,
+    /// The sliders' actuators and controller, when the sliders are degrees of freedom.
+    actuated: Option<Actuated>,
+    /// The actuator forces of the last evaluation (actuated sliders).
+    slider_forces: [f64; 3],
 }
 
 impl std::fmt::Debug for NonlinearSystem {
@@ -290,6 +303,8 @@ impl NonlinearSystem {
             counters: NonlinearCounters::default(),
             failure: None,
             initial: Vec::new(),
+            actuated: None,
+            slider_forces: [0.0; 3],
         })
     }
 
@@ -305,9 +320,39 @@ impl NonlinearSystem {
     pub fn options(&self) -> NonlinearOptions {
         self.options
     }
-    /// Number of generalized coordinates (half the state dimension).
+    /// Number of generalized coordinates: the platform's, every link's nodal ones, and the
+    /// three sliders' when they are actuated (they come last).
     pub fn coordinates(&self) -> usize {
-        3 + 3 * self.per_link
+        3 + 3 * self.per_link + if self.actuated.is_some() { 3 } else { 0 }
+    }
+    /// Index of slider `i`'s coordinate (actuated sliders).
+    fn slider_index(&self, i: usize) -> usize {
+        3 + 3 * self.per_link + i
+    }
+    /// The measured sliders of `y` (actuated sliders).
+    fn measured_sliders(&self, y: &[f64]) -> [SliderState; 3] {
+        let n = self.coordinates();
+        std::array::from_fn(|i| SliderState {
+            position: y[self.slider_index(i)],
+            velocity: y[n + self.slider_index(i)],
+            acceleration: 0.0,
+        })
+    }
+    /// Slider masses (kg), with the actuators' reflected masses when actuated.
+    pub fn slider_masses(&self) -> [f64; 3] {
+        self.actuated
+            .as_ref()
+            .map_or(self.machine.slider_mass, |a| a.slider_mass)
+    }
+    /// The actuation, when the sliders are degrees of freedom.
+    pub fn actuation(&self) -> Option<&Actuation> {
+        self.actuated.as_ref().map(|a| &a.spec)
+    }
+    /// The sample times of a sampled controller strictly inside `(t0, t1)`.
+    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
+        self.actuated
+            .as_ref()
+            .map_or_else(Vec::new, |a| a.sample_times(t0, t1))
     }
     /// Range of link `link`'s nodal coordinates (0-based link) among the generalized
     /// coordinates; the platform's three come first.
@@ -342,8 +387,17 @@ impl NonlinearSystem {
             .inverse_kinematics_unchecked(&nominal)
             .map_err(|source| DynamicsError::Kinematics { t: t0, source })?;
         let n = self.coordinates();
-        let mut y = vec![0.0; 2 * n];
-        let (z, zd) = y.split_at_mut(n);
+        let mut y = vec![0.0; self.dim()];
+        if let Some(actuated) = &self.actuated {
+            for (i, leg) in rigid.legs.iter().enumerate() {
+                y[self.slider_index(i)] = leg.rho;
+                y[n + self.slider_index(i)] = leg.rho_dot;
+            }
+            if actuated.ode_states() > 0 {
+                y[2 * n..].copy_from_slice(&actuated.spec.controller.initial_states());
+            }
+        }
+        let (z, zd) = y[..2 * n].split_at_mut(n);
         let p = nominal.pose;
         z[..3].copy_from_slice(&[p.x, p.y, p.phi]);
         zd[..3].copy_from_slice(nominal.velocity.as_slice());
@@ -371,19 +425,16 @@ impl NonlinearSystem {
 
     /// The same model with the sliders as degrees of freedom, driven along their guides by
     /// `actuation`'s actuators under its controller (docs/control.md), started at `t0` on
-    /// the commanded path.
+    /// the commanded path: each slider carries its mass, the actuator's reflected mass and
+    /// half the mass of its link's first node, `(m_s + m_r + m_0) rho'' = F - f_0 . u` with
+    /// `f_0` the internal force at the node.
     ///
     /// # Errors
     /// The commanded motion's inverse kinematics fails at `t0`.
-    pub fn with_actuation(
-        self,
-        actuation: crate::Actuation,
-        t0: f64,
-    ) -> Result<Self, DynamicsError> {
-        let _ = (actuation, t0);
-        Err(DynamicsError::Inconsistent(
-            "the nonlinear model with actuated sliders is not available yet".into(),
-        ))
+    pub fn with_actuation(mut self, actuation: Actuation, t0: f64) -> Result<Self, DynamicsError> {
+        self.actuated = Some(Actuated::new(actuation, &self.machine, t0));
+        self.start_at(t0)?;
+        Ok(self)
     }
 
     /// Sets the initial state of the integration to the rigid state at `t0`
@@ -456,20 +507,23 @@ impl NonlinearSystem {
         let v = Vector2::new(y[n], y[n + 1]);
         let mut frame = Frame {
             nominal,
+            rigid,
             rho: [[0.0; 3]; 3],
             b: [[Vector2::zeros(); 3]; 3],
             r: [Vector2::zeros(); 3],
             c: [[Vector2::zeros(); 2]; 3],
         };
+        let measured = self.actuated.is_some().then(|| self.measured_sliders(y));
         for (i, leg) in self.machine.geometry.legs.iter().enumerate() {
-            let s = &rigid.legs[i];
+            let s = &frame.rigid.legs[i];
             let u = leg.guide.direction.into_inner();
-            frame.rho[i] = [s.rho, s.rho_dot, s.rho_ddot];
-            frame.b[i] = [
-                leg.guide.anchor.coords + s.rho * u,
-                s.rho_dot * u,
-                s.rho_ddot * u,
-            ];
+            // Actuated sliders: from the state, their acceleration still unknown.
+            frame.rho[i] = match measured {
+                Some(m) => [m[i].position, m[i].velocity, 0.0],
+                None => [s.rho, s.rho_dot, s.rho_ddot],
+            };
+            let [rho, rho_dot, rho_ddot] = frame.rho[i];
+            frame.b[i] = [leg.guide.anchor.coords + rho * u, rho_dot * u, rho_ddot * u];
             let a = leg.attachment;
             let r = Vector2::new(cos * a.x - sin * a.y, sin * a.x + cos * a.y);
             frame.r[i] = r;
@@ -651,7 +705,37 @@ impl NonlinearSystem {
             .solve(&rhs);
         acc[..3].copy_from_slice(qdd.as_slice());
         self.platform_acceleration = qdd;
+        if self.actuated.is_some() {
+            let masses = self.slider_masses();
+            for i in 0..3 {
+                let f = &self.forces[i * stride..(i + 1) * stride];
+                let u = self.machine.geometry.legs[i].guide.direction.into_inner();
+                let half = 0.5 * self.links[i].node_mass;
+                acc[self.slider_index(i)] =
+                    (self.slider_forces[i] - (f[0] * u.x + f[1] * u.y)) / (masses[i] + half);
+            }
+        }
         Ok(())
+    }
+
+    /// The actuators' commands and outputs at `(t, y)` for the frame's commanded state
+    /// (the control law's state rates into `rates`); their forces into `slider_forces`.
+    fn actuate(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        frame: &Frame,
+        rates: &mut [f64],
+    ) -> Result<Option<([f64; 3], [ActuatorOutput; 3])>, DynamicsError> {
+        let Some(actuated) = self.actuated.as_ref() else {
+            return Ok(None);
+        };
+        let measured = self.measured_sliders(y);
+        let states = &y[2 * self.coordinates()..];
+        let (command, outputs) =
+            actuated.forces(&self.machine, &frame.rigid, t, measured, states, rates)?;
+        self.slider_forces = outputs.map(|o| o.force);
+        Ok(Some((command, outputs)))
     }
 
     /// Platform motion, chords, mid-point deflections, axial and driving forces at `(t, y)`.
@@ -661,11 +745,22 @@ impl NonlinearSystem {
     /// collapsed state is still reported).
     pub fn output(&mut self, t: f64, y: &[f64]) -> Result<NonlinearOutput, DynamicsError> {
         self.check_state(y)?;
-        let frame = self.frame(t, y)?;
+        let mut frame = self.frame(t, y)?;
         self.assemble(y, &frame);
         let n = self.coordinates();
+        let mut rates = vec![0.0; y.len() - 2 * n];
+        let actuators = self.actuate(t, y, &frame, &mut rates)?;
         let mut acc = vec![0.0; n];
         self.accelerations(t, y, &frame, &mut acc)?;
+        if self.actuated.is_some() {
+            for i in 0..3 {
+                let rho_ddot = acc[self.slider_index(i)];
+                let u = self.machine.geometry.legs[i].guide.direction.into_inner();
+                frame.rho[i][2] = rho_ddot;
+                frame.b[i][2] = rho_ddot * u;
+            }
+        }
+        let slider_mass = self.slider_masses();
         let ne = self.options.elements;
         let stride = 3 * (ne + 1);
         let omega = y[n + 2];
@@ -679,6 +774,12 @@ impl NonlinearSystem {
                 acceleration: qdd,
             },
             slider: frame.rho,
+            actuators: actuators.map(|(command, outputs)| {
+                std::array::from_fn(|i| ActuatorState {
+                    command: command[i],
+                    output: outputs[i],
+                })
+            }),
             chord_length: [0.0; 3],
             chord_angle: [0.0; 3],
             midpoint_deflection: self.midpoint_deflections(y, &frame),
@@ -709,7 +810,11 @@ impl NonlinearSystem {
             out.axial_force_b[i] = -f_b.dot(&e);
             out.axial_force_c[i] = f_c.dot(&e);
             let u = self.machine.geometry.legs[i].guide.direction.into_inner();
-            out.driving_force[i] = self.machine.slider_mass[i] * frame.rho[i][2] + f_b.dot(&u);
+            // Actuated: the slider's equation of motion makes this the actuator's force.
+            out.driving_force[i] = slider_mass[i] * frame.rho[i][2] + f_b.dot(&u);
+            if self.actuated.is_some() {
+                out.kinetic_energy += 0.5 * slider_mass[i] * frame.rho[i][1] * frame.rho[i][1];
+            }
             out.slider_power += f_b.dot(&frame.b[i][1]);
             let el = link.element;
             for k in 0..=ne {
@@ -754,11 +859,11 @@ impl NonlinearSystem {
     }
 
     fn check_state(&self, y: &[f64]) -> Result<(), DynamicsError> {
-        if y.len() != 2 * self.coordinates() {
+        if y.len() != self.dim() {
             return Err(DynamicsError::Inconsistent(format!(
                 "state has {} entries, the nonlinear system {}",
                 y.len(),
-                2 * self.coordinates()
+                self.dim()
             )));
         }
         Ok(())
@@ -774,7 +879,7 @@ impl NonlinearSystem {
 
 impl OdeSystem for NonlinearSystem {
     fn dim(&self) -> usize {
-        2 * self.coordinates()
+        2 * self.coordinates() + self.actuated.as_ref().map_or(0, Actuated::ode_states)
     }
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
@@ -788,10 +893,26 @@ impl OdeSystem for NonlinearSystem {
         }
         self.assemble(y, &frame);
         let n = self.coordinates();
-        let (dz, dzd) = dy.split_at_mut(n);
-        dz.copy_from_slice(&y[n..]);
+        let (dz, rest) = dy.split_at_mut(n);
+        let (dzd, rates) = rest.split_at_mut(n);
+        dz.copy_from_slice(&y[n..2 * n]);
+        if let Err(e) = self.actuate(t, y, &frame, rates) {
+            return self.fail(e, dy);
+        }
         if let Err(e) = self.accelerations(t, y, &frame, dzd) {
             self.fail(e, dy);
+        }
+    }
+
+    /// A sampled controller takes its sample when a segment starts at one of its sample
+    /// times (they are stop times: [`NonlinearSystem::sample_times`]).
+    fn segment_start(&mut self, t: f64, y: &[f64]) {
+        if self.actuated.is_none() || y.len() != self.dim() {
+            return;
+        }
+        let measured = self.measured_sliders(y);
+        if let Some(actuated) = self.actuated.as_mut() {
+            actuated.sample_at(&self.machine, self.trajectory.as_ref(), t, measured);
         }
     }
 }
