@@ -43,7 +43,7 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{
-    ActuatorState, MachineSnapshot, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION,
+    ActuatorState, ExternalLoads, MachineSnapshot, PointForce, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION,
     SceneModel, SliderMotion, force_table, platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};

@@ -362,7 +362,8 @@ impl CoupledSystem {
             if self.options.elastic_reactions {
                 m0 -= rho[2] * cos_ab * dot(&link.mass_psi, &eta[range]);
             }
-            out.moment0[i] = m0 / lengths[i];
+            // External point forces: their moment about B_i (docs/linear.md).
+            out.moment0[i] = (m0 - self.loads.moment[i]) / lengths[i];
             out.moment_s
                 .set_row(i, &(row * (link.inertia_b / lengths[i])));
             out.e[i] = e;

@@ -263,6 +263,21 @@ pub struct CoupledSystem {
     actuated: Option<Actuated>,
     /// The initial state (set by [`CoupledSystem::with_actuation`]; zero otherwise).
     initial: Vec<f64>,
+    /// External loads (the inputs of linear models; none in a run).
+    loads: AppliedLoads,
+}
+
+/// External loads as the equations use them.
+#[derive(Debug, Clone, Default)]
+struct AppliedLoads {
+    /// `M^-1 sum F psi(xi)` per modal coordinate (`n`; empty without point forces).
+    modal: Vec<f64>,
+    /// Moment about `B_i` of the point forces on link `i`, `sum F x` (N m).
+    moment: [f64; 3],
+    /// Sum of the point forces on link `i` (N).
+    transverse: [f64; 3],
+    /// Forces on the sliders along their guides (N).
+    slider: [f64; 3],
 }
 
 impl std::fmt::Debug for CoupledSystem {
@@ -407,6 +422,7 @@ impl CoupledSystem {
             failure: None,
             actuated: None,
             initial: vec![0.0; 2 * modes],
+            loads: AppliedLoads::default(),
         })
     }
 
@@ -437,6 +453,53 @@ impl CoupledSystem {
         self.initial = y;
         self.actuated = Some(actuated);
         Ok(self)
+    }
+
+    /// Applies external loads from now on (the inputs of linear models): a point force `F`
+    /// at `x` on link `i` adds `F psi_j(x / l)` to its modal forces and `F x` to the moment
+    /// about `B_i` of the link's balance, and `F sin(a - b)` to the slider's (docs/linear.md).
+    ///
+    /// # Errors
+    /// A point force off the links.
+    pub fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
+        use faer::linalg::solvers::Solve;
+        let mut applied = AppliedLoads {
+            slider: loads.slider,
+            ..AppliedLoads::default()
+        };
+        let mut modal = vec![0.0; self.modes];
+        for p in &loads.point {
+            crate::model::check_point_force(p)?;
+            let link = &self.machine.links[p.link];
+            applied.moment[p.link] += p.force * p.xi * link.length();
+            applied.transverse[p.link] += p.force;
+            for (j, k) in self.link_range(p.link).enumerate() {
+                modal[k] += p.force * link.basis.eval(j, p.xi)[0];
+            }
+        }
+        if !loads.point.is_empty() {
+            for i in 0..3 {
+                let range = self.link_range(i);
+                let ints = &self.machine.links[i].integrals;
+                let rhs = faer::Mat::from_fn(range.len(), 1, |j, _| modal[range.start + j]);
+                let solved = ints
+                    .mass
+                    .llt(faer::Side::Lower)
+                    .map_err(|_| {
+                        DynamicsError::Inconsistent(format!(
+                            "the modal mass matrix of link {} is not positive definite",
+                            i + 1
+                        ))
+                    })?
+                    .solve(&rhs);
+                for j in 0..range.len() {
+                    modal[range.start + j] = solved[(j, 0)];
+                }
+            }
+            applied.modal = modal;
+        }
+        self.loads = applied;
+        Ok(())
     }
 
     /// Slider masses (kg), with the actuators' reflected masses when actuated.

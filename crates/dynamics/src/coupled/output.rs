@@ -109,7 +109,7 @@ impl CoupledSystem {
                     0.0
                 };
             let f_c = tension[i] * ei + (mom / kin.lengths[i]) * ni;
-            let f_b = inertia - f_c;
+            let f_b = inertia - f_c - self.loads.transverse[i] * ni;
             // Actuated: the slider's equation of motion makes this the actuator's force.
             out.driving_force[i] = slider_mass[i] * rho_ddot + f_b.dot(&u);
         }

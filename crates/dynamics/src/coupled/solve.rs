@@ -186,6 +186,11 @@ impl CoupledSystem {
                 &mut slider_change[off..off]
             };
             Self::free_accelerations(link, kin, i, e, ed, q, a, h);
+            if !self.loads.modal.is_empty() {
+                for (aj, load) in a.iter_mut().zip(&self.loads.modal[off..off + r]) {
+                    *aj += load;
+                }
+            }
             let (a, h) = (&*a, &*h);
             let project = |v: &[f64]| Projected {
                 a: dot(v, a),
@@ -228,6 +233,9 @@ impl CoupledSystem {
                     link,
                     mass: slider_mass[i],
                     elastic_reactions: self.options.elastic_reactions,
+                    // The slider's own load, and the transverse loads on the link seen along
+                    // the guide (the slider carries `-F n` of them: `F_B . u` loses `F sin`).
+                    load: self.loads.slider[i] + self.loads.transverse[i] * kin.sin_ab[i],
                 };
                 c[6 + i] = slider.row(
                     &mut w[row..row + unknowns],
@@ -291,6 +299,8 @@ struct Slider<'a> {
     /// Slider mass plus the actuator's reflected mass (kg).
     mass: f64,
     elastic_reactions: bool,
+    /// External load along the guide (N).
+    load: f64,
 }
 
 impl Slider<'_> {
@@ -338,7 +348,7 @@ impl Slider<'_> {
                 - sin_ab * kin.moment_r[(i, col)];
         }
         w[3 + i] -= sin_ab * elastic;
-        force - c_0 - c_b * kin.beta0[i] - sin_ab * inertia.a
+        force + self.load - c_0 - c_b * kin.beta0[i] - sin_ab * inertia.a
             + cos_ab * kin.tension0[i]
             + sin_ab * kin.moment0[i]
     }

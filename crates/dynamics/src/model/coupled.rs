@@ -68,6 +68,9 @@ impl SceneModel for CoupledSystem {
     fn platform_follows_links(&self) -> bool {
         true
     }
+    fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
+        CoupledSystem::set_loads(self, loads)
+    }
     fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
         self.sample_times(t0, t1)
     }

@@ -85,6 +85,27 @@ impl MachineSnapshot {
     }
 }
 
+/// A transverse point force on a link.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PointForce {
+    /// The link (0-based).
+    pub link: usize,
+    /// Where along it (0..1).
+    pub xi: f64,
+    /// The force along the link's chord normal `n` (positive towards positive `w`, N).
+    pub force: f64,
+}
+
+/// External loads on a model: the inputs of its linear models (docs/linear.md).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ExternalLoads {
+    /// Force on each slider along its guide (N); a prescribed or locked slider takes it in
+    /// its drive, so it moves nothing.
+    pub slider: [f64; 3],
+    /// Transverse point forces on the links.
+    pub point: Vec<PointForce>,
+}
+
 /// Energies of a model's state (J).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ModelEnergies {
@@ -207,6 +228,35 @@ pub trait SceneModel: OdeSystem + Send {
         let _ = t;
         Ok(self.machine().links[link].deflection(&y[self.link_range(link)], xi))
     }
+    /// Slope `dw/dx` of link `link`'s deflection at `xi` (rad) for the state `y` at `t`: for
+    /// modal coordinates `sum_j psi_j'(xi) eta_j / l`.
+    ///
+    /// # Errors
+    /// As [`SceneModel::deflection`].
+    fn slope(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
+        let _ = t;
+        let model = &self.machine().links[link];
+        let eta = &y[self.link_range(link)];
+        let derivative: f64 = eta
+            .iter()
+            .enumerate()
+            .map(|(j, e)| e * model.basis.eval(j, xi)[1])
+            .sum();
+        Ok(derivative / model.length())
+    }
+    /// Applies `loads` from now on in the right-hand side (the inputs of linear models);
+    /// replaces the loads set before. Models without external loads refuse.
+    ///
+    /// # Errors
+    /// The model takes no external loads, or a load names a link or point that does not
+    /// exist.
+    fn set_loads(&mut self, loads: &ExternalLoads) -> Result<(), DynamicsError> {
+        let _ = loads;
+        Err(DynamicsError::Inconsistent(format!(
+            "the {} model takes no external loads (the coupled and nonlinear models do)",
+            self.kind()
+        )))
+    }
     /// Whether [`SceneModel::deflection`] is linear in the coordinates and needs no time
     /// (true for modal models). When false, the divergence guard, which tabulates the
     /// deflection once per coordinate, does not apply; such a model checks its own limits.
@@ -285,6 +335,22 @@ pub trait SceneModel: OdeSystem + Send {
             None => format!("state component {component}"),
         }
     }
+}
+
+/// Checks a point force's link and position.
+///
+/// # Errors
+/// A link other than 0, 1, 2 or a position outside `[0, 1]` or a non-finite force.
+pub(crate) fn check_point_force(p: &PointForce) -> Result<(), DynamicsError> {
+    if p.link > 2 || !(0.0..=1.0).contains(&p.xi) || !p.force.is_finite() {
+        return Err(DynamicsError::Inconsistent(format!(
+            "a point force needs link 1, 2 or 3, xi in [0, 1] and a finite force; got link {}, xi {}, force {}",
+            p.link + 1,
+            p.xi,
+            p.force
+        )));
+    }
+    Ok(())
 }
 
 /// The table of the platform's deviation from its commanded pose at the snapshots

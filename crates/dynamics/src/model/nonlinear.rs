@@ -70,6 +70,14 @@ impl SceneModel for NonlinearSystem {
     fn platform_follows_links(&self) -> bool {
         true
     }
+    fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
+        NonlinearSystem::set_loads(self, loads)
+    }
+    /// The slope of the deflection from the chord, by the derivative of the element's
+    /// cubic Hermite centre line ([`NonlinearSystem::slope_at`]).
+    fn slope(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
+        self.slope_at(t, link, xi, y)
+    }
     fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
         self.sample_times(t0, t1)
     }

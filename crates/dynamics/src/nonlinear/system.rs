@@ -199,6 +199,10 @@ pub struct NonlinearSystem {
     actuated: Option<Actuated>,
     /// The actuator forces of the last evaluation (actuated sliders).
     slider_forces: [f64; 3],
+    /// External point forces `(link, element, position in the element, force)` and slider
+    /// loads (the inputs of linear models; none in a run).
+    point_loads: Vec<(usize, usize, f64, f64)>,
+    slider_loads: [f64; 3],
 }
 
 impl std::fmt::Debug for NonlinearSystem {
@@ -305,6 +309,8 @@ impl NonlinearSystem {
             initial: Vec::new(),
             actuated: None,
             slider_forces: [0.0; 3],
+            point_loads: Vec::new(),
+            slider_loads: [0.0; 3],
         })
     }
 
@@ -470,6 +476,36 @@ impl NonlinearSystem {
 
     /// [`NonlinearSystem::deflection_at`] in a computed frame.
     fn deflection_in(&self, frame: &Frame, y: &[f64], i: usize, xi: f64) -> f64 {
+        let (point, _) = self.centre_line(frame, y, i, xi);
+        let b = frame.b[i][0];
+        let chord = (frame.c[i][0] - b).normalize();
+        (point - b).dot(&perp(&chord))
+    }
+
+    /// The slope `dw/dx` (rad) of link `link`'s deflection from its chord at `xi`, at
+    /// `(t, y)`: the tangent of the element's cubic Hermite centre line in the chord's frame,
+    /// `(T . n) / (T . e)`.
+    ///
+    /// # Errors
+    /// A wrong state length or a kinematic failure.
+    pub fn slope_at(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
+        self.check_state(y)?;
+        let frame = self.frame(t, y)?;
+        let i = link.min(2);
+        let (_, tangent) = self.centre_line(&frame, y, i, xi);
+        let chord = (frame.c[i][0] - frame.b[i][0]).normalize();
+        Ok(tangent.dot(&perp(&chord)) / tangent.dot(&chord))
+    }
+
+    /// The point at `xi` of link `i`'s centre line and its tangent `d r / d xi`: the cubic
+    /// Hermite curve through the element's end positions and tangents `(cos psi, sin psi)`.
+    fn centre_line(
+        &self,
+        frame: &Frame,
+        y: &[f64],
+        i: usize,
+        xi: f64,
+    ) -> (Vector2<f64>, Vector2<f64>) {
         let ne = self.options.elements;
         let s = xi.clamp(0.0, 1.0) * ne as f64;
         let e = (s.floor() as usize).min(ne - 1);
@@ -477,18 +513,21 @@ impl NonlinearSystem {
         let (q1, _) = self.node(y, frame, i, e);
         let (q2, _) = self.node(y, frame, i, e + 1);
         let le = self.links[i].element.length;
+        let (p1, p2) = (Vector2::new(q1[0], q1[1]), Vector2::new(q2[0], q2[1]));
+        let (t1, t2) = (
+            Vector2::new(q1[2].cos(), q1[2].sin()) * le,
+            Vector2::new(q2[2].cos(), q2[2].sin()) * le,
+        );
         let (h00, h10) = (
             2.0 * a * a * a - 3.0 * a * a + 1.0,
             a * a * a - 2.0 * a * a + a,
         );
         let (h01, h11) = (-2.0 * a * a * a + 3.0 * a * a, a * a * a - a * a);
-        let point = Vector2::new(q1[0], q1[1]) * h00
-            + Vector2::new(q1[2].cos(), q1[2].sin()) * (le * h10)
-            + Vector2::new(q2[0], q2[1]) * h01
-            + Vector2::new(q2[2].cos(), q2[2].sin()) * (le * h11);
-        let b = frame.b[i][0];
-        let chord = (frame.c[i][0] - b).normalize();
-        (point - b).dot(&perp(&chord))
+        let point = p1 * h00 + t1 * h10 + p2 * h01 + t2 * h11;
+        let (d00, d10) = (6.0 * a * a - 6.0 * a, 3.0 * a * a - 4.0 * a + 1.0);
+        let (d01, d11) = (-6.0 * a * a + 6.0 * a, 3.0 * a * a - 2.0 * a);
+        let tangent = p1 * d00 + t1 * d10 + p2 * d01 + t2 * d11;
+        (point, tangent)
     }
 
     /// Sliders from the rigid inverse kinematics of the nominal motion, platform points from
@@ -591,6 +630,50 @@ impl NonlinearSystem {
             }
         }
         self.forces = forces;
+        self.apply_point_loads(frame);
+    }
+
+    /// Sets external loads (the inputs of linear models): a transverse point force on a
+    /// link goes to the nodes of its element as the element's consistent load (the cubic
+    /// Hermite shape functions: forces `P h00(a)`, `P h01(a)` along the chord normal, moments
+    /// `P L_e h10(a)`, `P L_e h11(a)`); a slider load adds to the actuator's force.
+    ///
+    /// # Errors
+    /// A point force off the links.
+    pub fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
+        let ne = self.options.elements;
+        let mut points = Vec::with_capacity(loads.point.len());
+        for p in &loads.point {
+            crate::model::check_point_force(p)?;
+            let s = p.xi * ne as f64;
+            let e = (s.floor() as usize).min(ne - 1);
+            points.push((p.link, e, s - e as f64, p.force));
+        }
+        self.point_loads = points;
+        self.slider_loads = loads.slider;
+        Ok(())
+    }
+
+    /// Subtracts the external point loads from the nodal force buffer (it holds the internal
+    /// forces, which the accelerations oppose).
+    fn apply_point_loads(&mut self, frame: &Frame) {
+        let stride = 3 * (self.options.elements + 1);
+        for &(i, e, a, force) in &self.point_loads {
+            let chord = frame.c[i][0] - frame.b[i][0];
+            let n = perp(&chord.normalize());
+            let le = self.links[i].element.length;
+            let (h00, h10) = (
+                2.0 * a * a * a - 3.0 * a * a + 1.0,
+                a * a * a - 2.0 * a * a + a,
+            );
+            let (h01, h11) = (-2.0 * a * a * a + 3.0 * a * a, a * a * a - a * a);
+            let f = &mut self.forces[i * stride..(i + 1) * stride];
+            for (node, shape, moment) in [(e, h00, h10), (e + 1, h01, h11)] {
+                f[3 * node] -= force * shape * n.x;
+                f[3 * node + 1] -= force * shape * n.y;
+                f[3 * node + 2] -= force * le * moment;
+            }
+        }
     }
 
     /// Type-II measure of the chords `B_i -> C_i` (as [`crate::equilibrium_measure`]).
@@ -711,8 +794,9 @@ impl NonlinearSystem {
                 let f = &self.forces[i * stride..(i + 1) * stride];
                 let u = self.machine.geometry.legs[i].guide.direction.into_inner();
                 let half = 0.5 * self.links[i].node_mass;
-                acc[self.slider_index(i)] =
-                    (self.slider_forces[i] - (f[0] * u.x + f[1] * u.y)) / (masses[i] + half);
+                acc[self.slider_index(i)] = (self.slider_forces[i] + self.slider_loads[i]
+                    - (f[0] * u.x + f[1] * u.y))
+                    / (masses[i] + half);
             }
         }
         Ok(())

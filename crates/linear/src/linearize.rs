@@ -1,0 +1,315 @@
+//! The linearisation of any scene model about a state: `x' = A x + B u`, `y = C x + D u`
+//! with `x` the deviation of the model's state from the operating point.
+//!
+//! * `A = df/dy` by central differences with one Richardson extrapolation (error of fourth
+//!   order in the step; exact for the models' quadratic terms, Dahlquist & Bjorck,
+//!   *Numerical Methods in Scientific Computing*, 2008, 3.3.4);
+//! * `B`: the right-hand side is affine in the external loads
+//!   ([`flexprr_dynamics::SceneModel::set_loads`]), so the difference of the right-hand
+//!   sides with a unit load and without is exact;
+//! * `C`: outputs that are functions of the coordinates (slider positions and platform pose
+//!   from the model's snapshot, deflection and slope from the model) by the same differences;
+//!   the acceleration of a link point is `n . dr/dq q''` with `q''` the acceleration rows of
+//!   `A x + B u`, which gives its `C` and `D` rows.
+
+use faer::Mat;
+use flexprr_dynamics::{ExternalLoads, PointForce, SceneModel};
+
+use crate::{Axis, Input, LinearError, Output};
+
+/// A linear model of a scene model about an operating point.
+#[derive(Debug, Clone)]
+pub struct Linearization {
+    /// The time of the operating point (s).
+    pub t: f64,
+    /// The operating point (the model's state).
+    pub state: Vec<f64>,
+    /// Number of generalized coordinates (the state holds them, their rates, then the
+    /// control law's states).
+    pub coordinates: usize,
+    /// `A` (`n x n`).
+    pub a: Mat<f64>,
+    /// The inputs, in the order of `B`'s columns.
+    pub inputs: Vec<Input>,
+    /// `B` (`n x m`).
+    pub b: Mat<f64>,
+    /// The outputs, in the order of `C`'s rows.
+    pub outputs: Vec<Output>,
+    /// `C` (`p x n`).
+    pub c: Mat<f64>,
+    /// `D` (`p x m`).
+    pub d: Mat<f64>,
+    /// The outputs' values at the operating point.
+    pub output_values: Vec<f64>,
+}
+
+/// Relative step of the central differences (with Richardson extrapolation the truncation
+/// error is `O(h^4)`; round-off grows as `eps / h`).
+const RELATIVE_STEP: f64 = 1e-5;
+
+/// Smallest scale of a state component for the step (m, rad, m/s, rad/s).
+const STEP_FLOOR: f64 = 1e-2;
+
+/// The difference step of state component `j`.
+fn step(y: f64) -> f64 {
+    let r = std::env::var("LIN_STEP").ok().and_then(|s| s.parse().ok()).unwrap_or(RELATIVE_STEP);
+    let f = std::env::var("LIN_FLOOR").ok().and_then(|s| s.parse().ok()).unwrap_or(STEP_FLOOR);
+    r * y.abs().max(f)
+}
+
+/// `(g(y + h e_j) - g(y - h e_j)) / 2h` extrapolated from `h` and `h / 2`, for every `j` of
+/// `columns`, written column by column by `put(j, derivative)`.
+fn differentiate(
+    y: &[f64],
+    columns: std::ops::Range<usize>,
+    width: usize,
+    g: &mut dyn FnMut(&[f64], &mut [f64]) -> Result<(), LinearError>,
+    put: &mut dyn FnMut(usize, &[f64]),
+) -> Result<(), LinearError> {
+    let mut probe = y.to_vec();
+    let (mut plus, mut minus) = (vec![0.0; width], vec![0.0; width]);
+    let mut coarse = vec![0.0; width];
+    let mut column = vec![0.0; width];
+    for j in columns {
+        for (level, h) in [step(y[j]), 0.5 * step(y[j])].into_iter().enumerate() {
+            probe[j] = y[j] + h;
+            g(&probe, &mut plus)?;
+            probe[j] = y[j] - h;
+            g(&probe, &mut minus)?;
+            probe[j] = y[j];
+            let target = if level == 0 { &mut coarse } else { &mut column };
+            for k in 0..width {
+                target[k] = (plus[k] - minus[k]) / (2.0 * h);
+            }
+        }
+        for k in 0..width {
+            column[k] = (4.0 * column[k] - coarse[k]) / 3.0;
+        }
+        put(j, &column);
+    }
+    Ok(())
+}
+
+/// The right-hand side of `model` at `(t, y)`, or the model's failure there.
+fn rhs(model: &mut dyn SceneModel, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), LinearError> {
+    model.rhs(t, y, dy);
+    if let Some(e) = model.take_failure() {
+        return Err(LinearError::Model(e));
+    }
+    if dy.iter().any(|v| !v.is_finite()) {
+        return Err(LinearError::Channel(format!(
+            "the {} model's right-hand side is not finite near the operating point",
+            model.kind()
+        )));
+    }
+    Ok(())
+}
+
+/// The loads of one unit input.
+fn unit_load(input: &Input) -> ExternalLoads {
+    match *input {
+        Input::SliderForce(i) => {
+            let mut loads = ExternalLoads::default();
+            loads.slider[i] = 1.0;
+            loads
+        }
+        Input::PointForce { link, xi } => ExternalLoads {
+            point: vec![PointForce {
+                link,
+                xi,
+                force: 1.0,
+            }],
+            ..ExternalLoads::default()
+        },
+    }
+}
+
+/// The value of an output that is a function of the coordinates (all but accelerations),
+/// or for an acceleration, the position of the link point projected on `normal`.
+fn output_value(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    output: &Output,
+    normal: [f64; 2],
+) -> Result<f64, LinearError> {
+    Ok(match *output {
+        Output::SliderPosition(i) => model.snapshot(t, y)?.sliders[i].position,
+        Output::Platform(axis) => {
+            let pose = model.snapshot(t, y)?.platform.pose;
+            match axis {
+                Axis::X => pose.x,
+                Axis::Y => pose.y,
+                Axis::Phi => pose.phi,
+            }
+        }
+        Output::Deflection { link, xi } => model.deflection(t, link, xi, y)?,
+        Output::Slope { link, xi } => model.slope(t, link, xi, y)?,
+        Output::Acceleration { link, xi } => {
+            let point = link_point(model, t, y, link, xi)?;
+            point[0] * normal[0] + point[1] * normal[1]
+        }
+    })
+}
+
+/// The position of the point of link `link` at `xi`: `B + xi (C - B) + w n` with the chord
+/// `B -> C` from the model's sliders and platform.
+fn link_point(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    link: usize,
+    xi: f64,
+) -> Result<[f64; 2], LinearError> {
+    let (b, c) = chord(model, t, y, link)?;
+    let w = model.deflection(t, link, xi, y)?;
+    let (dx, dy) = (c[0] - b[0], c[1] - b[1]);
+    let length = dx.hypot(dy);
+    let normal = [-dy / length, dx / length];
+    Ok([
+        b[0] + xi * dx + w * normal[0],
+        b[1] + xi * dy + w * normal[1],
+    ])
+}
+
+/// The chord `B_i`, `C_i` of link `link` at `(t, y)`.
+fn chord(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    link: usize,
+) -> Result<([f64; 2], [f64; 2]), LinearError> {
+    let snapshot = model.snapshot(t, y)?;
+    let leg = &model.machine().geometry.legs[link];
+    let u = leg.guide.direction.into_inner();
+    let rho = snapshot.sliders[link].position;
+    let b = leg.guide.anchor.coords + rho * u;
+    let pose = snapshot.platform.pose;
+    let (sin, cos) = pose.phi.sin_cos();
+    let a = leg.attachment;
+    let c = [
+        pose.x + cos * a.x - sin * a.y,
+        pose.y + sin * a.x + cos * a.y,
+    ];
+    Ok(([b.x, b.y], c))
+}
+
+/// Linearises `model` about its state `y` at `t` for `inputs` and `outputs`.
+///
+/// # Errors
+/// The model fails near the operating point (kinematics, a singular pose), an input the
+/// model cannot take (the KED model takes no loads), or a non-finite right-hand side.
+pub fn linearize(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    inputs: &[Input],
+    outputs: &[Output],
+) -> Result<Linearization, LinearError> {
+    let n = model.dim();
+    if y.len() != n {
+        return Err(LinearError::Channel(format!(
+            "the operating point has {} entries, the {} model's state {n}",
+            y.len(),
+            model.kind()
+        )));
+    }
+    let coordinates = model.modes();
+    let mut a = Mat::zeros(n, n);
+    model.set_loads(&ExternalLoads::default()).ok();
+    differentiate(
+        y,
+        0..n,
+        n,
+        &mut |probe, out| rhs(model, t, probe, out),
+        &mut |j, column| {
+            for (k, v) in column.iter().enumerate() {
+                a[(k, j)] = *v;
+            }
+        },
+    )?;
+    let mut f0 = vec![0.0; n];
+    rhs(model, t, y, &mut f0)?;
+    let mut b = Mat::zeros(n, inputs.len());
+    let mut loaded = vec![0.0; n];
+    for (k, input) in inputs.iter().enumerate() {
+        model.set_loads(&unit_load(input))?;
+        let outcome = rhs(model, t, y, &mut loaded);
+        model.set_loads(&ExternalLoads::default())?;
+        outcome?;
+        for i in 0..n {
+            b[(i, k)] = loaded[i] - f0[i];
+        }
+    }
+    let (c, d, output_values) = output_matrices(model, t, y, coordinates, &a, &b, outputs)?;
+    Ok(Linearization {
+        t,
+        state: y.to_vec(),
+        coordinates,
+        a,
+        inputs: inputs.to_vec(),
+        b,
+        outputs: outputs.to_vec(),
+        c,
+        d,
+        output_values,
+    })
+}
+
+/// `C`, `D` and the outputs' values at the operating point.
+#[allow(clippy::type_complexity)]
+fn output_matrices(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    coordinates: usize,
+    a: &Mat<f64>,
+    b: &Mat<f64>,
+    outputs: &[Output],
+) -> Result<(Mat<f64>, Mat<f64>, Vec<f64>), LinearError> {
+    let n = y.len();
+    let (p, m) = (outputs.len(), b.ncols());
+    let mut c = Mat::zeros(p, n);
+    let mut d = Mat::zeros(p, m);
+    let mut values = Vec::with_capacity(p);
+    for (row, output) in outputs.iter().enumerate() {
+        let normal = match *output {
+            Output::Acceleration { link, .. } => {
+                let (b, c) = chord(model, t, y, link)?;
+                let (dx, dy) = (c[0] - b[0], c[1] - b[1]);
+                let length = dx.hypot(dy);
+                [-dy / length, dx / length]
+            }
+            _ => [0.0; 2],
+        };
+        values.push(output_value(model, t, y, output, normal)?);
+        let mut gradient = vec![0.0; coordinates];
+        differentiate(
+            y,
+            0..coordinates,
+            1,
+            &mut |probe, out| {
+                out[0] = output_value(model, t, probe, output, normal)?;
+                Ok(())
+            },
+            &mut |j, column| gradient[j] = column[0],
+        )?;
+        if let Output::Acceleration { .. } = output {
+            // n . r'' = (d(n . r)/dq) q'' at rest: the acceleration rows of A x + B u.
+            for (j, g) in gradient.iter().enumerate() {
+                for col in 0..n {
+                    c[(row, col)] += g * a[(coordinates + j, col)];
+                }
+                for col in 0..m {
+                    d[(row, col)] += g * b[(coordinates + j, col)];
+                }
+            }
+            values[row] = 0.0;
+        } else {
+            for (j, g) in gradient.iter().enumerate() {
+                c[(row, j)] = *g;
+            }
+        }
+    }
+    Ok((c, d, values))
+}

@@ -1,0 +1,85 @@
+//! Whole-machine modes from a linearisation: the eigenvalues `lambda` of `A`, each pair of
+//! complex conjugates one mode, with `frequency_hz = |lambda| / 2 pi` (the undamped natural
+//! frequency) and `damping_ratio = -Re(lambda) / |lambda|`, as MATLAB's `damp` reports them,
+//! and the mode's shape at the linearisation's outputs.
+
+use faer::Mat;
+use faer::linalg::solvers::Eigen;
+
+use crate::frf::Complex;
+use crate::{Linearization, LinearError};
+
+/// Frequencies below this (Hz) are rigid-body (zero) modes and are left out.
+const ZERO_FREQUENCY_HZ: f64 = 1e-3;
+
+/// One mode of a linear model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mode {
+    /// The eigenvalue `lambda` (1/s).
+    pub eigenvalue: Complex,
+    /// `|lambda| / 2 pi` (Hz).
+    pub frequency_hz: f64,
+    /// `-Re(lambda) / |lambda|`.
+    pub damping_ratio: f64,
+    /// The eigenvector seen at the linearisation's outputs (`C v`), scaled so that its
+    /// largest entry is 1 (real).
+    pub shape: Vec<Complex>,
+}
+
+/// The modes of `lin` sorted by frequency, rigid-body (zero-frequency) modes left out; a
+/// real eigenvalue (an overdamped motion, a controller's integral) is a mode of damping
+/// ratio 1.
+///
+/// # Errors
+/// The eigenvalue problem did not converge.
+pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
+    let n = lin.a.nrows();
+    let eigen = Eigen::new_from_real(lin.a.as_ref())
+        .map_err(|e| LinearError::Numerics(format!("eigenvalues of A ({n} x {n}): {e:?}")))?;
+    let (values, vectors) = (eigen.S(), eigen.U());
+    let scale = (0..n)
+        .map(|k| {
+            let v = values[k];
+            v.re.hypot(v.im)
+        })
+        .fold(0.0, f64::max);
+    let mut modes = Vec::new();
+    for k in 0..n {
+        let lambda = Complex::new(values[k].re, values[k].im);
+        let modulus = lambda.norm();
+        if modulus / std::f64::consts::TAU < ZERO_FREQUENCY_HZ
+            || lambda.im < -1e-9 * scale.max(1.0)
+        {
+            continue;
+        }
+        let column: Vec<Complex> = (0..n)
+            .map(|j| Complex::new(vectors[(j, k)].re, vectors[(j, k)].im))
+            .collect();
+        modes.push(Mode {
+            eigenvalue: lambda,
+            frequency_hz: modulus / std::f64::consts::TAU,
+            damping_ratio: -lambda.re / modulus,
+            shape: normalised(&lin.c, &column),
+        });
+    }
+    modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    Ok(modes)
+}
+
+/// `C v`, divided by its entry of largest modulus.
+fn normalised(c: &Mat<f64>, v: &[Complex]) -> Vec<Complex> {
+    let seen: Vec<Complex> = (0..c.nrows())
+        .map(|i| {
+            (0..c.ncols()).fold(Complex::default(), |sum, j| sum + v[j].scale(c[(i, j)]))
+        })
+        .collect();
+    let largest = seen
+        .iter()
+        .copied()
+        .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+        .unwrap_or_default();
+    if largest.norm() <= 0.0 {
+        return seen;
+    }
+    seen.iter().map(|s| s.div(largest)).collect()
+}
