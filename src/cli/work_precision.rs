@@ -88,6 +88,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
             .iter()
             .map(|name| model("--models", name))
             .collect::<Result<_, _>>()?;
+        refuse_repeats("--models", names)?;
     }
     if let Some(name) = &args.reference_model {
         config.reference_model = Some(model("--reference-model", name)?);
@@ -124,6 +125,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
                 })
             })
             .collect::<Result<_, _>>()?;
+        refuse_repeats("--methods", names)?;
     }
     if !(args.target_error.is_finite() && args.target_error > 0.0) {
         return Err(Failure::bad_input(format!(
@@ -153,6 +155,12 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
             .apply(&scene)
             .map_err(option_error("--models".to_string()))?;
         model_scenes.push((choice.label(&scene), applied));
+    }
+    if let Some(names) = &args.models {
+        let labels: Vec<String> = model_scenes.iter().map(|(l, _)| l.clone()).collect();
+        refuse_repeats("--models", &labels).map_err(|e| {
+            Failure::bad_input(format!("{} (given: {})", e.message, names.join(",")))
+        })?;
     }
     // A method named on the command line must apply to at least one measured model; the
     // default list simply skips those that do not (said in the output).
@@ -185,15 +193,15 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
             .join(&scene.name)
             .join("work_precision")
     });
-    std::fs::create_dir_all(&out)
-        .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
-
     let clock = std::time::Instant::now();
     let reference = match &args.reference {
         Some(path) => Reference::read_csv(path).map_err(failure)?,
         None => Reference::compute(&scene, &config).map_err(failure)?,
     };
     let reference_s = clock.elapsed().as_secs_f64();
+    // Created once there is a reference to measure against: a refused one writes nothing.
+    std::fs::create_dir_all(&out)
+        .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
     let reference_line = reference.agreement.map(|a| {
         format!(
             "reference: {} with {} at rtol {:e}, checked with {} at rtol {:e}: agree to {:.1e} \
@@ -239,6 +247,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     for f in &failures {
         eprintln!("failed: {f}");
     }
+    let measured = rows.len();
     rows.extend(peers);
 
     let csv = csv_text(&rows).map_err(failure)?;
@@ -276,6 +285,15 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         }
     }
     write("work_precision.md", &md)?;
+    if measured == 0 {
+        return Err(Failure::run(format!(
+            "work-precision of scene {:?}: no point was measured, every one failed ({}; all \
+             in {})",
+            scene.name,
+            failures.first().map_or("no method applies", String::as_str),
+            out.join("work_precision.md").display()
+        )));
+    }
     write_svg(
         &rows,
         &out.join("work_precision.svg"),
@@ -289,4 +307,16 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         out.join("work_precision.csv").display()
     );
     Ok(())
+}
+
+/// Refuses a name given twice to `option` (a repeat would only give duplicate rows).
+fn refuse_repeats(option: &str, names: &[String]) -> Result<(), Failure> {
+    let trimmed: Vec<&str> = names.iter().map(|n| n.trim()).collect();
+    match (1..trimmed.len()).find(|&k| trimmed[..k].contains(&trimmed[k])) {
+        Some(k) => Err(Failure::bad_input(format!(
+            "{option}: {:?} is named twice; each is measured once",
+            trimmed[k]
+        ))),
+        None => Ok(()),
+    }
 }

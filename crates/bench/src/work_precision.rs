@@ -121,6 +121,16 @@ impl ModelChoice {
         }
     }
 
+    /// The name [`ModelChoice::parse`] reads back (`ked`, `nonlinear`, `nonlinear:16`).
+    pub fn name(self) -> String {
+        match self {
+            Self::Ked => "ked".to_string(),
+            Self::Coupled => "coupled".to_string(),
+            Self::Nonlinear(None) => "nonlinear".to_string(),
+            Self::Nonlinear(Some(n)) => format!("nonlinear:{n}"),
+        }
+    }
+
     /// The scene's own model.
     pub fn of(scene: &Scene) -> Self {
         match scene.coupling {
@@ -330,6 +340,16 @@ impl WorkPrecisionConfig {
         if self.methods.is_empty() {
             return bad("methods", "no method to measure".to_string());
         }
+        // Each method, model and tolerance once: a repeat would only give duplicate rows.
+        if let Some(m) = first_repeat(&self.methods, |a, b| a == b) {
+            return bad("methods", format!("{} is named twice", m.name()));
+        }
+        if let Some(m) = first_repeat(&self.models, |a, b| a == b) {
+            return bad("models", format!("{} is named twice", m.name()));
+        }
+        if let Some(t) = first_repeat(&self.tolerances, |a, b| a.to_bits() == b.to_bits()) {
+            return bad("tolerances", format!("{t:e} is named twice"));
+        }
         if self.repeats == 0 {
             return bad("repeats", "at least one timed run is needed".to_string());
         }
@@ -439,6 +459,15 @@ impl WorkPrecisionConfig {
     }
 }
 
+/// The first element of `items` equal (by `same`) to an earlier one.
+fn first_repeat<T>(items: &[T], same: impl Fn(&T, &T) -> bool) -> Option<&T> {
+    items
+        .iter()
+        .enumerate()
+        .find(|(k, a)| items[..*k].iter().any(|b| same(a, b)))
+        .map(|(_, a)| a)
+}
+
 /// An achieved error, relative to the solution's size (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AchievedError {
@@ -514,6 +543,69 @@ fn solve(
             ),
             None => format!("{} at rtol {rtol:e}: {interrupted}", method.name()),
         })
+}
+
+/// Integrates the reference model as `flexprr run` does ([`flexprr_run::integrate_model`]:
+/// the scene's stop times, the run layer's divergence guard, the model's own failure
+/// causes such as a collapse), with `method` and `options`. `role` names the integration
+/// in the error (`pilot run`, `reference`, `check`).
+///
+/// A reference that diverged or failed is never measured against: its failure comes back
+/// as [`ScenarioError::Run`] naming the scene, the model, the integration, the reason and
+/// the time.
+fn solve_reference(
+    scene: &Scene,
+    label: &str,
+    role: &str,
+    model: &mut dyn SceneModel,
+    method: Method,
+    options: Options,
+) -> Result<Solution, ScenarioError> {
+    let _ = model.take_failure();
+    let rtol = options.rtol;
+    let handle = flexprr_scene::Registry::default()
+        .method(method.name())
+        .ok_or_else(|| {
+            ScenarioError::Run(format!(
+                "no integrator {:?} in the default registry",
+                method.name()
+            ))
+        })?;
+    let integration = flexprr_run::integrate_model(
+        scene,
+        handle.integrator(options).as_ref(),
+        model,
+        &mut |_| {},
+    );
+    match integration.failure {
+        None => Ok(integration.solution),
+        Some(failure) => {
+            let reason = failure.to_string();
+            // Every failure names its time in its own words; added where one does not.
+            let when = match failure.time() {
+                Some(t) if !reason.contains("t = ") => format!(" at t = {t} s"),
+                _ => String::new(),
+            };
+            Err(ScenarioError::Run(format!(
+                "scene {:?}, reference model {label}: the {role} ({} at rtol {rtol:e}) failed{when}: \
+                 {reason}; a failed reference is not measured against",
+                scene.name,
+                method.name(),
+            )))
+        }
+    }
+}
+
+/// The first output time at which `solution` of `model` passes the run layer's divergence
+/// limit ([`flexprr_run::guard::DivergenceGuard`], the check `flexprr run` makes after every
+/// step, made here at the output times of a timed integration that ran without it).
+fn divergence(model: &dyn SceneModel, solution: &Solution) -> Option<flexprr_run::RunError> {
+    use flexprr_integrators::{Flow, Observer as _};
+    let mut guard = flexprr_run::guard::DivergenceGuard::new(model);
+    (0..solution.len()).find_map(|k| match guard.on_step(solution.t[k], solution.y(k)) {
+        Flow::Stop => guard.take_divergence(),
+        _ => None,
+    })
 }
 
 /// The scene's model from its one builder.
@@ -747,32 +839,35 @@ impl Reference {
         let mut system = build(&model_scene)?;
         let in_model = |e: String| ScenarioError::Run(format!("reference model {label}: {e}"));
         let pilot_rtol = 1e-8;
-        let pilot = solve(
+        let pilot = solve_reference(
             &model_scene,
+            &label,
+            "pilot run",
             system.as_mut(),
             Method::Abm,
             model_scene.options.clone().rtol(pilot_rtol),
-        )
-        .map_err(in_model)?;
+        )?;
         let pilot = Self::from_solution(measure, system.as_mut(), pilot)
             .map_err(|e| in_model(format!("pilot run for the reference: {e}")))?;
         let size = pilot.displacement_size;
         let options = |rtol: f64| Options::default().rtol(rtol).atol(rtol * size);
         let check_rtol = plan.rtol * plan.check_factor;
-        let main = solve(
+        let main = solve_reference(
             &model_scene,
+            &label,
+            "reference",
             system.as_mut(),
             plan.method,
             options(plan.rtol),
-        )
-        .map_err(in_model)?;
-        let check = solve(
+        )?;
+        let check = solve_reference(
             &model_scene,
+            &label,
+            "check",
             system.as_mut(),
             plan.check_method,
             options(check_rtol),
-        )
-        .map_err(in_model)?;
+        )?;
         let mut reference = Self::from_solution(measure, system.as_mut(), main)
             .map_err(|e| in_model(format!("reference: {e}")))?;
         let agreement = reference.errors_of(system.as_mut(), &check)?;
@@ -1133,8 +1228,17 @@ pub fn measure(
             ),
         });
     }
+    let models = config.measured_models(scene);
+    let labels: Vec<String> = models.iter().map(|m| m.label(scene)).collect();
+    if let Some(twice) = first_repeat(&labels, |a, b| a == b) {
+        return Err(ScenarioError::Input {
+            location: None,
+            key: "models".to_string(),
+            message: format!("{twice} is named twice (on scene {:?})", scene.name),
+        });
+    }
     let (mut rows, mut failures) = (Vec::new(), Vec::new());
-    for choice in config.measured_models(scene) {
+    for choice in models {
         let model_scene = choice.apply(scene)?;
         let label = if config.models.is_empty() {
             String::new()
@@ -1172,6 +1276,15 @@ pub fn measure(
                         continue;
                     }
                 };
+                // Untimed: a point that left the small-deflection range, as the run
+                // layer's guard sees it, is a failed point, not a large error.
+                if let Some(diverged) = divergence(system.as_ref(), &solution) {
+                    failures.push(format!(
+                        "{place}{} at rtol {rtol:e}: {diverged}",
+                        method.name()
+                    ));
+                    continue;
+                }
                 let error = match reference.errors_of(system.as_mut(), &solution) {
                     Ok(error) => error,
                     Err(e) => {
