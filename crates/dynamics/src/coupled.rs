@@ -324,6 +324,27 @@ struct Kinetics {
     type_ii_measure: f64,
 }
 
+/// The chords of the deflected links at one instant (module documentation).
+struct Chords {
+    /// `L_i` (m).
+    lengths: [f64; 3],
+    /// `L_i'` (m/s).
+    length_dot: [f64; 3],
+    /// The part of `L_i''` without `eta''` (m/s²).
+    length_ddot0: [f64; 3],
+}
+
+/// The columns of the platform's balance at one instant: `E_i`, `N_i`, the normalised
+/// columns of the type-II measure, and the links' moments about `B_i` over `L_i` (without
+/// `eta''`, and their `s` rows).
+struct Balance {
+    e_cols: Matrix3<f64>,
+    n_cols: Matrix3<f64>,
+    measure_cols: Matrix3<f64>,
+    moment0: Vector3<f64>,
+    moment_s: Matrix3<f64>,
+}
+
 /// The coupled rigid-flexible 3-PRR as an [`OdeSystem`]: state
 /// `y = (eta_1, eta_2, eta_3, eta_1', eta_2', eta_3')` as in [`crate::ModalSystem`].
 pub struct CoupledSystem {
@@ -634,7 +655,12 @@ impl CoupledSystem {
     }
 
     /// Rigid kinematics and the linear-in-`eta''` pieces at `(t, y)`; fills
-    /// `scratch.g0_eta`, `scratch.inv_g0_eta` and `scratch.length_gradient`.
+    /// `scratch.g0_eta`, `scratch.inv_g0_eta` and `scratch.length_gradient`. In four steps
+    /// (module documentation): the sliders on their inverse-kinematics path, the chords
+    /// shortened by the bending ([`Self::foreshortened_chords`]), the platform that closes
+    /// the chords ([`Self::closing_platform`]), the chord angles and the links' moments
+    /// ([`Self::chord_kinetics`]), and the chord tensions from the platform's balance
+    /// ([`Self::chord_tensions`]).
     fn kinetics(&mut self, t: f64, y: &[f64]) -> Result<Kinetics, DynamicsError> {
         let n = self.modes;
         let (eta, eta_dot) = y.split_at(n);
@@ -649,9 +675,44 @@ impl CoupledSystem {
             let leg = &rigid.legs[i];
             [leg.rho, leg.rho_dot, leg.rho_ddot]
         });
-        let mut lengths = [0.0; 3];
-        let mut length_dot = [0.0; 3];
-        let mut length_ddot0 = [0.0; 3];
+        let chords = self.foreshortened_chords(eta, eta_dot);
+        let (motion, f_inv) = self.closing_platform(t, nominal, &rho, &chords, eta, &rigid)?;
+        let lengths = chords.lengths;
+        let mut out = Kinetics {
+            nominal,
+            pose: motion.pose,
+            velocity: motion.velocity,
+            acceleration0: motion.acceleration,
+            q_of_s: f_inv * Matrix3::from_diagonal(&Vector3::from(lengths)),
+            lengths,
+            rho,
+            e: [Vector2::zeros(); 3],
+            n: [Vector2::zeros(); 3],
+            beta_dot: [0.0; 3],
+            beta0: Vector3::zeros(),
+            beta_s: Matrix3::zeros(),
+            tension0: Vector3::zeros(),
+            tension_s: Matrix3::zeros(),
+            tension_m: Matrix3::zeros(),
+            sin_ab: [0.0; 3],
+            cos_ab: [0.0; 3],
+            type_ii_measure: f64::NAN,
+        };
+        let balance = self.chord_kinetics(&mut out, &chords, eta);
+        self.chord_tensions(t, eta, &rigid, &mut out, &balance)?;
+        Ok(out)
+    }
+
+    /// The chords of the deflected links: `L_i = l - (1/(2l)) eta_i^T G0 eta_i`, its rate
+    /// and the part of `L_i''` without `eta''` (module documentation), or the link lengths
+    /// without foreshortening; fills `scratch.g0_eta` (`G0 eta / l`), `scratch.inv_g0_eta`
+    /// and `scratch.length_gradient` (`dL / d eta`).
+    fn foreshortened_chords(&mut self, eta: &[f64], eta_dot: &[f64]) -> Chords {
+        let mut chords = Chords {
+            lengths: [0.0; 3],
+            length_dot: [0.0; 3],
+            length_ddot0: [0.0; 3],
+        };
         for (i, link) in self.links.iter().enumerate() {
             let range = self.offsets[i]..self.offsets[i] + link.r;
             let r = link.r;
@@ -671,75 +732,88 @@ impl CoupledSystem {
                     dot(&inv_g0[j * r..(j + 1) * r], e) / link.length;
             }
             if self.options.foreshortening {
-                lengths[i] = link.length - 0.5 * quad;
-                length_dot[i] = -dot(&self.scratch.g0_eta[range.clone()], ed);
-                length_ddot0[i] = -quad_dot;
+                chords.lengths[i] = link.length - 0.5 * quad;
+                chords.length_dot[i] = -dot(&self.scratch.g0_eta[range.clone()], ed);
+                chords.length_ddot0[i] = -quad_dot;
                 for j in range {
                     self.scratch.length_gradient[j] = -self.scratch.g0_eta[j];
                 }
             } else {
-                lengths[i] = link.length;
+                chords.lengths[i] = link.length;
                 self.scratch.length_gradient[range].fill(0.0);
             }
         }
-        let (motion, f_inv) = if self.options.foreshortening {
+        chords
+    }
+
+    /// The platform that the sliders and `chords` close, and `F^-1`: with foreshortening the
+    /// forward kinematics of the chords ([`Self::platform_motion`]; a collapse when it
+    /// fails), else the nominal motion with the closure's Jacobian at the nominal pose.
+    fn closing_platform(
+        &mut self,
+        t: f64,
+        nominal: PlatformMotion,
+        rho: &[[f64; 3]; 3],
+        chords: &Chords,
+        eta: &[f64],
+        rigid: &MachineKinematics,
+    ) -> Result<(PlatformMotion, Matrix3<f64>), DynamicsError> {
+        if self.options.foreshortening {
             self.counters.forward_kinematics_solves += 1;
-            self.platform_motion(t, &nominal.pose, &rho, lengths, length_dot, length_ddot0)
-                .map_err(|e| self.collapse_or(e, t, eta, &rigid, 0.0))?
-        } else {
-            // Chords of length l: the platform on its nominal path.
-            let closure = self
-                .machine
+            return self
+                .platform_motion(
+                    t,
+                    &nominal.pose,
+                    rho,
+                    chords.lengths,
+                    chords.length_dot,
+                    chords.length_ddot0,
+                )
+                .map_err(|e| self.collapse_or(e, t, eta, rigid, 0.0));
+        }
+        // Chords of length l: the platform on its nominal path.
+        let closure =
+            self.machine
                 .geometry
-                .closure(&nominal.pose, rho.map(|r| r[0]), lengths);
-            let f_inv = closure.pose_jacobian.try_inverse().ok_or(
-                DynamicsError::SingularInverseDynamics {
+                .closure(&nominal.pose, rho.map(|r| r[0]), chords.lengths);
+        let f_inv =
+            closure
+                .pose_jacobian
+                .try_inverse()
+                .ok_or(DynamicsError::SingularInverseDynamics {
                     t,
                     measure: 0.0,
                     threshold: self.machine.geometry.thresholds.type_ii,
-                },
-            )?;
-            (nominal, f_inv)
-        };
+                })?;
+        Ok((nominal, f_inv))
+    }
+
+    /// Per chord: its direction `e_i` and normal `n_i`, the angle's rate `b_i'`, the part of
+    /// `b_i''` without `eta''` and its `eta''` row (`N_i . Q / L_i`), and the link's moment
+    /// about `B_i` split the same way (module documentation); into `out`, and the columns
+    /// of the platform balance into the returned [`Balance`].
+    fn chord_kinetics(&self, out: &mut Kinetics, chords: &Chords, eta: &[f64]) -> Balance {
         let geometry = &self.machine.geometry;
-        let pose = motion.pose;
-        let (sin, cos) = pose.phi.sin_cos();
+        let (lengths, length_dot) = (chords.lengths, chords.length_dot);
+        let rho = out.rho;
+        let (sin, cos) = out.pose.phi.sin_cos();
         let rotate = |c: &Vector2<f64>| Vector2::new(cos * c.x - sin * c.y, sin * c.x + cos * c.y);
         let (p, v) = (
-            Vector2::new(pose.x, pose.y),
-            Vector2::new(motion.velocity.x, motion.velocity.y),
+            Vector2::new(out.pose.x, out.pose.y),
+            Vector2::new(out.velocity.x, out.velocity.y),
         );
-        let omega = motion.velocity.z;
-        let a0 = motion.acceleration;
-        let q_of_s = f_inv * Matrix3::from_diagonal(&Vector3::from(lengths));
-        let mut out = Kinetics {
-            nominal,
-            pose,
-            velocity: motion.velocity,
-            acceleration0: a0,
-            q_of_s,
-            lengths,
-            rho,
-            e: [Vector2::zeros(); 3],
-            n: [Vector2::zeros(); 3],
-            beta_dot: [0.0; 3],
-            beta0: Vector3::zeros(),
-            beta_s: Matrix3::zeros(),
-            tension0: Vector3::zeros(),
-            tension_s: Matrix3::zeros(),
-            tension_m: Matrix3::zeros(),
-            sin_ab: [0.0; 3],
-            cos_ab: [0.0; 3],
-            type_ii_measure: f64::NAN,
-        };
+        let omega = out.velocity.z;
+        let a0 = out.acceleration0;
         // Columns E_i = (e_i, r_i x e_i) and N_i = (n_i, r_i x n_i) of the platform balance.
-        let mut e_cols = Matrix3::zeros();
-        let mut n_cols = Matrix3::zeros();
-        let mut measure_cols = Matrix3::zeros();
+        let mut balance = Balance {
+            e_cols: Matrix3::zeros(),
+            n_cols: Matrix3::zeros(),
+            measure_cols: Matrix3::zeros(),
+            moment0: Vector3::zeros(),
+            moment_s: Matrix3::zeros(),
+        };
         let centroid = rotate(&geometry.platform_centroid());
         let radius = geometry.platform_radius().max(f64::MIN_POSITIVE);
-        let mut moment0 = Vector3::zeros();
-        let mut moment_s = Matrix3::zeros();
         for (i, leg) in geometry.legs.iter().enumerate() {
             let link = &self.links[i];
             let range = self.offsets[i]..self.offsets[i] + link.r;
@@ -758,55 +832,80 @@ impl CoupledSystem {
                 - rho[i][2] * sin_ab
                 - 2.0 * length_dot[i] * beta_dot)
                 / lengths[i];
-            let row = big_n.transpose() * q_of_s / lengths[i];
+            let row = big_n.transpose() * out.q_of_s / lengths[i];
             out.beta_s.set_row(i, &row);
-            e_cols.set_column(i, &Vector3::new(e.x, e.y, cross(&r_i, &e)));
-            n_cols.set_column(i, &big_n);
+            balance
+                .e_cols
+                .set_column(i, &Vector3::new(e.x, e.y, cross(&r_i, &e)));
+            balance.n_cols.set_column(i, &big_n);
             let column = Vector3::new(e.x, e.y, cross(&(r_i - centroid), &e) / radius);
-            measure_cols.set_column(i, &column.normalize());
+            balance.measure_cols.set_column(i, &column.normalize());
             // Moment about B_i of the link's inertia forces (the part independent of eta'').
             let mut m0 =
                 link.inertia_b * out.beta0[i] + 0.5 * link.mass * link.length * rho[i][2] * sin_ab;
             if self.options.elastic_reactions {
                 m0 -= rho[i][2] * cos_ab * dot(&link.mass_psi, &eta[range]);
             }
-            moment0[i] = m0 / lengths[i];
-            moment_s.set_row(i, &(row * (link.inertia_b / lengths[i])));
+            balance.moment0[i] = m0 / lengths[i];
+            balance
+                .moment_s
+                .set_row(i, &(row * (link.inertia_b / lengths[i])));
             out.e[i] = e;
             out.n[i] = nrm;
             out.beta_dot[i] = beta_dot;
             out.sin_ab[i] = sin_ab;
             out.cos_ab[i] = cos_ab;
         }
-        // Type-II measure of the actual chords, as [`crate::equilibrium_measure`].
+        balance
+    }
+
+    /// The chord tensions from the platform's Newton-Euler equations
+    /// `M_p q'' = -sum_i (T_i E_i + S_i N_i)` (module documentation), split into the part
+    /// without `eta''`, its `s` and its modal-moment rows; refused (a collapse, or a
+    /// singular pose) when the actual chords' type-II measure, as
+    /// [`crate::equilibrium_measure`], falls below the machine's threshold.
+    fn chord_tensions(
+        &self,
+        t: f64,
+        eta: &[f64],
+        rigid: &MachineKinematics,
+        out: &mut Kinetics,
+        balance: &Balance,
+    ) -> Result<(), DynamicsError> {
+        let geometry = &self.machine.geometry;
         let singular = |measure: f64| {
             let rigid_singular = DynamicsError::SingularInverseDynamics {
                 t,
                 measure,
                 threshold: geometry.thresholds.type_ii,
             };
-            self.collapse_or(rigid_singular, t, eta, &rigid, measure)
+            self.collapse_or(rigid_singular, t, eta, rigid, measure)
         };
-        let measure = measure_cols.determinant().abs();
+        let measure = balance.measure_cols.determinant().abs();
         if measure.is_nan() || measure < geometry.thresholds.type_ii {
             return Err(singular(measure));
         }
         out.type_ii_measure = measure;
-        let e_inv = e_cols.try_inverse().ok_or_else(|| singular(measure))?;
+        let e_inv = balance
+            .e_cols
+            .try_inverse()
+            .ok_or_else(|| singular(measure))?;
         let mp = Vector3::new(
             self.machine.platform_mass,
             self.machine.platform_mass,
             self.machine.platform_inertia,
         );
-        out.tension0 = e_inv * (-a0.component_mul(&mp) - n_cols * moment0);
-        out.tension_s = e_inv * (-(Matrix3::from_diagonal(&mp) * q_of_s) - n_cols * moment_s);
+        let n_cols = balance.n_cols;
+        out.tension0 = e_inv * (-out.acceleration0.component_mul(&mp) - n_cols * balance.moment0);
+        out.tension_s =
+            e_inv * (-(Matrix3::from_diagonal(&mp) * out.q_of_s) - n_cols * balance.moment_s);
         if self.options.elastic_reactions {
             let scale = Vector3::from(std::array::from_fn::<f64, 3, _>(|i| {
-                self.links[i].length / lengths[i]
+                self.links[i].length / out.lengths[i]
             }));
             out.tension_m = -(e_inv * n_cols * Matrix3::from_diagonal(&scale));
         }
-        Ok(out)
+        Ok(())
     }
 
     /// [`DynamicsError::Collapse`] when the largest mid-point deflection passes `limit` times
