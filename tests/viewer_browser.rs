@@ -3,8 +3,8 @@
 //! expected frames and links, the slider joints where the closed-form inverse kinematics
 //! of `flexprr_kinematics` puts them, and a moving machine.
 //!
-//! Needs the `chromium` binary (Debian: `apt-get install -y chromium`); only
-//! `FLEXPRR_SKIP_BROWSER=1` skips. With `FLEXPRR_README_IMAGES=<dir>` it also writes the
+//! Needs the `chromium` binary (Debian: `apt-get install -y chromium`): without it the test
+//! skips with one line on stderr, unless `FLEXPRR_REQUIRE_BROWSER=1`. With `FLEXPRR_README_IMAGES=<dir>` it also writes the
 //! README's pictures there (docs/viewer.md):
 //!
 //! ```text

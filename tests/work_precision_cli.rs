@@ -177,3 +177,84 @@ fn choices_that_do_not_apply_are_refused_in_one_located_line() {
     }
     assert!(!out.exists(), "nothing written for refused input");
 }
+
+/// A shipped stress scene (`configs/stress/`).
+fn stress_scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs/stress")
+        .join(format!("{name}.toml"))
+}
+
+#[test]
+fn a_diverged_reference_is_refused_with_exit_1_and_nothing_written() {
+    // At 40 Hz link 3 buckles: `flexprr run` with the reference's pilot settings (ABM at
+    // rtol 1e-8) reports "diverged" at a time; work-precision refuses to measure against
+    // that solution, in one line naming the scene, the model and the same reason and time.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = stress_scene("high_speed_f40");
+    let text = std::fs::read_to_string(&scene).expect("scene").replace(
+        "method = \"bdf\"\nrtol = 1e-6",
+        "method = \"abm\"\nrtol = 1e-8",
+    );
+    let pilot = dir.path().join("pilot.toml");
+    std::fs::write(&pilot, text).expect("write");
+    let run = flexprr()
+        .arg("run")
+        .arg(&pilot)
+        .args(["--quiet", "--out"])
+        .arg(dir.path().join("run"))
+        .output()
+        .expect("runs");
+    assert_eq!(run.status.code(), Some(1), "{}", stderr_of(&run));
+    let run_stderr = stderr_of(&run);
+    // "diverged: link 3 at t = 15.9792 ms", up to the next colon.
+    let start = run_stderr.find("diverged: link").expect("run diverged");
+    let rest = &run_stderr[start + "diverged:".len()..];
+    let reason = &run_stderr[start..start + "diverged:".len() + rest.find(':').expect("colon")];
+
+    let out = dir.path().join("wp");
+    let output = work_precision(&scene, &out, &[]);
+    let stderr = stderr_of(&output);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    for part in ["high_speed_f40", "ked (consistent)", "pilot run", reason] {
+        assert!(stderr.contains(part), "{part:?} not in {stderr}");
+    }
+    assert!(!out.exists(), "nothing written for a refused reference");
+}
+
+#[test]
+fn a_method_or_model_named_twice_is_refused_naming_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = short_scene(dir.path());
+    let out = dir.path().join("wp");
+    for (args, expected) in [
+        (
+            ["--methods", "abm,rk45,abm", "--models", "ked"],
+            "--methods: \"abm\" is named twice",
+        ),
+        (
+            ["--methods", "abm", "--models", "ked,nonlinear,ked"],
+            "--models: \"ked\" is named twice",
+        ),
+        // The scene has 4 elements: `nonlinear` and `nonlinear:4` are one model.
+        (
+            ["--methods", "abm", "--models", "nonlinear,nonlinear:4"],
+            "--models: \"nonlinear:4\" is named twice",
+        ),
+    ] {
+        let output = flexprr()
+            .arg("work-precision")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .args(args)
+            .output()
+            .expect("runs");
+        let stderr = stderr_of(&output);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+    assert!(!out.exists(), "nothing written for refused input");
+}

@@ -69,28 +69,93 @@ pub struct WorkPrecisionArgs {
 /// `work_precision.md` and `reference.csv`.
 pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     let scene = Scene::load(&args.scene).map_err(failure)?;
+    let config = config_of(&args, &scene)?;
+    let measure_name = check_choices(&args, &config, &scene)?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out")
+            .join(&scene.name)
+            .join("work_precision")
+    });
+    let (reference, reference_line) = reference_of(&args, &config, &scene, measure_name)?;
+    // Created once there is a reference to measure against: a refused one writes nothing.
+    std::fs::create_dir_all(&out)
+        .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
+    reference
+        .write_csv(&out.join("reference.csv"))
+        .map_err(failure)?;
+    let mut peers: Vec<WorkPrecisionRow> = Vec::new();
+    for path in &args.peers {
+        peers.extend(read_csv(path).map_err(failure)?);
+    }
+    let (mut rows, failures) = measure_printed(&scene, &reference, &config)?;
+    let measured = rows.len();
+    rows.extend(peers);
+    let report = Report {
+        scene: &scene,
+        rows: &rows,
+        failures: &failures,
+        measure_name,
+        reference_line: reference_line.as_deref(),
+        side_by_side: !config.models.is_empty(),
+        target_error: args.target_error,
+    };
+    report.write_tables(&out)?;
+    if measured == 0 {
+        return Err(Failure::run(format!(
+            "work-precision of scene {:?}: no point was measured, every one failed ({}; all \
+             in {})",
+            scene.name,
+            failures.first().map_or("no method applies", String::as_str),
+            out.join("work_precision.md").display()
+        )));
+    }
+    write_svg(
+        &rows,
+        &out.join("work_precision.svg"),
+        &format!("Work-precision: {}", scene.name),
+    )
+    .map_err(failure)?;
+    println!("\n{}", markdown_at_error(&rows, args.target_error));
+    println!(
+        "{} rows written to {}",
+        rows.len(),
+        out.join("work_precision.csv").display()
+    );
+    Ok(())
+}
+
+/// The model named `name` after `option` (`--models`, `--reference-model`).
+fn model_named(option: &str, name: &str) -> Result<ModelChoice, Failure> {
+    ModelChoice::parse(name.trim()).ok_or_else(|| {
+        Failure::bad_input(format!(
+            "{option}: unknown model {name:?} (expected one of {})",
+            ModelChoice::NAMES
+        ))
+    })
+}
+
+/// The measurement's configuration from the options: models, reference model, error
+/// measure, ladder (the nonlinear default when a nonlinear model is involved) and methods,
+/// each name parsed and checked, repeats refused.
+///
+/// # Errors
+/// Bad input (exit 2) naming the option and the value.
+fn config_of(args: &WorkPrecisionArgs, scene: &Scene) -> Result<WorkPrecisionConfig, Failure> {
     let mut config = WorkPrecisionConfig {
         repeats: args.repeats,
         warmup: args.warmup,
         reference_rtol: args.reference_rtol,
         ..WorkPrecisionConfig::default()
     };
-    let model = |option: &str, name: &str| {
-        ModelChoice::parse(name.trim()).ok_or_else(|| {
-            Failure::bad_input(format!(
-                "{option}: unknown model {name:?} (expected one of {})",
-                ModelChoice::NAMES
-            ))
-        })
-    };
     if let Some(names) = &args.models {
         config.models = names
             .iter()
-            .map(|name| model("--models", name))
+            .map(|name| model_named("--models", name))
             .collect::<Result<_, _>>()?;
+        refuse_repeats("--models", names)?;
     }
     if let Some(name) = &args.reference_model {
-        config.reference_model = Some(model("--reference-model", name)?);
+        config.reference_model = Some(model_named("--reference-model", name)?);
     }
     if let Some(name) = &args.error {
         config.error = Some(ErrorMeasure::parse(name.trim()).ok_or_else(|| {
@@ -102,12 +167,12 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         })?);
     }
     let nonlinear = config
-        .measured_models(&scene)
+        .measured_models(scene)
         .into_iter()
-        .chain([config.reference_model(&scene)])
+        .chain([config.reference_model(scene)])
         .any(|m| matches!(m, ModelChoice::Nonlinear(_)));
-    match args.tolerances {
-        Some(tolerances) => config.tolerances = tolerances,
+    match &args.tolerances {
+        Some(tolerances) => config.tolerances.clone_from(tolerances),
         None if nonlinear => config.tolerances = NONLINEAR_TOLERANCES.to_vec(),
         None => {}
     }
@@ -124,6 +189,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
                 })
             })
             .collect::<Result<_, _>>()?;
+        refuse_repeats("--methods", names)?;
     }
     if !(args.target_error.is_finite() && args.target_error > 0.0) {
         return Err(Failure::bad_input(format!(
@@ -132,6 +198,22 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         )));
     }
     config.validate().map_err(failure)?;
+    Ok(config)
+}
+
+/// Checks, before any work, that every choice applies to the scene: the error measure to
+/// the models, each model to the scene's formulation (and no model twice under two names),
+/// each method named on the command line to at least one measured model (the default list
+/// simply skips those that do not, said in the output), the reference model and its
+/// tolerance. Returns the error measure's name.
+///
+/// # Errors
+/// Bad input (exit 2) naming the option.
+fn check_choices(
+    args: &WorkPrecisionArgs,
+    config: &WorkPrecisionConfig,
+    scene: &Scene,
+) -> Result<&'static str, Failure> {
     let option_error = |option: String| {
         move |e: ScenarioError| match e {
             ScenarioError::Input { message, .. } => {
@@ -141,21 +223,25 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         }
     };
     let measure_name = config
-        .error_measure(&scene)
+        .error_measure(scene)
         .map_err(option_error(format!(
             "--error {}",
             args.error.as_deref().unwrap_or_default()
         )))?
         .name();
     let mut model_scenes = Vec::new();
-    for choice in config.measured_models(&scene) {
+    for choice in config.measured_models(scene) {
         let applied = choice
-            .apply(&scene)
+            .apply(scene)
             .map_err(option_error("--models".to_string()))?;
-        model_scenes.push((choice.label(&scene), applied));
+        model_scenes.push((choice.label(scene), applied));
     }
-    // A method named on the command line must apply to at least one measured model; the
-    // default list simply skips those that do not (said in the output).
+    if let Some(names) = &args.models {
+        let labels: Vec<String> = model_scenes.iter().map(|(l, _)| l.clone()).collect();
+        refuse_repeats("--models", &labels).map_err(|e| {
+            Failure::bad_input(format!("{} (given: {})", e.message, names.join(",")))
+        })?;
+    }
     if args.methods.is_some() {
         for &method in &config.methods {
             let reasons: Vec<String> = model_scenes
@@ -172,29 +258,32 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         }
     }
     config
-        .reference_model(&scene)
-        .apply(&scene)
+        .reference_model(scene)
+        .apply(scene)
         .map_err(option_error("--reference-model".to_string()))?;
     if args.reference.is_none() {
         config
-            .reference_plan(&scene)
+            .reference_plan(scene)
             .map_err(option_error("--reference-rtol".to_string()))?;
     }
-    let out = args.out.unwrap_or_else(|| {
-        PathBuf::from("out")
-            .join(&scene.name)
-            .join("work_precision")
-    });
-    std::fs::create_dir_all(&out)
-        .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
+    Ok(measure_name)
+}
 
+/// The reference: read from `--reference`, or computed (and refused if it diverged or
+/// failed, exit 1); with the line that says how it was computed and checked, printed.
+fn reference_of(
+    args: &WorkPrecisionArgs,
+    config: &WorkPrecisionConfig,
+    scene: &Scene,
+    measure_name: &str,
+) -> Result<(Reference, Option<String>), Failure> {
     let clock = std::time::Instant::now();
     let reference = match &args.reference {
         Some(path) => Reference::read_csv(path).map_err(failure)?,
-        None => Reference::compute(&scene, &config).map_err(failure)?,
+        None => Reference::compute(scene, config).map_err(failure)?,
     };
     let reference_s = clock.elapsed().as_secs_f64();
-    let reference_line = reference.agreement.map(|a| {
+    let line = reference.agreement.map(|a| {
         format!(
             "reference: {} with {} at rtol {:e}, checked with {} at rtol {:e}: agree to {:.1e} \
              (end) / {:.1e} (max) in the {measure_name} measure ({reference_s:.1} s with its \
@@ -208,22 +297,24 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
             a.max
         )
     });
-    if let Some(line) = &reference_line {
+    if let Some(line) = &line {
         println!("{line}");
     }
-    reference
-        .write_csv(&out.join("reference.csv"))
-        .map_err(failure)?;
+    Ok((reference, line))
+}
 
-    let mut peers: Vec<WorkPrecisionRow> = Vec::new();
-    for path in &args.peers {
-        peers.extend(read_csv(path).map_err(failure)?);
-    }
+/// Measures every point, printing a table line per row as it comes and each failed point
+/// on stderr.
+fn measure_printed(
+    scene: &Scene,
+    reference: &Reference,
+    config: &WorkPrecisionConfig,
+) -> Result<(Vec<WorkPrecisionRow>, Vec<String>), Failure> {
     println!(
         "{:<24} {:>7} {:>10} {:>8} {:>9} {:>10} {:>10}",
         "method", "rtol", "time_ms", "steps", "rhs", "end_err", "max_err"
     );
-    let (mut rows, failures) = measure(&scene, &reference, &config, &mut |r| {
+    let (rows, failures) = measure(scene, reference, config, &mut |r| {
         println!(
             "{:<24} {:>7.0e} {:>10.3} {:>8} {:>9} {:>10.2e} {:>10.2e}",
             r.series_label(),
@@ -239,54 +330,76 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     for f in &failures {
         eprintln!("failed: {f}");
     }
-    rows.extend(peers);
+    Ok((rows, failures))
+}
 
-    let csv = csv_text(&rows).map_err(failure)?;
-    let write = |name: &str, text: &str| {
-        let path = out.join(name);
-        std::fs::write(&path, text).map_err(|e| Failure::run(format!("{}: {e}", path.display())))
-    };
-    write("work_precision.csv", &csv)?;
-    let at_error = markdown_at_error(&rows, args.target_error);
-    let what = match measure_name {
-        "state" => "the modal state, relative to the solution's size",
-        _ => "the links' mid-point deflections, relative to the reference's largest",
-    };
-    let mut md = format!(
-        "# Work-precision: {}\n\nErrors: maximum over the output times of {what}.\n\n",
-        scene.name
-    );
-    if let Some(line) = &reference_line {
-        md.push_str(&format!("{line}\n\n"));
+/// What `work_precision.csv` and `work_precision.md` say.
+struct Report<'a> {
+    scene: &'a Scene,
+    rows: &'a [WorkPrecisionRow],
+    failures: &'a [String],
+    measure_name: &'a str,
+    reference_line: Option<&'a str>,
+    side_by_side: bool,
+    target_error: f64,
+}
+
+impl Report<'_> {
+    /// Writes `work_precision.csv` and `work_precision.md` (the reference, cost against
+    /// fidelity with models side by side, the equal-error table, every point, the failed
+    /// points) into `out`.
+    fn write_tables(&self, out: &std::path::Path) -> Result<(), Failure> {
+        let write = |name: &str, text: &str| {
+            let path = out.join(name);
+            std::fs::write(&path, text)
+                .map_err(|e| Failure::run(format!("{}: {e}", path.display())))
+        };
+        write("work_precision.csv", &csv_text(self.rows).map_err(failure)?)?;
+        write("work_precision.md", &self.markdown())
     }
-    if !config.models.is_empty() {
-        md.push_str(&format!(
-            "Cost against fidelity:\n\n{}\n",
-            markdown_models(&rows)
-        ));
-    }
-    md.push_str(&format!(
-        "At equal achieved error:\n\n{at_error}\nAll points:\n\n{}",
-        markdown_rows(&rows)
-    ));
-    if !failures.is_empty() {
-        md.push_str("\nFailed points:\n\n");
-        for f in &failures {
-            md.push_str(&format!("- {f}\n"));
+
+    /// The text of `work_precision.md`.
+    fn markdown(&self) -> String {
+        let what = match self.measure_name {
+            "state" => "the modal state, relative to the solution's size",
+            _ => "the links' mid-point deflections, relative to the reference's largest",
+        };
+        let mut md = format!(
+            "# Work-precision: {}\n\nErrors: maximum over the output times of {what}.\n\n",
+            self.scene.name
+        );
+        if let Some(line) = self.reference_line {
+            md.push_str(&format!("{line}\n\n"));
         }
+        if self.side_by_side {
+            md.push_str(&format!(
+                "Cost against fidelity:\n\n{}\n",
+                markdown_models(self.rows)
+            ));
+        }
+        md.push_str(&format!(
+            "At equal achieved error:\n\n{}\nAll points:\n\n{}",
+            markdown_at_error(self.rows, self.target_error),
+            markdown_rows(self.rows)
+        ));
+        if !self.failures.is_empty() {
+            md.push_str("\nFailed points:\n\n");
+            for f in self.failures {
+                md.push_str(&format!("- {f}\n"));
+            }
+        }
+        md
     }
-    write("work_precision.md", &md)?;
-    write_svg(
-        &rows,
-        &out.join("work_precision.svg"),
-        &format!("Work-precision: {}", scene.name),
-    )
-    .map_err(failure)?;
-    println!("\n{at_error}");
-    println!(
-        "{} rows written to {}",
-        rows.len(),
-        out.join("work_precision.csv").display()
-    );
-    Ok(())
+}
+
+/// Refuses a name given twice to `option` (a repeat would only give duplicate rows).
+fn refuse_repeats(option: &str, names: &[String]) -> Result<(), Failure> {
+    let trimmed: Vec<&str> = names.iter().map(|n| n.trim()).collect();
+    match (1..trimmed.len()).find(|&k| trimmed[..k].contains(&trimmed[k])) {
+        Some(k) => Err(Failure::bad_input(format!(
+            "{option}: {:?} is named twice; each is measured once",
+            trimmed[k]
+        ))),
+        None => Ok(()),
+    }
 }

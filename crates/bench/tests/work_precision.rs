@@ -548,3 +548,141 @@ fn choices_that_do_not_apply_are_refused_with_the_setting() {
     }
     assert_eq!(ModelChoice::Nonlinear(None).label(&scene), "nonlinear:4");
 }
+
+/// A shipped stress scene (`configs/stress/`).
+fn stress_scene(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../configs/stress")
+        .join(format!("{name}.toml"));
+    Scene::load(&path).expect("stress scene loads")
+}
+
+#[test]
+fn a_diverged_reference_is_refused_where_the_run_layer_sees_the_divergence() {
+    // At 40 Hz link 3 buckles and the small-deflection model runs away (`flexprr run`
+    // reports "diverged"). The reference's pilot run (ABM at 1e-8 with the scene's atol) is
+    // refused, naming the scene, the model, the reason and the time the run layer's own
+    // integration of the same model and options stops at.
+    let scene = stress_scene("high_speed_f40");
+    let config = WorkPrecisionConfig {
+        warmup: 0,
+        repeats: 1,
+        ..WorkPrecisionConfig::default()
+    };
+    let err = Reference::compute(&scene, &config).expect_err("diverged reference refused");
+    let text = err.to_string();
+    assert!(
+        matches!(err, flexprr_scene::ScenarioError::Run(_)),
+        "{text}"
+    );
+    assert!(!text.contains('\n'), "{text}");
+
+    let mut model = scene.build_model().expect("model");
+    let integrator = flexprr_scene::Registry::default()
+        .method("abm")
+        .expect("abm")
+        .integrator(scene.options.clone().rtol(1e-8));
+    let run =
+        flexprr_run::integrate_model(&scene, integrator.as_ref(), model.as_mut(), &mut |_| {});
+    let failure = run.failure.expect("the run layer sees the divergence");
+    assert_eq!(failure.kind(), "diverged");
+    let t_ms = 1e3 * failure.time().expect("a time");
+    assert!((15.0..17.0).contains(&t_ms), "diverged at {t_ms} ms");
+    for part in [
+        "high_speed_f40",
+        "ked (consistent)",
+        "pilot run",
+        &failure.to_string(),
+        "not measured against",
+    ] {
+        assert!(text.contains(part), "{part:?} not in {text}");
+    }
+}
+
+#[test]
+fn a_point_that_diverges_is_a_failed_point_and_the_others_are_measured() {
+    // The loose-tolerance stress scene: its reference (1e-14) is sound, but ABM at rtol 1e-1
+    // runs away. That point is listed as failed ("diverged", as the run layer's guard sees
+    // it), never as a row with a huge error; the point at 1e-4 is measured.
+    let scene = stress_scene("tolerance_loose");
+    let config = WorkPrecisionConfig {
+        tolerances: vec![1e-1, 1e-4],
+        methods: vec![Method::Abm],
+        warmup: 0,
+        repeats: 1,
+        ..WorkPrecisionConfig::default()
+    };
+    let result = work_precision(&scene, &config, &mut |_| {}).expect("measured");
+    assert_eq!(result.rows.len(), 1, "{:?}", result.rows);
+    assert!(result.rows[0].rtol < 1e-3 && result.rows[0].max_error < 1e-2);
+    assert_eq!(result.failures.len(), 1, "{:?}", result.failures);
+    assert!(
+        result.failures[0].starts_with("abm at rtol 1e-1: diverged: link"),
+        "{:?}",
+        result.failures
+    );
+
+    // The run layer's own guarded integration with the same method and options diverges.
+    let mut model = scene.build_model().expect("model");
+    let integrator = flexprr_scene::Registry::default()
+        .method("abm")
+        .expect("abm")
+        .integrator(
+            Options::default()
+                .rtol(1e-1)
+                .atol(result.reference.atol(1e-1)),
+        );
+    let run =
+        flexprr_run::integrate_model(&scene, integrator.as_ref(), model.as_mut(), &mut |_| {});
+    assert_eq!(run.failure.map(|f| f.kind()), Some("diverged"));
+}
+
+#[test]
+fn a_method_model_or_tolerance_named_twice_is_refused() {
+    for (config, key, named) in [
+        (
+            WorkPrecisionConfig {
+                methods: vec![Method::Abm, Method::Rk45, Method::Abm],
+                ..config()
+            },
+            "methods",
+            "abm",
+        ),
+        (
+            WorkPrecisionConfig {
+                models: vec![ModelChoice::Ked, ModelChoice::Ked],
+                ..config()
+            },
+            "models",
+            "ked",
+        ),
+        (
+            WorkPrecisionConfig {
+                tolerances: vec![1e-4, 1e-6, 1e-6],
+                ..config()
+            },
+            "tolerances",
+            "1e-6",
+        ),
+    ] {
+        let err = config.validate().expect_err("repeat refused");
+        assert_eq!(err.to_string(), format!("{key}: {named} is named twice"));
+    }
+    // The same nonlinear model under two names: refused when measured on the scene.
+    let f30 = scene_f30("coupling = \"nonlinear\"\nelements = 4", 0.002);
+    let twice = WorkPrecisionConfig {
+        models: vec![
+            ModelChoice::Nonlinear(None),
+            ModelChoice::Nonlinear(Some(4)),
+        ],
+        error: Some(ErrorMeasure::Deflection),
+        ..config()
+    };
+    let reference = Reference::from_deflections(vec![0.0, 1.0], vec![1.0; 6]).expect("ref");
+    let err = measure(&f30, &reference, &twice, &mut |_| {}).expect_err("refused");
+    assert!(
+        err.to_string()
+            .contains("models: nonlinear:4 is named twice"),
+        "{err}"
+    );
+}

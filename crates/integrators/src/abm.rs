@@ -24,6 +24,7 @@
 // which difference or coefficient is meant.
 #![allow(clippy::needless_range_loop)]
 
+use crate::common::{Span, step_floor};
 use crate::{Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper, initial_step};
 
 /// Highest order of the Adams formulas (the corrector with local extrapolation has order
@@ -236,9 +237,8 @@ pub struct AbmStepper {
     options: Options,
     max_order: usize,
     dim: usize,
-    t: f64,
-    t_previous: f64,
-    t_end: f64,
+    /// Where the stepper is, where it ends, its statistics (shared by every stepper).
+    span: Span,
     /// Largest step magnitude: `min(max_step, |t_end - t0|)`.
     h_max: f64,
     /// Signed step size to try next.
@@ -255,7 +255,6 @@ pub struct AbmStepper {
     start_phase: bool,
     /// Consecutive accepted steps at order <= 4 (DE's `KLE4`).
     low_order_steps: usize,
-    finished: bool,
     coef: Coefficients,
     y: Vec<f64>,
     /// Derivative: `f(t, y)` after a step, `f` at the prediction during one.
@@ -272,7 +271,6 @@ pub struct AbmStepper {
     prediction_rounding: Vec<f64>,
     /// Reciprocal error weights of the current step.
     inv_weight: Vec<f64>,
-    stats: Stats,
 }
 
 impl AbmStepper {
@@ -290,12 +288,6 @@ impl AbmStepper {
     /// `t_end`).
     pub fn step_size(&self) -> f64 {
         self.h
-    }
-
-    /// Step-size floor at time `t`: `16 eps |t|` (and never zero).
-    #[inline]
-    fn h_floor(t: f64) -> f64 {
-        (16.0 * f64::EPSILON * t.abs()).max(f64::MIN_POSITIVE)
     }
 
     /// Weighted RMS norm of `v` with the current reciprocal weights.
@@ -385,18 +377,15 @@ impl Integrator for Abm {
             options: self.options.clone(),
             max_order: self.max_order,
             dim: n,
-            t: t0,
-            t_previous: t0,
-            t_end,
+            span: Span::new(t0, t_end, stats),
             h_max,
-            h: direction * h0.max(AbmStepper::h_floor(t0)),
+            h: direction * h0.max(step_floor(t0)),
             h_old: 0.0,
             order: 1,
             order_old: 0,
             steps_at_h: 0,
             start_phase: true,
             low_order_steps: 0,
-            finished: false,
             coef: Coefficients::new(),
             y: y0.to_vec(),
             dy,
@@ -406,14 +395,13 @@ impl Integrator for Abm {
             correction_rounding: vec![0.0; n],
             prediction_rounding: vec![0.0; n],
             inv_weight: vec![0.0; n],
-            stats,
         })
     }
 }
 
 impl Stepper for AbmStepper {
     fn t(&self) -> f64 {
-        self.t
+        self.span.t
     }
 
     fn y(&self) -> &[f64] {
@@ -421,29 +409,29 @@ impl Stepper for AbmStepper {
     }
 
     fn t_previous(&self) -> f64 {
-        self.t_previous
+        self.span.t_previous
     }
 
     fn stats(&self) -> &Stats {
-        &self.stats
+        &self.span.stats
     }
 
     /// One accepted step of STEP (Shampine & Gordon 1975, ch. 7), retrying rejected attempts
     /// with half the step (and order 1 from the third failure on). Once `t_end` is reached,
     /// further calls do nothing.
     fn step<S: OdeSystem + ?Sized>(&mut self, system: &mut S) -> Result<(), IntegratorError> {
-        if self.finished {
+        if self.span.finished {
             return Ok(());
         }
         let n = self.dim;
-        let direction = (self.t_end - self.t).signum();
+        let direction = (self.span.t_end - self.span.t).signum();
 
         // Limit the step to max_step and to what is left (DE, label 100); land on t_end
         // exactly rather than leave a sliver of a step.
-        let remaining = (self.t_end - self.t).abs();
+        let remaining = (self.span.t_end - self.span.t).abs();
         let mut abs_h = self.h.abs().min(self.h_max);
         let mut last = false;
-        if remaining <= abs_h * (1.0 + 4.0 * f64::EPSILON) + Self::h_floor(self.t_end) {
+        if remaining <= abs_h * (1.0 + 4.0 * f64::EPSILON) + step_floor(self.span.t_end) {
             abs_h = remaining;
             last = true;
         }
@@ -451,15 +439,8 @@ impl Stepper for AbmStepper {
         let mut failures = 0usize;
 
         loop {
-            if self.stats.accepted_steps + self.stats.rejected_steps >= self.options.max_steps {
-                return Err(IntegratorError::TooManySteps {
-                    t: self.t,
-                    max_steps: self.options.max_steps,
-                });
-            }
-            if h.is_nan() || h.abs() < Self::h_floor(self.t) {
-                return Err(IntegratorError::StepSizeTooSmall { t: self.t, h });
-            }
+            self.span.check_budget(self.options.max_steps)?;
+            self.span.check_step_size(h, None)?;
 
             // ---- Block 1: coefficients (only those changed by the step history).
             let k = self.order;
@@ -506,9 +487,13 @@ impl Stepper for AbmStepper {
                 self.prediction_rounding[l] = (p - self.y[l]) - increment;
                 self.predicted[l] = p;
             }
-            let t_new = if last { self.t_end } else { self.t + h };
+            let t_new = if last {
+                self.span.t_end
+            } else {
+                self.span.t + h
+            };
             system.rhs(t_new, &self.predicted, &mut self.dy);
-            self.stats.rhs_evaluations += 1;
+            self.span.stats.rhs_evaluations += 1;
             let non_finite =
                 first_non_finite(&self.predicted).or_else(|| first_non_finite(&self.dy));
 
@@ -582,15 +567,14 @@ impl Stepper for AbmStepper {
                         self.y[l] = y_new;
                     }
                 }
-                self.t_previous = self.t;
-                self.t = t_new;
-                system.rhs(self.t, &self.y, &mut self.dy);
-                self.stats.rhs_evaluations += 1;
+                self.span.advance(t_new, false);
+                system.rhs(self.span.t, &self.y, &mut self.dy);
+                self.span.stats.rhs_evaluations += 1;
                 if let Some(component) =
                     first_non_finite(&self.y).or_else(|| first_non_finite(&self.dy))
                 {
                     return Err(IntegratorError::NonFinite {
-                        t: self.t,
+                        t: self.span.t,
                         component,
                     });
                 }
@@ -655,32 +639,32 @@ impl Stepper for AbmStepper {
                     abs_h
                 } else {
                     let r = (half_tol / err_k).powf(1.0 / (order as f64 + 1.0));
-                    (abs_h * r.clamp(0.5, 0.9)).max(Self::h_floor(self.t))
+                    (abs_h * r.clamp(0.5, 0.9)).max(step_floor(self.span.t))
                 };
                 self.h = direction * h_new;
 
                 // Book-keeping.
-                self.stats.accepted_steps += 1;
-                self.stats.record_order(k);
+                self.span.stats.accepted_steps += 1;
+                self.span.stats.record_order(k);
                 if k > 4 {
                     self.low_order_steps = 0;
                 } else {
                     self.low_order_steps += 1;
                     if self.low_order_steps >= STIFF_LOW_ORDER_STEPS
-                        && self.stats.stiffness_detected_at.is_none()
+                        && self.span.stats.stiffness_detected_at.is_none()
                     {
-                        self.stats.stiffness_detected_at = Some(self.t);
+                        self.span.stats.stiffness_detected_at = Some(self.span.t);
                     }
                 }
                 if last {
-                    self.finished = true;
+                    self.span.finished = true;
                 }
                 return Ok(());
             }
 
             // ---- Block 3: the step failed. Restore phi and psi, halve the step; order 1
             // from the third failure on, then the asymptotic step estimate.
-            self.stats.rejected_steps += 1;
+            self.span.stats.rejected_steps += 1;
             self.start_phase = false;
             for i in 1..=k {
                 let inv_beta = 1.0 / self.coef.beta[i];
@@ -701,13 +685,13 @@ impl Stepper for AbmStepper {
             h *= factor;
             last = false;
             self.steps_at_h = 0;
-            if h.is_nan() || h.abs() < Self::h_floor(self.t) {
+            if h.is_nan() || h.abs() < step_floor(self.span.t) {
                 return Err(match non_finite {
                     Some(component) => IntegratorError::NonFinite {
                         t: t_new,
                         component,
                     },
-                    None => IntegratorError::StepSizeTooSmall { t: self.t, h },
+                    None => IntegratorError::StepSizeTooSmall { t: self.span.t, h },
                 });
             }
         }
@@ -719,7 +703,7 @@ impl Stepper for AbmStepper {
     /// `psi` (the same recursion as `Coefficients::update` for a step of length `s`).
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         let n = self.dim;
-        let s = t - self.t;
+        let s = t - self.span.t;
         let ki = self.order_old + 1;
         let mut w = [0.0; N_COEF + 1];
         let mut g = [0.0; N_COEF + 1];

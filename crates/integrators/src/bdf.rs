@@ -51,6 +51,7 @@ use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve}
 use faer::perm::PermRef;
 use faer::{Mat, MatMut, Par};
 
+use crate::common::Span;
 use crate::{
     IntegratorError, OdeSystem, Options, Stats, Stepper, error_norm, finite_difference_jacobian,
     initial_step,
@@ -206,9 +207,8 @@ pub struct BdfStepper {
     coefficients: Coefficients,
     max_order: usize,
     dim: usize,
-    t: f64,
-    t_previous: f64,
-    t_end: f64,
+    /// Where the stepper is, where it ends, its statistics (shared by every stepper).
+    span: Span,
     direction: f64,
     /// Signed spacing of the difference table.
     h: f64,
@@ -250,17 +250,15 @@ pub struct BdfStepper {
     steps_since_jacobian: usize,
     /// Newton rate estimate carried between steps while the matrix is unchanged.
     newton_rate: f64,
-    finished: bool,
-    stats: Stats,
 }
 
 impl std::fmt::Debug for BdfStepper {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("BdfStepper")
-            .field("t", &self.t)
+            .field("t", &self.span.t)
             .field("h", &self.h)
             .field("order", &self.order)
-            .field("stats", &self.stats)
+            .field("stats", &self.span.stats)
             .finish_non_exhaustive()
     }
 }
@@ -325,23 +323,23 @@ impl BdfStepper {
         c: f64,
     ) -> Result<(), AttemptFailure> {
         if system.has_analytic_jacobian() {
-            system.jacobian(self.t, &self.y, self.jacobian.as_mut());
-            self.stats.rhs_evaluations += system.jacobian_rhs_evaluations();
+            system.jacobian(self.span.t, &self.y, self.jacobian.as_mut());
+            self.span.stats.rhs_evaluations += system.jacobian_rhs_evaluations();
         } else {
             // The trait's provided Jacobian is these same forward differences but allocates
             // its work vectors; with ours preallocated the step stays allocation-free.
-            system.rhs(self.t, &self.y, &mut self.jacobian_f0);
+            system.rhs(self.span.t, &self.y, &mut self.jacobian_f0);
             finite_difference_jacobian(
                 system,
-                self.t,
+                self.span.t,
                 &self.y,
                 &self.jacobian_f0,
                 self.jacobian.as_mut(),
                 &mut self.jacobian_work,
             );
-            self.stats.rhs_evaluations += self.dim + 1;
+            self.span.stats.rhs_evaluations += self.dim + 1;
         }
-        self.stats.jacobian_evaluations += 1;
+        self.span.stats.jacobian_evaluations += 1;
         self.jacobian_c = Some(c);
         self.jacobian_current = true;
         self.steps_since_jacobian = 0;
@@ -359,7 +357,7 @@ impl BdfStepper {
     /// Forms and factors `I - c J` into the preallocated LU storage.
     fn factor(&mut self, c: f64) -> Result<(), AttemptFailure> {
         let n = self.dim;
-        self.stats.lu_decompositions += 1;
+        self.span.stats.lu_decompositions += 1;
         for j in 0..n {
             for i in 0..n {
                 let identity = if i == j { 1.0 } else { 0.0 };
@@ -426,8 +424,8 @@ impl BdfStepper {
         let mut previous_norm = f64::INFINITY;
         for m in 0..NEWTON_MAX_ITERATIONS {
             system.rhs(t_new, &self.y_new, &mut self.f);
-            self.stats.rhs_evaluations += 1;
-            self.stats.newton_iterations += 1;
+            self.span.stats.rhs_evaluations += 1;
+            self.span.stats.newton_iterations += 1;
             if let Some(i) = first_non_finite(&self.f) {
                 return Err(AttemptFailure::Newton {
                     non_finite: Some(i),
@@ -549,7 +547,7 @@ impl BdfStepper {
 
 impl Stepper for BdfStepper {
     fn t(&self) -> f64 {
-        self.t
+        self.span.t
     }
 
     fn y(&self) -> &[f64] {
@@ -557,50 +555,29 @@ impl Stepper for BdfStepper {
     }
 
     fn t_previous(&self) -> f64 {
-        self.t_previous
+        self.span.t_previous
     }
 
     fn step<S: OdeSystem + ?Sized>(&mut self, system: &mut S) -> Result<(), IntegratorError> {
-        if self.finished {
-            return Err(IntegratorError::InvalidInput(format!(
-                "the integration already reached t_end = {}",
-                self.t_end
-            )));
-        }
+        self.span.check_open()?;
         let mut h_abs = self.h_next.min(self.options.max_step);
         let mut failures = 0usize;
         let mut error_failures = 0usize;
         let mut last_non_finite: Option<usize> = None;
         loop {
-            if self.stats.accepted_steps + self.stats.rejected_steps >= self.options.max_steps {
-                return Err(IntegratorError::TooManySteps {
-                    t: self.t,
-                    max_steps: self.options.max_steps,
-                });
-            }
-            let floor = 16.0 * f64::EPSILON * self.t.abs();
-            if h_abs <= floor || h_abs < f64::MIN_POSITIVE {
-                return Err(match last_non_finite {
-                    Some(component) => IntegratorError::NonFinite {
-                        t: self.t,
-                        component,
-                    },
-                    None => IntegratorError::StepSizeTooSmall {
-                        t: self.t,
-                        h: h_abs * self.direction,
-                    },
-                });
-            }
+            self.span.check_budget(self.options.max_steps)?;
+            self.span
+                .check_step_size(h_abs * self.direction, last_non_finite)?;
             // Land exactly on t_end; avoid a sliver of a last step.
-            let remaining = (self.t_end - self.t).abs();
+            let remaining = (self.span.t_end - self.span.t).abs();
             let last = h_abs >= remaining * (1.0 - 1e-10);
             if last {
                 h_abs = remaining;
             }
             let t_new = if last {
-                self.t_end
+                self.span.t_end
             } else {
-                self.t + self.direction * h_abs
+                self.span.t + self.direction * h_abs
             };
             let h = self.direction * h_abs;
             if (h - self.h).abs() > 4.0 * f64::EPSILON * h_abs {
@@ -613,12 +590,12 @@ impl Stepper for BdfStepper {
                 Ok(()) => {}
                 Err(AttemptFailure::NonFiniteJacobian { row }) => {
                     return Err(IntegratorError::NonFinite {
-                        t: self.t,
+                        t: self.span.t,
                         component: row,
                     });
                 }
                 Err(failure) => {
-                    self.stats.rejected_steps += 1;
+                    self.span.stats.rejected_steps += 1;
                     failures += 1;
                     let singular = matches!(failure, AttemptFailure::Singular);
                     if let AttemptFailure::Newton { non_finite } = failure {
@@ -626,7 +603,7 @@ impl Stepper for BdfStepper {
                     }
                     if failures >= MAX_CONSECUTIVE_FAILURES {
                         return Err(if singular {
-                            IntegratorError::SingularMatrix { t: self.t }
+                            IntegratorError::SingularMatrix { t: self.span.t }
                         } else if let Some(component) = last_non_finite {
                             IntegratorError::NonFinite {
                                 t: t_new,
@@ -634,7 +611,7 @@ impl Stepper for BdfStepper {
                             }
                         } else {
                             IntegratorError::NewtonFailure {
-                                t: self.t,
+                                t: self.span.t,
                                 h: self.h,
                             }
                         });
@@ -646,7 +623,7 @@ impl Stepper for BdfStepper {
                             self.evaluate_jacobian(system, c)
                         {
                             return Err(IntegratorError::NonFinite {
-                                t: self.t,
+                                t: self.span.t,
                                 component: row,
                             });
                         }
@@ -665,7 +642,7 @@ impl Stepper for BdfStepper {
             }
             let error = error_norm(&self.error, &self.y, &self.y_new, &self.options);
             if error.is_nan() || error > 1.0 {
-                self.stats.rejected_steps += 1;
+                self.span.stats.rejected_steps += 1;
                 error_failures += 1;
                 let factor = if error.is_finite() {
                     (SAFETY * error.powf(-1.0 / (k as f64 + 1.0))).max(MIN_FACTOR)
@@ -700,16 +677,15 @@ impl Stepper for BdfStepper {
                 }
             }
             self.y.copy_from_slice(&self.differences[..n]);
-            self.t_previous = self.t;
-            self.t = t_new;
+            self.span.advance(t_new, false);
             self.dense_order = k;
             self.n_equal_steps += 1;
-            self.stats.accepted_steps += 1;
-            self.stats.record_order(k);
+            self.span.stats.accepted_steps += 1;
+            self.span.stats.record_order(k);
             self.steps_since_jacobian += 1;
             self.jacobian_current = false;
             if last {
-                self.finished = true;
+                self.span.finished = true;
                 return Ok(());
             }
             // Next step size and order.
@@ -735,7 +711,7 @@ impl Stepper for BdfStepper {
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         // y(t) = sum_j D[j] prod_{m<j} (x + m) / (m + 1), x = (t - t_n) / h: the Newton
         // backward-difference form of the interpolating polynomial.
-        let x = (t - self.t) / self.h;
+        let x = (t - self.span.t) / self.h;
         out.copy_from_slice(self.diff(0));
         let mut p = 1.0;
         for j in 1..=self.dense_order {
@@ -747,7 +723,7 @@ impl Stepper for BdfStepper {
     }
 
     fn stats(&self) -> &Stats {
-        &self.stats
+        &self.span.stats
     }
 }
 
@@ -824,9 +800,7 @@ impl crate::Integrator for Bdf {
             coefficients: Coefficients::new(self.variant),
             max_order: self.max_order,
             dim: n,
-            t: t0,
-            t_previous: t0,
-            t_end,
+            span: Span::new(t0, t_end, stats),
             direction,
             h,
             h_next: h0,
@@ -856,8 +830,6 @@ impl crate::Integrator for Bdf {
             jacobian_current: false,
             steps_since_jacobian: 0,
             newton_rate: 1.0,
-            finished: false,
-            stats,
         })
     }
 }

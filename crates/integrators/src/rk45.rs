@@ -9,7 +9,7 @@
 //! Equations II*, 2nd ed., Springer 1996, IV.2 (automatic stiffness detection, and the PI
 //! "stabilized" step-size control of K. Gustafsson, *ACM TOMS* 17 (1991), as used in DOPRI5).
 
-use crate::common::{error_norm, initial_step};
+use crate::common::{Span, error_norm, initial_step};
 use crate::{Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper};
 
 // Butcher tableau of Dormand & Prince (1980), Hairer-Norsett-Wanner I, Table II.5.2.
@@ -161,9 +161,8 @@ pub struct Rk45Stepper {
     stiffness: StiffnessDetection,
     /// +1 forwards, -1 backwards.
     direction: f64,
-    t: f64,
-    t_previous: f64,
-    t_end: f64,
+    /// Where the stepper is, where it ends, its statistics (shared by every stepper).
+    span: Span,
     /// Signed size of the next step attempt.
     h: f64,
     /// Signed size of the last accepted step (for dense output).
@@ -190,8 +189,6 @@ pub struct Rk45Stepper {
     non_finite_component: Option<usize>,
     stiff_count: usize,
     nonstiff_count: usize,
-    finished: bool,
-    stats: Stats,
 }
 
 impl Integrator for Rk45 {
@@ -258,9 +255,7 @@ impl Integrator for Rk45 {
             options: self.options.clone(),
             stiffness: self.stiffness,
             direction,
-            t: t0,
-            t_previous: t0,
-            t_end,
+            span: Span::new(t0, t_end, stats),
             h: direction * h_abs,
             h_previous: 0.0,
             h_max,
@@ -276,8 +271,6 @@ impl Integrator for Rk45 {
             non_finite_component: None,
             stiff_count: 0,
             nonstiff_count: 0,
-            finished: false,
-            stats,
         })
     }
 }
@@ -297,7 +290,7 @@ impl Rk45Stepper {
     /// One trial step of size `h` from `(t, y)`: fills `k[1..7]`, `y_new` and `error`.
     /// Six right-hand-side evaluations (stages 2-7).
     fn attempt<S: OdeSystem + ?Sized>(&mut self, system: &mut S, h: f64) {
-        let t = self.t;
+        let t = self.span.t;
         let n = self.y.len();
         let y = &self.y;
         let ys = &mut self.y_stage;
@@ -336,7 +329,7 @@ impl Rk45Stepper {
             self.error[i] =
                 h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
         }
-        self.stats.rhs_evaluations += 6;
+        self.span.stats.rhs_evaluations += 6;
     }
 
     /// First non-finite component of `y_new` or `f(t + h, y_new)`.
@@ -394,17 +387,16 @@ impl Rk45Stepper {
         self.y_previous.copy_from_slice(&self.y);
         self.y.copy_from_slice(&self.y_new);
         self.k.swap(0, 6);
-        self.t_previous = self.t;
         self.h_previous = h;
-        self.t = if last { self.t_end } else { self.t + h };
-        self.stats.accepted_steps += 1;
-        self.stats.record_order(ORDER);
+        self.span.advance(self.span.t + h, last);
+        self.span.stats.accepted_steps += 1;
+        self.span.stats.record_order(ORDER);
     }
 }
 
 impl Stepper for Rk45Stepper {
     fn t(&self) -> f64 {
-        self.t
+        self.span.t
     }
 
     fn y(&self) -> &[f64] {
@@ -412,61 +404,29 @@ impl Stepper for Rk45Stepper {
     }
 
     fn t_previous(&self) -> f64 {
-        self.t_previous
+        self.span.t_previous
     }
 
     fn step<S: OdeSystem + ?Sized>(&mut self, system: &mut S) -> Result<(), IntegratorError> {
-        if self.finished {
-            return Err(IntegratorError::InvalidInput(format!(
-                "the integration already reached t_end = {}",
-                self.t_end
-            )));
-        }
+        self.span.check_open()?;
         let expo = 1.0 / ORDER as f64 - 0.75 * PI_BETA;
         let mut non_finite_tries = 0;
         loop {
-            if self.stats.accepted_steps + self.stats.rejected_steps >= self.options.max_steps {
-                return Err(IntegratorError::TooManySteps {
-                    t: self.t,
-                    max_steps: self.options.max_steps,
-                });
-            }
-            let mut h = self.direction * self.h.abs().min(self.h_max);
-            if h.abs() < 16.0 * f64::EPSILON * self.t.abs() || h.abs() < f64::MIN_POSITIVE {
-                // If non-finite values drove the step down, that is the better diagnosis
-                // (e.g. a right-hand side undefined beyond some time).
-                if let Some(component) = self.non_finite_component {
-                    return Err(IntegratorError::NonFinite {
-                        t: self.t,
-                        component,
-                    });
-                }
-                return Err(IntegratorError::StepSizeTooSmall { t: self.t, h });
-            }
-            // Land exactly on t_end; stretch the last step by up to 1% rather than leave a
-            // sliver (DOPRI5's rule).
-            // (When the stretched step would exceed max_step, the remainder is halved instead.)
-            let remaining = self.t_end - self.t;
-            let mut last = false;
-            if remaining.abs() <= 1.01 * h.abs() {
-                if remaining.abs() <= self.h_max {
-                    h = remaining;
-                    last = true;
-                } else {
-                    h = 0.5 * remaining;
-                }
-            }
+            self.span.check_budget(self.options.max_steps)?;
+            let h = self.direction * self.h.abs().min(self.h_max);
+            self.span.check_step_size(h, self.non_finite_component)?;
+            let (h, last) = self.span.land(h, self.h_max);
             self.attempt(system, h);
 
             let err = error_norm(&self.error, &self.y, &self.y_new, &self.options);
             if let Some(component) = self.first_non_finite().or(err.is_nan().then_some(0)) {
                 // Overflow in a too-large trial step is handled like a rejection; a
                 // right-hand side that keeps failing is reported.
-                self.stats.rejected_steps += 1;
+                self.span.stats.rejected_steps += 1;
                 non_finite_tries += 1;
                 if non_finite_tries > NON_FINITE_RETRIES {
                     return Err(IntegratorError::NonFinite {
-                        t: self.t,
+                        t: self.span.t,
                         component,
                     });
                 }
@@ -499,21 +459,21 @@ impl Stepper for Rk45Stepper {
                 }
                 self.last_rejected = false;
                 self.h = h_new;
-                self.finished = last;
+                self.span.finished = last;
                 if let Some(h_lambda) = stiff_at {
-                    if self.stats.stiffness_detected_at.is_none() {
-                        self.stats.stiffness_detected_at = Some(self.t);
+                    if self.span.stats.stiffness_detected_at.is_none() {
+                        self.span.stats.stiffness_detected_at = Some(self.span.t);
                     }
                     if self.stiffness == StiffnessDetection::Error {
                         return Err(IntegratorError::Stiff {
-                            t: self.t,
+                            t: self.span.t,
                             h_lambda,
                         });
                     }
                 }
                 return Ok(());
             }
-            self.stats.rejected_steps += 1;
+            self.span.stats.rejected_steps += 1;
             self.last_rejected = true;
             self.non_finite_component = None;
             self.h = h / (fac_err / SAFETY).min(1.0 / FAC_MIN);
@@ -526,11 +486,11 @@ impl Stepper for Rk45Stepper {
     /// Exact at both ends of the step, with the right derivatives there (Hermite-like).
     fn interpolate(&self, t: f64, out: &mut [f64]) {
         let n = self.y.len();
-        if self.stats.accepted_steps == 0 {
+        if self.span.stats.accepted_steps == 0 {
             out.copy_from_slice(&self.y);
             return;
         }
-        let theta = (t - self.t_previous) / self.h_previous;
+        let theta = (t - self.span.t_previous) / self.h_previous;
         let theta1 = 1.0 - theta;
         let (ydiff, rest) = self.dense.split_at(n);
         let (bspl, rest) = rest.split_at(n);
@@ -542,7 +502,7 @@ impl Stepper for Rk45Stepper {
     }
 
     fn stats(&self) -> &Stats {
-        &self.stats
+        &self.span.stats
     }
 }
 

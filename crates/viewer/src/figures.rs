@@ -1,9 +1,20 @@
 //! Static figures: the machine with its reachable workspace and type-II singularity locus
 //! (`machine.svg`), and the deformed links at a few instants (`snapshots.svg`).
+//!
+//! The machine itself (guides, links, sliders, platform, workspace) is drawn here as plain
+//! SVG; the axes, ticks, axis titles and text come from the one plot module
+//! ([`flexprr_plot::axes::Axes`], [`flexprr_plot::svg`]), with equal scales.
 
-use flexprr_kinematics::{Geometry, KinematicsError, Pose};
-use plotters::coord::Shift;
-use plotters::prelude::*;
+use std::fmt::Write as _;
+
+use flexprr_kinematics::{Geometry, KinematicsError, LegPosition, Pose};
+use flexprr_plot::axes::{Area, Axes};
+use flexprr_plot::decimate::frame_indices;
+use flexprr_plot::svg::{
+    FONT_LABEL, FONT_LEGEND, FONT_TITLE, close, color, open, text, text_width, wrap,
+};
+use flexprr_plot::ticks::value_label;
+use flexprr_plot::{Axis, Color};
 
 use crate::data::{ViewerData, ViewerError};
 
@@ -31,7 +42,7 @@ pub struct WorkspaceSection {
 /// Signed determinant of the direct Jacobian with rows `(e_i, ((r_i - r_bar) x e_i) / L)`
 /// normalised to unit length, as in [`flexprr_kinematics::SingularityMeasures`] but keeping
 /// the sign, so that its zero set can be contoured.
-fn signed_type_ii(legs: &[flexprr_kinematics::LegPosition; 3]) -> f64 {
+fn signed_type_ii(legs: &[LegPosition; 3]) -> f64 {
     let centroid = (legs[0].r + legs[1].r + legs[2].r) / 3.0;
     let radius = legs
         .iter()
@@ -167,86 +178,71 @@ pub fn workspace_section(
     }
 }
 
-const INK: RGBColor = RGBColor(34, 34, 34);
-const GUIDE: RGBColor = RGBColor(150, 150, 150);
-const WORKSPACE: RGBColor = RGBColor(205, 222, 245);
-const LOCUS: RGBColor = RGBColor(200, 30, 30);
-const LOCUS_REFERENCE: RGBColor = RGBColor(235, 150, 150);
-const PATH: RGBColor = RGBColor(31, 95, 191);
-const PLATFORM: RGBColor = RGBColor(250, 220, 120);
-const LINK_COLORS: [RGBColor; 3] = [
-    RGBColor(31, 119, 180),
-    RGBColor(217, 95, 2),
-    RGBColor(44, 160, 44),
-];
+const INK: Color = Color(34, 34, 34);
+const GUIDE: Color = Color(150, 150, 150);
+const WORKSPACE: Color = Color(205, 222, 245);
+const WORKSPACE_EDGE: Color = Color(120, 150, 200);
+const LOCUS: Color = Color(200, 30, 30);
+const LOCUS_REFERENCE: Color = Color(235, 150, 150);
+const PATH: Color = Color(31, 95, 191);
+const PLATFORM: Color = Color(250, 220, 120);
+const PLATFORM_EDGE: Color = Color(107, 82, 0);
+const LINK_COLORS: [Color; 3] = [Color(31, 119, 180), Color(217, 95, 2), Color(44, 160, 44)];
 
-fn figure_error(e: impl std::fmt::Display) -> ViewerError {
-    ViewerError::Figure(e.to_string())
-}
-
-/// Millimetres, the unit of the static figures' axes.
-fn mm(p: [f64; 2]) -> (f64, f64) {
-    (1e3 * p[0], 1e3 * p[1])
-}
-
-/// Axis tick label in whole millimetres with a Unicode minus.
-fn mm_label(v: &f64) -> String {
-    if v.abs() < 0.5 {
-        "0".into()
-    } else {
-        format!("{v:.0}").replace('-', "\u{2212}")
+/// A polyline through `points` (px), `width` px wide, dashed `dash` (an SVG dash array) if
+/// given.
+fn line(out: &mut String, points: &[(f64, f64)], c: Color, width: f64, dash: Option<&str>) {
+    let mut d = String::new();
+    for (k, (x, y)) in points.iter().enumerate() {
+        let sep = if k == 0 { "" } else { " " };
+        let _ = write!(d, "{sep}{x:.1},{y:.1}");
     }
+    let dash = dash.map_or(String::new(), |a| format!(" stroke-dasharray=\"{a}\""));
+    let _ = writeln!(
+        out,
+        "<polyline points=\"{d}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{width}\" \
+         stroke-linejoin=\"round\" stroke-linecap=\"round\"{dash}/>",
+        color(c)
+    );
 }
 
-/// `value` in engineering notation with an SI prefix, e.g. `12.5 ms`.
-fn si(value: f64, unit: &str) -> String {
-    if value.abs() < f64::MIN_POSITIVE || !value.is_finite() {
-        return format!("0 {unit}");
+/// A closed polygon through `points` (px), filled with `fill` (none if `None`), outlined in
+/// `edge` 1 px wide.
+fn polygon(out: &mut String, points: &[(f64, f64)], fill: Option<Color>, edge: Color) {
+    let mut d = String::new();
+    for (k, (x, y)) in points.iter().enumerate() {
+        let sep = if k == 0 { "" } else { " " };
+        let _ = write!(d, "{sep}{x:.1},{y:.1}");
     }
-    let exponent = ((value.abs().log10() / 3.0).floor() * 3.0).clamp(-9.0, 6.0) as i32;
-    let prefix = match exponent {
-        -9 => "n",
-        -6 => "\u{b5}",
-        -3 => "m",
-        3 => "k",
-        6 => "M",
-        _ => "",
-    };
-    let scaled = value / 10f64.powi(exponent);
-    let text = format!("{scaled:.3}");
-    let text = text.trim_end_matches('0').trim_end_matches('.');
-    format!("{} {prefix}{unit}", text.replace('-', "\u{2212}"))
+    let fill = fill.map_or("none".to_string(), color);
+    let _ = writeln!(
+        out,
+        "<polygon points=\"{d}\" fill=\"{fill}\" stroke=\"{}\" stroke-width=\"1\" \
+         stroke-linejoin=\"round\"/>",
+        color(edge)
+    );
 }
 
-/// One entry of a legend drawn in its own column, outside the data.
-enum Key {
-    Fill(RGBColor),
-    Line(RGBColor, u32),
+/// A filled rectangle between the corners `a` and `b` (px).
+fn rect(out: &mut String, a: (f64, f64), b: (f64, f64), fill: Color) {
+    let _ = writeln!(
+        out,
+        "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"{}\"/>",
+        a.0.min(b.0),
+        a.1.min(b.1),
+        (b.0 - a.0).abs(),
+        (b.1 - a.1).abs(),
+        color(fill)
+    );
 }
 
-fn draw_legend(
-    area: &DrawingArea<SVGBackend<'_>, Shift>,
-    top: i32,
-    entries: &[(Key, String)],
-) -> Result<(), ViewerError> {
-    let font = ("sans-serif", 15).into_font().color(&INK);
-    for (k, (key, label)) in entries.iter().enumerate() {
-        let y = top + 24 * k as i32;
-        match key {
-            Key::Fill(c) => area
-                .draw(&Rectangle::new(
-                    [(8, y - 6), (36, y + 6)],
-                    c.filled().stroke_width(1),
-                ))
-                .map_err(figure_error)?,
-            Key::Line(c, w) => area
-                .draw(&PathElement::new(vec![(8, y), (36, y)], c.stroke_width(*w)))
-                .map_err(figure_error)?,
-        }
-        area.draw(&Text::new(label.clone(), (44, y - 8), font.clone()))
-            .map_err(figure_error)?;
-    }
-    Ok(())
+/// A filled disc of radius `r` at `(x, y)` (px).
+fn disc(out: &mut String, (x, y): (f64, f64), r: f64, fill: Color) {
+    let _ = writeln!(
+        out,
+        "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"{r}\" fill=\"{}\"/>",
+        color(fill)
+    );
 }
 
 /// Bounding box of the guides' travel ends.
@@ -264,16 +260,42 @@ fn guide_box(geometry: &Geometry) -> ((f64, f64), (f64, f64)) {
     ((x0, x1), (y0, y1))
 }
 
+/// One entry of a legend drawn in its own column, outside the data.
+enum Key {
+    Fill(Color),
+    Line(Color, f64),
+}
+
+/// The legend `entries` in a column at `x`, the first row's centre line at `top` (px),
+/// `row` px apart.
+fn column_legend(out: &mut String, (x, top): (f64, f64), row: f64, entries: &[(Key, String)]) {
+    for (k, (key, label)) in entries.iter().enumerate() {
+        let y = top + row * k as f64;
+        match key {
+            Key::Fill(c) => rect(out, (x, y - 6.0), (x + 28.0, y + 6.0), *c),
+            Key::Line(c, w) => line(out, &[(x, y), (x + 28.0, y)], *c, *w, None),
+        }
+        text(
+            out,
+            (x + 36.0, y + 0.35 * FONT_LABEL),
+            FONT_LABEL,
+            "start",
+            label,
+        );
+    }
+}
+
 /// `machine.svg`: the guides with their travel stops, the reachable workspace of the
 /// platform reference point at the orientation of the path's first pose with its type-II
 /// singularity locus, the path, and the machine (rigid links, sliders, platform) at the
-/// first pose. Axes in millimetres, equal scales; the legend sits in its own column.
+/// first pose. Axes in millimetres with equal scales (the plot module's axes); the title
+/// and the legend sit in their own column on the right.
 ///
 /// `path` holds platform poses `(x, y, phi)` (m, m, rad); `grid` is the number of nodes
 /// per axis of the workspace section (e.g. 241).
 ///
 /// # Errors
-/// An empty path, a first pose the machine cannot assemble in, or a drawing failure.
+/// An empty path, or a first pose the machine cannot assemble in.
 pub fn machine_svg(
     geometry: &Geometry,
     path: &[[f64; 3]],
@@ -291,228 +313,193 @@ pub fn machine_svg(
     let ((x0, x1), (y0, y1)) = guide_box(geometry);
     let half = 0.5 * (x1 - x0).max(y1 - y0) * 1.06;
     let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let section = workspace_section(
-        geometry,
-        first[2],
-        (cx - half, cx + half),
-        (cy - half, cy + half),
-        grid,
+    let window = ((cx - half, cx + half), (cy - half, cy + half));
+    let section = workspace_section(geometry, first[2], window.0, window.1, grid);
+    // None in this section: show where it lies at phi = 0 for reference (the paper's
+    // radial layout is type-II singular at its home pose).
+    let reference = if section.locus.is_empty() {
+        workspace_section(geometry, 0.0, window.0, window.1, grid).locus
+    } else {
+        Vec::new()
+    };
+
+    let (width, height, side) = (960.0, 700.0, 700.0);
+    let axes = Axes::fit(
+        Area {
+            left: 8.0,
+            top: 10.0,
+            width: side - 16.0,
+            height: height - 16.0,
+        },
+        (&Axis::new("x", "m"), window.0),
+        (&Axis::new("y", "m"), window.1),
+        true,
     );
-
-    let (width, height, side) = (960u32, 700u32, 700u32);
     let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(figure_error)?;
-        let (left, right) = root.split_horizontally(side);
-        let (margin, x_area, y_area) = (14u32, 46u32, 62u32);
-        // Equal scales: stretch the x range to the plotting area's aspect ratio.
-        let plot_w = f64::from(side - 2 * margin - y_area);
-        let plot_h = f64::from(height - 2 * margin - x_area);
-        let half_x = half * plot_w / plot_h;
-        let mut chart = ChartBuilder::on(&left)
-            .margin(margin)
-            .x_label_area_size(x_area)
-            .y_label_area_size(y_area)
-            .build_cartesian_2d(
-                1e3 * (cx - half_x)..1e3 * (cx + half_x),
-                1e3 * (cy - half)..1e3 * (cy + half),
-            )
-            .map_err(figure_error)?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_desc("x [mm]")
-            .y_desc("y [mm]")
-            .x_label_formatter(&mm_label)
-            .y_label_formatter(&mm_label)
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 16))
-            .draw()
-            .map_err(figure_error)?;
-
-        // Reachable workspace: horizontal runs of reachable nodes, one rectangle each.
-        let nx = section.x.len();
-        let dx = section.x[1] - section.x[0];
-        let dy = section.y[1] - section.y[0];
-        let mut runs = Vec::new();
-        for (iy, &y) in section.y.iter().enumerate() {
-            let mut ix = 0;
-            while ix < nx {
-                if section.reachable[iy * nx + ix] {
-                    let start = ix;
-                    while ix < nx && section.reachable[iy * nx + ix] {
-                        ix += 1;
-                    }
-                    runs.push(Rectangle::new(
-                        [
-                            mm([section.x[start] - 0.5 * dx, y - 0.5 * dy]),
-                            mm([section.x[ix - 1] + 0.5 * dx, y + 0.5 * dy]),
-                        ],
-                        WORKSPACE.filled(),
-                    ));
-                } else {
-                    ix += 1;
-                }
-            }
-        }
-        chart.draw_series(runs).map_err(figure_error)?;
-        chart
-            .draw_series(section.boundary.iter().map(|s| {
-                PathElement::new(
-                    vec![mm(s[0]), mm(s[1])],
-                    RGBColor(120, 150, 200).stroke_width(1),
-                )
-            }))
-            .map_err(figure_error)?;
-        chart
-            .draw_series(
-                section
-                    .locus
-                    .iter()
-                    .map(|s| PathElement::new(vec![mm(s[0]), mm(s[1])], LOCUS.stroke_width(2))),
-            )
-            .map_err(figure_error)?;
-        // None in this section: show where it lies at phi = 0 for reference (the paper's
-        // radial layout is type-II singular at its home pose).
-        let reference = if section.locus.is_empty() {
-            workspace_section(
-                geometry,
-                0.0,
-                (cx - half, cx + half),
-                (cy - half, cy + half),
-                grid,
-            )
-            .locus
-        } else {
-            Vec::new()
-        };
-        chart
-            .draw_series(reference.iter().map(|s| {
-                PathElement::new(vec![mm(s[0]), mm(s[1])], LOCUS_REFERENCE.stroke_width(1))
-            }))
-            .map_err(figure_error)?;
-
-        // Guides with travel stops.
-        for leg in &geometry.legs {
-            let g = &leg.guide;
-            let (a, b) = (g.slider_point(g.travel.0), g.slider_point(g.travel.1));
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    vec![mm([a.x, a.y]), mm([b.x, b.y])],
-                    GUIDE.stroke_width(5),
-                )))
-                .map_err(figure_error)?;
-            let v = [-g.direction.y * 0.008, g.direction.x * 0.008];
-            for end in [a, b] {
-                chart
-                    .draw_series(std::iter::once(PathElement::new(
-                        vec![
-                            mm([end.x - v[0], end.y - v[1]]),
-                            mm([end.x + v[0], end.y + v[1]]),
-                        ],
-                        INK.stroke_width(2),
-                    )))
-                    .map_err(figure_error)?;
-            }
-        }
-        // Path of the platform reference point.
-        // At most 2000 points of the path (uniform stride, ends kept) keep the file small.
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                crate::decimate::frame_indices(path.len(), 2000)
-                    .into_iter()
-                    .map(|k| mm([path[k][0], path[k][1]]))
-                    .collect::<Vec<_>>(),
-                PATH.stroke_width(2),
-            )))
-            .map_err(figure_error)?;
-        // The machine at the first pose.
-        for (i, leg) in legs.iter().enumerate() {
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    vec![mm([leg.b.x, leg.b.y]), mm([leg.c.x, leg.c.y])],
-                    LINK_COLORS[i].stroke_width(4),
-                )))
-                .map_err(figure_error)?;
-            chart
-                .draw_series(std::iter::once(Circle::new(
-                    mm([leg.b.x, leg.b.y]),
-                    5,
-                    INK.filled(),
-                )))
-                .map_err(figure_error)?;
-        }
-        chart
-            .draw_series(std::iter::once(Polygon::new(
-                legs.iter().map(|l| mm([l.c.x, l.c.y])).collect::<Vec<_>>(),
-                PLATFORM.filled(),
-            )))
-            .map_err(figure_error)?;
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                legs.iter()
-                    .chain(std::iter::once(&legs[0]))
-                    .map(|l| mm([l.c.x, l.c.y]))
-                    .collect::<Vec<_>>(),
-                RGBColor(107, 82, 0).stroke_width(1),
-            )))
-            .map_err(figure_error)?;
-
-        // Title and legend in the right-hand column.
-        let title_font = ("sans-serif", 17)
-            .into_font()
-            .style(FontStyle::Bold)
-            .color(&INK);
-        right
-            .draw(&Text::new(title.to_string(), (8, 20), title_font))
-            .map_err(figure_error)?;
-        let phi_deg = first[2].to_degrees();
-        let mut entries = vec![
-            (
-                Key::Fill(WORKSPACE),
-                format!("reachable, \u{3c6} = {phi_deg:.0}\u{b0}"),
-            ),
-            if section.locus.is_empty() {
-                (
-                    Key::Line(LOCUS_REFERENCE, 1),
-                    "type-II locus at \u{3c6} = 0\u{b0}".into(),
-                )
-            } else {
-                (
-                    Key::Line(LOCUS, 2),
-                    format!("type-II singularity, \u{3c6} = {phi_deg:.0}\u{b0}"),
-                )
-            },
-        ];
-        entries.extend([
-            (Key::Line(GUIDE, 5), "guide, travel stops".into()),
-            (Key::Line(PATH, 2), "path of the platform".into()),
-            (Key::Line(LINK_COLORS[0], 4), "links 1, 2, 3".into()),
-            (Key::Fill(PLATFORM), "platform, sliders \u{25cf}".into()),
-        ]);
-        draw_legend(&right, 80, &entries)?;
-        if section.locus.is_empty() {
-            let note = ("sans-serif", 13).into_font().color(&INK);
-            for (k, line) in [
-                "No type-II singularity in the".to_string(),
-                format!("reachable set at \u{3c6} = {phi_deg:.0}\u{b0}."),
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                right
-                    .draw(&Text::new(
-                        line,
-                        (8, 80 + 24 * 6 + 10 + 18 * k as i32),
-                        note.clone(),
-                    ))
-                    .map_err(figure_error)?;
-            }
-        }
-        root.present().map_err(figure_error)?;
-    }
+    open(
+        &mut svg,
+        width,
+        height,
+        title,
+        Some("flexprr machine figure: guides, reachable workspace, type-II locus, path"),
+    );
+    axes.draw_with_clip(&mut svg, "machine");
+    let _ = writeln!(svg, "<g clip-path=\"url(#machine)\">");
+    draw_workspace(&mut svg, &axes, &section, &reference);
+    draw_guides(&mut svg, &axes, geometry);
+    // At most 2000 points of the path (uniform stride, ends kept) keep the file small.
+    let path_px: Vec<(f64, f64)> = frame_indices(path.len(), 2000)
+        .into_iter()
+        .map(|k| axes.to_px(path[k][0], path[k][1]))
+        .collect();
+    line(&mut svg, &path_px, PATH, 2.0, None);
+    draw_machine(&mut svg, &axes, &legs);
+    let _ = writeln!(svg, "</g>");
+    machine_legend(
+        &mut svg,
+        (side + 12.0, width - side - 20.0),
+        title,
+        first[2],
+        section.locus.is_empty(),
+    );
+    close(&mut svg);
     Ok(svg)
+}
+
+/// The reachable workspace (horizontal runs of reachable grid cells, one rectangle each,
+/// all in one path so that no seam shows between rows), its boundary, the type-II locus in
+/// it and, when it has none, the `reference` locus.
+fn draw_workspace(
+    out: &mut String,
+    axes: &Axes,
+    section: &WorkspaceSection,
+    reference: &[[[f64; 2]; 2]],
+) {
+    let nx = section.x.len();
+    let dx = section.x[1] - section.x[0];
+    let dy = section.y[1] - section.y[0];
+    let mut d = String::new();
+    for (iy, &y) in section.y.iter().enumerate() {
+        let mut ix = 0;
+        while ix < nx {
+            if !section.reachable[iy * nx + ix] {
+                ix += 1;
+                continue;
+            }
+            let start = ix;
+            while ix < nx && section.reachable[iy * nx + ix] {
+                ix += 1;
+            }
+            let (x0, y0) = axes.to_px(section.x[start] - 0.5 * dx, y - 0.5 * dy);
+            let (x1, y1) = axes.to_px(section.x[ix - 1] + 0.5 * dx, y + 0.5 * dy);
+            let _ = write!(d, "M{x0:.1} {y0:.1}H{x1:.1}V{y1:.1}H{x0:.1}Z");
+        }
+    }
+    let _ = writeln!(out, "<path d=\"{d}\" fill=\"{}\"/>", color(WORKSPACE));
+    // Each set of contour pieces as one path.
+    let pieces = |out: &mut String, pieces: &[[[f64; 2]; 2]], c: Color, w: f64| {
+        if pieces.is_empty() {
+            return;
+        }
+        let mut d = String::new();
+        for s in pieces {
+            let (a, b) = (axes.to_px(s[0][0], s[0][1]), axes.to_px(s[1][0], s[1][1]));
+            let _ = write!(d, "M{:.1} {:.1}L{:.1} {:.1}", a.0, a.1, b.0, b.1);
+        }
+        let _ = writeln!(
+            out,
+            "<path d=\"{d}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{w}\" \
+             stroke-linecap=\"round\"/>",
+            color(c)
+        );
+    };
+    pieces(out, &section.boundary, WORKSPACE_EDGE, 1.0);
+    pieces(out, &section.locus, LOCUS, 2.0);
+    pieces(out, reference, LOCUS_REFERENCE, 1.0);
+}
+
+/// The guides, from travel stop to travel stop, with a short bar across each stop.
+fn draw_guides(out: &mut String, axes: &Axes, geometry: &Geometry) {
+    for leg in &geometry.legs {
+        let g = &leg.guide;
+        let (a, b) = (g.slider_point(g.travel.0), g.slider_point(g.travel.1));
+        line(
+            out,
+            &[axes.to_px(a.x, a.y), axes.to_px(b.x, b.y)],
+            GUIDE,
+            5.0,
+            None,
+        );
+        let v = [-g.direction.y * 0.008, g.direction.x * 0.008];
+        for end in [a, b] {
+            let bar = [
+                axes.to_px(end.x - v[0], end.y - v[1]),
+                axes.to_px(end.x + v[0], end.y + v[1]),
+            ];
+            line(out, &bar, INK, 2.0, None);
+        }
+    }
+}
+
+/// The rigid machine at one pose: the links (in the link colours), the sliders (discs at
+/// the slider joints) and the platform.
+fn draw_machine(out: &mut String, axes: &Axes, legs: &[LegPosition; 3]) {
+    for (i, leg) in legs.iter().enumerate() {
+        let ends = [axes.to_px(leg.b.x, leg.b.y), axes.to_px(leg.c.x, leg.c.y)];
+        line(out, &ends, LINK_COLORS[i], 4.0, None);
+        disc(out, ends[0], 5.0, INK);
+    }
+    let corners: Vec<(f64, f64)> = legs.iter().map(|l| axes.to_px(l.c.x, l.c.y)).collect();
+    polygon(out, &corners, Some(PLATFORM), PLATFORM_EDGE);
+}
+
+/// The right-hand column of `machine.svg` at `x`, `width` px wide: the title, the legend
+/// and, when the section at `phi` has no type-II locus (`no_locus`), a note saying so.
+fn machine_legend(out: &mut String, (x, width): (f64, f64), title: &str, phi: f64, no_locus: bool) {
+    let title_lines = wrap(title, width, FONT_TITLE);
+    for (k, line) in title_lines.iter().enumerate() {
+        let y = 28.0 + 1.25 * FONT_TITLE * k as f64;
+        text(out, (x, y), FONT_TITLE, "start", line);
+    }
+    let phi_deg = phi.to_degrees();
+    let locus = if no_locus {
+        (
+            Key::Line(LOCUS_REFERENCE, 1.0),
+            "type-II locus at \u{3c6} = 0\u{b0}".to_string(),
+        )
+    } else {
+        (
+            Key::Line(LOCUS, 2.0),
+            format!("type-II singularity, \u{3c6} = {phi_deg:.0}\u{b0}"),
+        )
+    };
+    let entries = [
+        (
+            Key::Fill(WORKSPACE),
+            format!("reachable, \u{3c6} = {phi_deg:.0}\u{b0}"),
+        ),
+        locus,
+        (Key::Line(GUIDE, 5.0), "guide, travel stops".into()),
+        (Key::Line(PATH, 2.0), "path of the platform".into()),
+        (Key::Line(LINK_COLORS[0], 4.0), "links 1, 2, 3".into()),
+        (Key::Fill(PLATFORM), "platform, sliders \u{25cf}".into()),
+    ];
+    let top = 40.0 + 1.25 * FONT_TITLE * title_lines.len() as f64;
+    column_legend(out, (x, top), 24.0, &entries);
+    if no_locus {
+        let note =
+            format!("No type-II singularity in the reachable set at \u{3c6} = {phi_deg:.0}\u{b0}.");
+        let y = top + 24.0 * entries.len() as f64 + 8.0;
+        for (k, line) in wrap(&note, width, FONT_LEGEND).iter().enumerate() {
+            text(
+                out,
+                (x, y + 1.3 * FONT_LEGEND * k as f64),
+                FONT_LEGEND,
+                "start",
+                line,
+            );
+        }
+    }
 }
 
 /// Index of the frame nearest to `t`.
@@ -553,18 +540,116 @@ fn round_125(value: f64) -> f64 {
     step * magnitude
 }
 
+/// One instant of `snapshots.svg` (m): slider joints B, platform joints C and the deformed
+/// centre lines, deflections amplified.
+struct Shape {
+    b: [[f64; 2]; 3],
+    c: [[f64; 2]; 3],
+    lines: [Vec<[f64; 2]>; 3],
+}
+
+impl Shape {
+    /// The machine at frame `k` of `data` (the platform moved by the coupled model's
+    /// deviation when there is one), each link's centre line deflected `amp` times its
+    /// deflection normal to its chord (the paper's eq. 1 along the chord B-C).
+    fn at(data: &ViewerData, k: usize, amp: f64) -> Self {
+        let mut p = data.pose[k];
+        if let Some(dev) = &data.deviation {
+            for (a, d) in p.iter_mut().zip(dev[k]) {
+                *a += d;
+            }
+        }
+        let (s, co) = p[2].sin_cos();
+        let b: [[f64; 2]; 3] = std::array::from_fn(|i| {
+            let g = &data.guides[i];
+            let rho = data.sliders[k][i];
+            [
+                g.anchor[0] + rho * g.direction[0],
+                g.anchor[1] + rho * g.direction[1],
+            ]
+        });
+        let c: [[f64; 2]; 3] = std::array::from_fn(|i| {
+            let a = data.attachments[i];
+            [p[0] + co * a[0] - s * a[1], p[1] + s * a[0] + co * a[1]]
+        });
+        let lines = std::array::from_fn(|i| {
+            let link = &data.links[i];
+            let (dx, dy) = (c[i][0] - b[i][0], c[i][1] - b[i][1]);
+            let chord = dx.hypot(dy);
+            let (e, n) = ([dx / chord, dy / chord], [-dy / chord, dx / chord]);
+            link.xi
+                .iter()
+                .enumerate()
+                .map(|(j, &xi)| {
+                    let w = amp * link.deflection(k, j);
+                    [
+                        b[i][0] + xi * chord * e[0] + w * n[0],
+                        b[i][1] + xi * chord * e[1] + w * n[1],
+                    ]
+                })
+                .collect()
+        });
+        Self { b, c, lines }
+    }
+}
+
+/// The amplification of `snapshots.svg`: `requested`, or a 1-2-5 number making the largest
+/// deflection in `frames` about a tenth of the shortest link (1 when nothing deflects).
+///
+/// # Errors
+/// A requested amplification that is not finite and positive.
+fn amplification(
+    data: &ViewerData,
+    frames: &[usize],
+    requested: Option<f64>,
+) -> Result<f64, ViewerError> {
+    if let Some(a) = requested {
+        if !(a.is_finite() && a > 0.0) {
+            return Err(ViewerError::Invalid {
+                field: "amplification".into(),
+                index: 0,
+                value: a,
+                reason: "must be finite and positive",
+            });
+        }
+        return Ok(a);
+    }
+    let mut max_w: f64 = 0.0;
+    for &k in frames {
+        for link in &data.links {
+            for j in 0..link.xi.len() {
+                max_w = max_w.max(link.deflection(k, j).abs());
+            }
+        }
+    }
+    let min_length = data.links.iter().map(|l| l.length).fold(f64::MAX, f64::min);
+    Ok(if max_w > 0.0 {
+        round_125(0.1 * min_length / max_w)
+    } else {
+        1.0
+    })
+}
+
+/// Width of one panel of `snapshots.svg` (px).
+const PANEL_W: f64 = 330.0;
+/// Height of one panel of `snapshots.svg`, caption included (px).
+const PANEL_H: f64 = 360.0;
+/// Height of the title above the panels and of the key below them (px).
+const BAND: f64 = 40.0;
+
 /// `snapshots.svg`: the deformed links at the frames nearest to `times`, one panel each,
 /// with a common amplification (a 1-2-5 number making the largest deflection in the
 /// shown frames about a tenth of the shortest link; `amplification` overrides it). Each
 /// panel shows the undeformed chords dashed, the deformed centre lines from the scene's
-/// mode shapes, sliders and platform, in millimetres with equal scales.
+/// mode shapes, sliders and platform, on the plot module's axes in millimetres with equal
+/// scales, the same window in every panel.
 ///
 /// # Errors
-/// Invalid `data`, no `times`, or a drawing failure.
+/// Invalid `data`, no `times`, or an amplification that is not finite and positive.
 pub fn snapshots_svg(
     data: &ViewerData,
     times: &[f64],
-    amplification: Option<f64>,
+    amplification_factor: Option<f64>,
 ) -> Result<String, ViewerError> {
     data.validate()?;
     if times.is_empty() {
@@ -578,219 +663,138 @@ pub fn snapshots_svg(
         .iter()
         .map(|&t| nearest_frame(&data.time, t))
         .collect();
-    let mut max_w: f64 = 0.0;
-    for &k in &frames {
-        for link in &data.links {
-            for j in 0..link.xi.len() {
-                max_w = max_w.max(link.deflection(k, j).abs());
-            }
-        }
-    }
-    if let Some(a) = amplification.filter(|a| !(a.is_finite() && *a > 0.0)) {
-        return Err(ViewerError::Invalid {
-            field: "amplification".into(),
-            index: 0,
-            value: a,
-            reason: "must be finite and positive",
-        });
-    }
-    let min_length = data.links.iter().map(|l| l.length).fold(f64::MAX, f64::min);
-    let amp = amplification.unwrap_or(if max_w > 0.0 {
-        round_125(0.1 * min_length / max_w)
-    } else {
-        1.0
-    });
-
-    // Per frame: slider joints B, platform joints C and the deformed centre lines.
-    struct Shape {
-        b: [[f64; 2]; 3],
-        c: [[f64; 2]; 3],
-        lines: [Vec<(f64, f64)>; 3],
-    }
-    let shapes: Vec<Shape> = frames
-        .iter()
-        .map(|&k| {
-            let mut p = data.pose[k];
-            if let Some(dev) = &data.deviation {
-                for (a, d) in p.iter_mut().zip(dev[k]) {
-                    *a += d;
-                }
-            }
-            let (s, co) = p[2].sin_cos();
-            let b: [[f64; 2]; 3] = std::array::from_fn(|i| {
-                let g = &data.guides[i];
-                let rho = data.sliders[k][i];
-                [
-                    g.anchor[0] + rho * g.direction[0],
-                    g.anchor[1] + rho * g.direction[1],
-                ]
-            });
-            let c: [[f64; 2]; 3] = std::array::from_fn(|i| {
-                let a = data.attachments[i];
-                [p[0] + co * a[0] - s * a[1], p[1] + s * a[0] + co * a[1]]
-            });
-            let lines = std::array::from_fn(|i| {
-                let link = &data.links[i];
-                let (dx, dy) = (c[i][0] - b[i][0], c[i][1] - b[i][1]);
-                let chord = dx.hypot(dy);
-                let (e, n) = ([dx / chord, dy / chord], [-dy / chord, dx / chord]);
-                link.xi
-                    .iter()
-                    .enumerate()
-                    .map(|(j, &xi)| {
-                        let w = amp * link.deflection(k, j);
-                        mm([
-                            b[i][0] + xi * chord * e[0] + w * n[0],
-                            b[i][1] + xi * chord * e[1] + w * n[1],
-                        ])
-                    })
-                    .collect()
-            });
-            Shape { b, c, lines }
-        })
-        .collect();
+    let amp = amplification(data, &frames, amplification_factor)?;
+    let shapes: Vec<Shape> = frames.iter().map(|&k| Shape::at(data, k, amp)).collect();
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for shape in &shapes {
-        for p in shape.b.iter().chain(&shape.c) {
-            x0 = x0.min(p[0]);
-            x1 = x1.max(p[0]);
-            y0 = y0.min(p[1]);
-            y1 = y1.max(p[1]);
-        }
+    for p in shapes.iter().flat_map(|s| s.b.iter().chain(&s.c)) {
+        x0 = x0.min(p[0]);
+        x1 = x1.max(p[0]);
+        y0 = y0.min(p[1]);
+        y1 = y1.max(p[1]);
     }
     let half = 0.5 * (x1 - x0).max(y1 - y0) * 1.2;
     let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let window = ((cx - half, cx + half), (cy - half, cy + half));
 
-    let panels = shapes.len() as u32;
-    let (panel_w, panel_h, head, key_h) = (330u32, 360u32, 40u32, 40u32);
-    let (width, height) = (panel_w * panels, head + panel_h + key_h);
+    let width = PANEL_W * shapes.len() as f64;
+    let height = BAND + PANEL_H + BAND;
+    let title = format!(
+        "{}: deformed links, deflection drawn \u{d7}{}",
+        data.title,
+        amplification_text(amp)
+    );
     let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(figure_error)?;
-        let title = format!(
-            "{}: deformed links, deflection drawn \u{d7}{}",
-            data.title,
-            amplification_text(amp)
+    open(
+        &mut svg,
+        width,
+        height,
+        &title,
+        Some("flexprr snapshots: deformed links at a few instants"),
+    );
+    text(
+        &mut svg,
+        (12.0, 8.0 + FONT_TITLE),
+        FONT_TITLE,
+        "start",
+        &title,
+    );
+    for (index, shape) in shapes.iter().enumerate() {
+        let caption = format!(
+            "({}) t = {}",
+            char::from(b'a' + (index % 26) as u8),
+            value_label(data.time[frames[index]], "s")
         );
-        root.draw(&Text::new(
-            title,
-            (12, 12),
-            ("serif", 18).into_font().color(&INK),
-        ))
-        .map_err(figure_error)?;
-        let body = root.margin(head, key_h, 0, 0);
-        let areas = body.split_evenly((1, panels as usize));
-        let (margin, x_area, y_area) = (8u32, 40u32, 52u32);
-        for (index, (area, shape)) in areas.iter().zip(&shapes).enumerate() {
-            let plot_w = f64::from(panel_w - 2 * margin - y_area);
-            let plot_h = f64::from(panel_h - 2 * margin - x_area - 22);
-            let half_x = half * plot_w / plot_h;
-            let mut chart = ChartBuilder::on(area)
-                .margin(margin)
-                .caption(
-                    format!(
-                        "({}) t = {}",
-                        char::from(b'a' + (index % 26) as u8),
-                        si(data.time[frames[index]], "s")
-                    ),
-                    ("serif", 16),
-                )
-                .x_label_area_size(x_area)
-                .y_label_area_size(y_area)
-                .build_cartesian_2d(
-                    1e3 * (cx - half_x)..1e3 * (cx + half_x),
-                    1e3 * (cy - half)..1e3 * (cy + half),
-                )
-                .map_err(figure_error)?;
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_desc("x [mm]")
-                .y_desc("y [mm]")
-                .x_label_formatter(&mm_label)
-                .y_label_formatter(&mm_label)
-                .x_labels(5)
-                .y_labels(5)
-                .label_style(("serif", 13))
-                .axis_desc_style(("serif", 14))
-                .draw()
-                .map_err(figure_error)?;
-            for i in 0..3 {
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![mm(shape.b[i]), mm(shape.c[i])],
-                        4,
-                        4,
-                        GUIDE.stroke_width(1),
-                    ))
-                    .map_err(figure_error)?;
-                chart
-                    .draw_series(std::iter::once(PathElement::new(
-                        shape.lines[i].clone(),
-                        INK.stroke_width(2),
-                    )))
-                    .map_err(figure_error)?;
-                chart
-                    .draw_series(std::iter::once(Rectangle::new(
-                        [
-                            (1e3 * shape.b[i][0] - 6.0, 1e3 * shape.b[i][1] - 6.0),
-                            (1e3 * shape.b[i][0] + 6.0, 1e3 * shape.b[i][1] + 6.0),
-                        ],
-                        INK.filled(),
-                    )))
-                    .map_err(figure_error)?;
-            }
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    shape
-                        .c
-                        .iter()
-                        .chain(std::iter::once(&shape.c[0]))
-                        .map(|&p| mm(p))
-                        .collect::<Vec<_>>(),
-                    INK.stroke_width(1),
-                )))
-                .map_err(figure_error)?;
-        }
-        let key = root.margin(head + panel_h, 0, 0, 0);
-        let font = ("serif", 14).into_font().color(&INK);
-        key.draw(&PathElement::new(
-            vec![(16, 18), (46, 18)],
-            INK.stroke_width(2),
-        ))
-        .map_err(figure_error)?;
-        key.draw(&Text::new("deformed centre line", (52, 11), font.clone()))
-            .map_err(figure_error)?;
-        for x in [230, 240, 250] {
-            key.draw(&PathElement::new(
-                vec![(x, 18), (x + 5, 18)],
-                GUIDE.stroke_width(1),
-            ))
-            .map_err(figure_error)?;
-        }
-        key.draw(&Text::new("undeformed chord", (262, 11), font.clone()))
-            .map_err(figure_error)?;
-        key.draw(&Rectangle::new([(410, 15), (416, 21)], INK.filled()))
-            .map_err(figure_error)?;
-        key.draw(&Text::new("slider; triangle: platform", (424, 11), font))
-            .map_err(figure_error)?;
-        root.present().map_err(figure_error)?;
+        draw_snapshot(&mut svg, index, shape, &caption, window);
     }
+    snapshot_key(&mut svg, BAND + PANEL_H + 0.5 * BAND);
+    close(&mut svg);
     Ok(svg)
+}
+
+/// Panel `index` of `snapshots.svg`: its caption, the axes over `window` (m) and the shape.
+fn draw_snapshot(
+    out: &mut String,
+    index: usize,
+    shape: &Shape,
+    caption: &str,
+    window: ((f64, f64), (f64, f64)),
+) {
+    let left = PANEL_W * index as f64;
+    let caption_h = FONT_LABEL + 10.0;
+    text(
+        out,
+        (left + 0.5 * PANEL_W, BAND + FONT_LABEL),
+        FONT_LABEL,
+        "middle",
+        caption,
+    );
+    let axes = Axes::fit(
+        Area {
+            left: left + 4.0,
+            top: BAND + caption_h,
+            width: PANEL_W - 12.0,
+            height: PANEL_H - caption_h - 4.0,
+        },
+        (&Axis::new("x", "m"), window.0),
+        (&Axis::new("y", "m"), window.1),
+        true,
+    );
+    let clip = format!("snapshot{index}");
+    axes.draw_with_clip(out, &clip);
+    let _ = writeln!(out, "<g clip-path=\"url(#{clip})\">");
+    let px = |p: [f64; 2]| axes.to_px(p[0], p[1]);
+    for i in 0..3 {
+        line(
+            out,
+            &[px(shape.b[i]), px(shape.c[i])],
+            GUIDE,
+            1.0,
+            Some("4 4"),
+        );
+        let centre: Vec<(f64, f64)> = shape.lines[i].iter().map(|&p| px(p)).collect();
+        line(out, &centre, INK, 2.0, None);
+        let (x, y) = px(shape.b[i]);
+        rect(out, (x - 4.0, y - 4.0), (x + 4.0, y + 4.0), INK);
+    }
+    let platform: Vec<(f64, f64)> = shape.c.iter().map(|&p| px(p)).collect();
+    polygon(out, &platform, None, INK);
+    let _ = writeln!(out, "</g>");
+}
+
+/// The key below the panels of `snapshots.svg`, its centre line at `y` (px).
+fn snapshot_key(out: &mut String, y: f64) {
+    let mut x = 16.0;
+    let mut entry = |out: &mut String, sample: &dyn Fn(&mut String, f64), label: &str| {
+        sample(out, x);
+        text(
+            out,
+            (x + 36.0, y + 0.35 * FONT_LEGEND),
+            FONT_LEGEND,
+            "start",
+            label,
+        );
+        x += 36.0 + text_width(label, FONT_LEGEND) + 28.0;
+    };
+    entry(
+        out,
+        &|out, x| line(out, &[(x, y), (x + 28.0, y)], INK, 2.0, None),
+        "deformed centre line",
+    );
+    entry(
+        out,
+        &|out, x| line(out, &[(x, y), (x + 28.0, y)], GUIDE, 1.0, Some("4 4")),
+        "undeformed chord",
+    );
+    entry(
+        out,
+        &|out, x| rect(out, (x + 10.0, y - 4.0), (x + 18.0, y + 4.0), INK),
+        "slider; triangle: platform",
+    );
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn si_prefixes() {
-        assert_eq!(si(0.0125, "s"), "12.5 ms");
-        assert_eq!(si(2.0e-5, "m"), "20 \u{b5}m");
-        assert_eq!(si(-350.4, "N"), "\u{2212}350.4 N");
-        assert_eq!(si(1500.0, "N"), "1.5 kN");
-    }
 
     #[test]
     fn amplification_labels() {

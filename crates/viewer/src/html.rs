@@ -3,8 +3,8 @@
 use serde_json::{Value, json};
 
 use crate::data::{ViewerData, ViewerError};
-use crate::decimate::{frame_indices, min_max_indices};
 use crate::encode::pack_f32;
+use flexprr_plot::decimate::{frame_indices, min_max_indices};
 
 /// The page template (HTML, CSS and JavaScript); the data replaces [`DATA_MARKER`].
 const TEMPLATE: &str = include_str!("viewer.html");

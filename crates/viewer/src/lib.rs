@@ -51,13 +51,12 @@
 //! ```
 
 mod data;
-mod decimate;
 mod encode;
 mod figures;
 mod html;
 
 pub use data::{GuideView, LinkView, ViewerData, ViewerError};
-pub use decimate::{frame_indices, min_max_indices};
 pub use encode::{base64, pack_f32};
 pub use figures::{WorkspaceSection, machine_svg, snapshots_svg, workspace_section};
+pub use flexprr_plot::decimate::{frame_indices, min_max_indices};
 pub use html::{ViewerOptions, viewer_html, viewer_html_with};

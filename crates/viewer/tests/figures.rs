@@ -108,3 +108,91 @@ fn snapshots_figure_labels_and_errors() {
         Err(ViewerError::Invalid { .. })
     ));
 }
+
+/// `(x, y, anchor, content)` of every `<text x=.. y=..>` element of `svg`.
+fn texts(svg: &str) -> Vec<(f64, f64, String, String)> {
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        Some(tag[at..at + tag[at..].find('"')?].to_string())
+    };
+    svg.split("<text ")
+        .skip(1)
+        .filter_map(|rest| {
+            let (tag, body) = rest.split_once('>')?;
+            let tag = format!(" {tag}");
+            Some((
+                attr(&tag, "x")?.parse().ok()?,
+                attr(&tag, "y")?.parse().ok()?,
+                attr(&tag, "text-anchor")?,
+                body.split_once("</text>")?.0.to_string(),
+            ))
+        })
+        .collect()
+}
+
+/// Least-squares line `pixel = a + b value` through `(value, pixel)` pairs.
+fn fit(points: &[(f64, f64)]) -> (f64, f64) {
+    let n = points.len() as f64;
+    let (mx, my) = (
+        points.iter().map(|p| p.0).sum::<f64>() / n,
+        points.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let b = sxy / sxx;
+    (my - b * mx, b)
+}
+
+/// The machine is drawn where its axes say, with equal scales: the tick labels of
+/// `machine.svg` (millimetres at pixel positions) give the map from the page to the plane;
+/// through it the three slider discs sit at the slider joints that the closed-form inverse
+/// kinematics of `flexprr_kinematics` gives for the first pose, and a millimetre is as long
+/// along x as along y.
+#[test]
+fn machine_figure_draws_the_sliders_where_its_axes_put_them() {
+    let data = common::paper_scene(0.05, 1e-4, false);
+    let geometry = common::paper_geometry();
+    let svg = machine_svg(&geometry, &data.pose, "paper", 121).unwrap();
+    let number = |t: &str| t.replace('\u{2212}', "-").parse::<f64>().ok();
+    let tick = flexprr_plot::svg::FONT_TICK;
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
+    for (x, y, anchor, content) in texts(&svg) {
+        match (number(&content), anchor.as_str()) {
+            (Some(mm), "middle") => xs.push((mm, x)),
+            // The label's baseline is 0.35 em below its tick.
+            (Some(mm), "end") => ys.push((mm, y - 0.35 * tick)),
+            _ => {}
+        }
+    }
+    assert!(xs.len() >= 4 && ys.len() >= 4, "{xs:?} {ys:?}");
+    let ((ax, bx), (ay, by)) = (fit(&xs), fit(&ys));
+    // Equal scales (y down on the page), to the 0.1 px the labels are written with.
+    assert!(
+        (bx + by).abs() < 2e-3 * bx,
+        "{bx} px/mm along x, {by} along y"
+    );
+    let discs: Vec<(f64, f64)> = svg
+        .split("<circle ")
+        .skip(1)
+        .filter(|c| c.contains("r=\"5\""))
+        .map(|c| {
+            let value = |name: &str| -> f64 {
+                let at = c.find(&format!("{name}=\"")).unwrap() + name.len() + 2;
+                c[at..at + c[at..].find('"').unwrap()].parse().unwrap()
+            };
+            ((value("cx") - ax) / bx, (value("cy") - ay) / by)
+        })
+        .collect();
+    assert_eq!(discs.len(), 3, "{discs:?}");
+    let p = data.pose[0];
+    let legs = geometry
+        .inverse_position(&flexprr_kinematics::Pose::new(p[0], p[1], p[2]))
+        .unwrap();
+    for (leg, (x, y)) in legs.iter().zip(&discs) {
+        let (bx_mm, by_mm) = (1e3 * leg.b.x, 1e3 * leg.b.y);
+        assert!(
+            (x - bx_mm).abs() < 0.5 && (y - by_mm).abs() < 0.5,
+            "slider drawn at ({x:.2}, {y:.2}) mm, inverse kinematics ({bx_mm:.2}, {by_mm:.2})"
+        );
+    }
+}

@@ -15,7 +15,7 @@ use std::cell::RefCell;
 use super::functions::{PhiPairs, phi_pairs, split};
 use super::jacobi::{rotate_columns, rotate_congruence, schur_rotation};
 use super::{BlockOperators, LinearSecondOrder};
-use crate::common::{error_norm, initial_step, validate_start};
+use crate::common::{Span, error_norm, initial_step, validate_start};
 use crate::{Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper};
 
 /// Half the spread of the 3-point Gauss-Legendre nodes on `[0, 1]`: `sqrt(15) / 10`.
@@ -633,9 +633,8 @@ pub struct MagnusStepper {
     options: Options,
     order: MagnusOrder,
     direction: f64,
-    t: f64,
-    t_previous: f64,
-    t_end: f64,
+    /// Where the stepper is, where it ends, its statistics (shared by every stepper).
+    span: Span,
     h: f64,
     h_previous: f64,
     h_max: f64,
@@ -657,8 +656,6 @@ pub struct MagnusStepper {
     s_coef: [Vec<f64>; 3],
     f_coef: [Vec<f64>; 3],
     last_rejected: bool,
-    finished: bool,
-    stats: Stats,
     /// Scratch for dense output.
     dense: RefCell<Vec<f64>>,
 }
@@ -747,9 +744,7 @@ impl Integrator for Magnus {
             options: self.options.clone(),
             order: self.order,
             direction,
-            t: t0,
-            t_previous: t0,
-            t_end,
+            span: Span::new(t0, t_end, stats),
             h: direction * h_abs,
             h_previous: 0.0,
             h_max,
@@ -765,8 +760,6 @@ impl Integrator for Magnus {
             s_coef: std::array::from_fn(|_| vec![0.0; s_off]),
             f_coef: std::array::from_fn(|_| vec![0.0; f_off]),
             last_rejected: false,
-            finished: false,
-            stats,
             dense: RefCell::new(vec![0.0; 2 * n]),
         };
         let mut x = std::mem::take(&mut stepper.x);
@@ -829,9 +822,9 @@ impl MagnusStepper {
         h: f64,
     ) -> Result<(), IntegratorError> {
         for (i, c) in GAUSS3.iter().enumerate() {
-            let ti = self.t + c * h;
+            let ti = self.span.t + c * h;
             lin.coefficients(ti, &mut self.s_coef[i], &mut self.f_coef[i]);
-            self.stats.rhs_evaluations += 1;
+            self.span.stats.rhs_evaluations += 1;
             let bad = self.s_coef[i]
                 .iter()
                 .chain(&self.f_coef[i])
@@ -1042,7 +1035,7 @@ impl MagnusStepper {
 
 impl Stepper for MagnusStepper {
     fn t(&self) -> f64 {
-        self.t
+        self.span.t
     }
 
     fn y(&self) -> &[f64] {
@@ -1050,16 +1043,11 @@ impl Stepper for MagnusStepper {
     }
 
     fn t_previous(&self) -> f64 {
-        self.t_previous
+        self.span.t_previous
     }
 
     fn step<S: OdeSystem + ?Sized>(&mut self, system: &mut S) -> Result<(), IntegratorError> {
-        if self.finished {
-            return Err(IntegratorError::InvalidInput(format!(
-                "the integration already reached t_end = {}",
-                self.t_end
-            )));
-        }
+        self.span.check_open()?;
         let Some(lin) = system.linear_form() else {
             return Err(IntegratorError::InvalidInput(
                 "magnus needs a linear time-varying system, and this system offers none: use a general method such as abm"
@@ -1071,26 +1059,10 @@ impl Stepper for MagnusStepper {
             MagnusOrder::Six => 6,
         };
         loop {
-            if self.stats.accepted_steps + self.stats.rejected_steps >= self.options.max_steps {
-                return Err(IntegratorError::TooManySteps {
-                    t: self.t,
-                    max_steps: self.options.max_steps,
-                });
-            }
-            let mut h = self.direction * self.h.abs().min(self.h_max);
-            if h.abs() < 16.0 * f64::EPSILON * self.t.abs() || h.abs() < f64::MIN_POSITIVE {
-                return Err(IntegratorError::StepSizeTooSmall { t: self.t, h });
-            }
-            let remaining = self.t_end - self.t;
-            let mut last = false;
-            if remaining.abs() <= 1.01 * h.abs() {
-                if remaining.abs() <= self.h_max {
-                    h = remaining;
-                    last = true;
-                } else {
-                    h = 0.5 * remaining;
-                }
-            }
+            self.span.check_budget(self.options.max_steps)?;
+            let h = self.direction * self.h.abs().min(self.h_max);
+            self.span.check_step_size(h, None)?;
+            let (h, last) = self.span.land(h, self.h_max);
             self.evaluate_coefficients(&mut *lin, h)?;
             let converged = self.attempt(h);
             let err = if converged {
@@ -1111,21 +1083,20 @@ impl Stepper for MagnusStepper {
                 }
                 std::mem::swap(&mut self.x, &mut self.x_new);
                 std::mem::swap(&mut self.y, &mut self.y_new);
-                self.t_previous = self.t;
                 self.h_previous = h;
-                self.t = if last { self.t_end } else { self.t + h };
+                self.span.advance(self.span.t + h, last);
                 self.h = h_new;
                 self.last_rejected = false;
-                self.finished = last;
-                self.stats.accepted_steps += 1;
-                self.stats.record_order(order);
+                self.span.finished = last;
+                self.span.stats.accepted_steps += 1;
+                self.span.stats.record_order(order);
                 return Ok(());
             }
-            self.stats.rejected_steps += 1;
+            self.span.stats.rejected_steps += 1;
             if let Some(component) = non_finite {
-                if h.abs() <= 1e-12 * (1.0 + self.t.abs()) {
+                if h.abs() <= 1e-12 * (1.0 + self.span.t.abs()) {
                     return Err(IntegratorError::NonFinite {
-                        t: self.t,
+                        t: self.span.t,
                         component,
                     });
                 }
@@ -1143,11 +1114,11 @@ impl Stepper for MagnusStepper {
     /// Dense output: the 4th-order sub-step of every mode from the start of the last step to
     /// `t`, with the step's interpolated coefficients (see [`Magnus`]).
     fn interpolate(&self, t: f64, out: &mut [f64]) {
-        if self.stats.accepted_steps == 0 {
+        if self.span.stats.accepted_steps == 0 {
             out.copy_from_slice(&self.y);
             return;
         }
-        let theta = (t - self.t_previous) / self.h_previous;
+        let theta = (t - self.span.t_previous) / self.h_previous;
         let half = self.half;
         let mut work = self.dense.borrow_mut();
         let (xw, xs) = work.split_at_mut(2 * half);
@@ -1176,7 +1147,7 @@ impl Stepper for MagnusStepper {
     }
 
     fn stats(&self) -> &Stats {
-        &self.stats
+        &self.span.stats
     }
 }
 

@@ -41,92 +41,46 @@ fn time() -> Axis {
     Axis::new("t", "s")
 }
 
+/// A titled figure over time, with the run's description.
+type Titled<'a> = &'a dyn Fn(&str) -> Figure;
+
+/// A solid line in the `k`-th colour.
+fn solid(k: usize) -> Style {
+    Style::nth(k)
+}
+
+/// A dashed line in the `k`-th colour (a second variant of the same quantity).
+fn dashed(k: usize) -> Style {
+    Style::nth(k).dash(Dash::Dashed)
+}
+
 /// The run's figures as (file name, figure), for the tables `result` holds.
 pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
     let about = format!("flexprr run of scene {}", scene.name);
     let figure = |title: &str| Figure::new(time()).title(title).description(&about);
-    let solid = Style::nth;
-    let dashed = |k| Style::nth(k).dash(Dash::Dashed);
+    let modes = scene.machine.links[0].modes();
     let mut out = Vec::new();
     if let Some(t) = result.table("deflections") {
-        for &xi in &scene.file.output.deflection_xi {
-            let mut f = figure(&format!("Deflection of the links at ξ = {xi}"));
-            for i in 1..=3 {
-                // The legend once, on the top panel: the styles are the same below.
-                let (with, without) = if i == 1 {
-                    ("with axial force", "without axial force")
-                } else {
-                    ("", "")
-                };
-                f = f.panel(panel(
-                    Axis::new(format!("w_{{{i}}}"), "m"),
-                    [
-                        series(t, &format!("w_{i}_xi{xi}_m"), with, solid(0)),
-                        series(t, &format!("w_{i}_xi{xi}_no_axial_m"), without, dashed(1)),
-                    ],
-                ));
-            }
-            out.push((format!("deflections_xi{xi}.svg"), f));
-        }
+        out.extend(deflection_figures(
+            t,
+            &scene.file.output.deflection_xi,
+            &figure,
+        ));
     }
     if let Some(t) = result.table("modes") {
-        let r = scene.machine.links[0].modes();
-        let mut f = figure("Modal coordinates of link 1");
-        for j in 1..=r.min(3) {
-            f = f.panel(panel(
-                Axis::new(format!("η_{{1,{j}}}"), "m"),
-                [series(t, &format!("eta_1_{j}_m"), "", solid(0))],
-            ));
-        }
-        out.push(("modes.svg".to_string(), f));
+        out.push(modes_figure(t, modes, &figure));
     }
     if let Some(t) = result.table("modal_forces") {
-        let s = [
-            ("F_rho_1_1_N", "F₁ = −M_{ρ} ρ̈"),
-            ("F_beta_1_1_N", "F₂ = −M_{β} β̈"),
-            ("F_fg_1_1_N", "F₃ = F_{fg}"),
-        ]
-        .iter()
-        .enumerate()
-        .map(|(k, (c, l))| series(t, c, l, solid(k)));
-        out.push((
-            "modal_forces.svg".to_string(),
-            figure("Modal forces on mode 1 of link 1")
-                .panel(panel(Axis::new("modal force", "N"), s)),
-        ));
+        out.push(modal_forces_figure(t, &figure));
     }
     if let Some(t) = result.table("driving_forces") {
-        let mut f = figure("Driving force of slider 1").panel(panel(
-            Axis::new("F_{a1}", "N"),
-            [
-                series(t, "F_a_1_flexible_N", "flexible links", solid(0)),
-                series(t, "F_a_1_rigid_N", "rigid links", dashed(1)),
-            ],
-        ));
-        if let Some(s) = series(t, "F_a_1_difference_N", "", solid(2)) {
-            f = f.panel(Panel::new(Axis::new("ΔF_{a1}", "N")).series(s));
-        }
-        out.push(("driving_forces.svg".to_string(), f));
+        out.push(driving_forces_figure(t, &figure));
     }
     if let Some(t) = result.table("frequencies") {
-        let r = scene.machine.links[0].modes();
-        for j in 1..=r.min(3) {
-            let f = figure(&format!("Axial force and mode {j} frequency of link 1"))
-                .panel(panel(
-                    Axis::new("P₁", "N"),
-                    [
-                        series(t, "P_B_1_N", "at B (slider)", solid(0)),
-                        series(t, "P_C_1_N", "at C (platform)", dashed(1)),
-                    ],
-                ))
-                .panel(panel(
-                    Axis::new(format!("f_{{1,{j}}}"), "Hz"),
-                    [series(t, &format!("f_1_{j}_Hz"), "", solid(2))],
-                ));
-            out.push((format!("axial_force_frequency_mode{j}.svg"), f));
-        }
+        out.extend(frequency_figures(t, modes, &figure));
     }
     if let Some(t) = result.table("axial_forces") {
+        // The paper's figure 15.
         let s = per_link(t, |i| format!("P_B_{i}_N"), |i| format!("link {i}"));
         out.push((
             "axial_forces.svg".to_string(),
@@ -135,19 +89,7 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
         ));
     }
     if let Some(t) = result.table("platform_deviation") {
-        let f = figure("Platform deviation from the nominal path")
-            .panel(panel(
-                Axis::new("Δx, Δy", "m"),
-                [
-                    series(t, "dx_m", "Δx", solid(0)),
-                    series(t, "dy_m", "Δy", dashed(1)),
-                ],
-            ))
-            .panel(panel(
-                Axis::new("Δφ", "rad"),
-                [series(t, "dphi_rad", "", solid(2))],
-            ));
-        out.push(("platform_deviation.svg".to_string(), f));
+        out.push(deviation_figure(t, &figure));
     }
     if let Some(t) = result.table("kinematics") {
         let rho = per_link(t, |i| format!("rho_{i}_m"), |i| format!("ρ_{{{i}}}"));
@@ -166,4 +108,116 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
     }
     out.retain(|(_, f)| f.panels.iter().any(|p| !p.series.is_empty()));
     out
+}
+
+/// The paper's figures 6-7: per deflection point `xi`, the three links'
+/// deflections with and without the axial force, one panel per link.
+fn deflection_figures(t: &Table, points: &[f64], figure: Titled<'_>) -> Vec<(String, Figure)> {
+    points
+        .iter()
+        .map(|&xi| {
+            let mut f = figure(&format!("Deflection of the links at ξ = {xi}"));
+            for i in 1..=3 {
+                // The legend once, on the top panel: the styles are the same below.
+                let (with, without) = if i == 1 {
+                    ("with axial force", "without axial force")
+                } else {
+                    ("", "")
+                };
+                f = f.panel(panel(
+                    Axis::new(format!("w_{{{i}}}"), "m"),
+                    [
+                        series(t, &format!("w_{i}_xi{xi}_m"), with, solid(0)),
+                        series(t, &format!("w_{i}_xi{xi}_no_axial_m"), without, dashed(1)),
+                    ],
+                ));
+            }
+            (format!("deflections_xi{xi}.svg"), f)
+        })
+        .collect()
+}
+
+/// The paper's figure 8: the modal coordinates of link 1, one panel per mode (at most
+/// three of `modes`).
+fn modes_figure(t: &Table, modes: usize, figure: Titled<'_>) -> (String, Figure) {
+    let mut f = figure("Modal coordinates of link 1");
+    for j in 1..=modes.min(3) {
+        f = f.panel(panel(
+            Axis::new(format!("η_{{1,{j}}}"), "m"),
+            [series(t, &format!("eta_1_{j}_m"), "", solid(0))],
+        ));
+    }
+    ("modes.svg".to_string(), f)
+}
+
+/// The paper's figure 9: the three modal forces on mode 1 of link 1 (eq. 16).
+fn modal_forces_figure(t: &Table, figure: Titled<'_>) -> (String, Figure) {
+    let s = [
+        ("F_rho_1_1_N", "F₁ = −M_{ρ} ρ̈"),
+        ("F_beta_1_1_N", "F₂ = −M_{β} β̈"),
+        ("F_fg_1_1_N", "F₃ = F_{fg}"),
+    ]
+    .iter()
+    .enumerate()
+    .map(|(k, (c, l))| series(t, c, l, solid(k)));
+    (
+        "modal_forces.svg".to_string(),
+        figure("Modal forces on mode 1 of link 1").panel(panel(Axis::new("modal force", "N"), s)),
+    )
+}
+
+/// The paper's figures 10-11: the driving force of slider 1 with flexible and rigid links, and
+/// their difference when the table has it.
+fn driving_forces_figure(t: &Table, figure: Titled<'_>) -> (String, Figure) {
+    let mut f = figure("Driving force of slider 1").panel(panel(
+        Axis::new("F_{a1}", "N"),
+        [
+            series(t, "F_a_1_flexible_N", "flexible links", solid(0)),
+            series(t, "F_a_1_rigid_N", "rigid links", dashed(1)),
+        ],
+    ));
+    if let Some(s) = series(t, "F_a_1_difference_N", "", solid(2)) {
+        f = f.panel(Panel::new(Axis::new("ΔF_{a1}", "N")).series(s));
+    }
+    ("driving_forces.svg".to_string(), f)
+}
+
+/// The paper's figures 12-14: per mode of link 1 (at most three of `modes`), the axial
+/// force at both ends above the mode's frequency.
+fn frequency_figures(t: &Table, modes: usize, figure: Titled<'_>) -> Vec<(String, Figure)> {
+    (1..=modes.min(3))
+        .map(|j| {
+            let f = figure(&format!("Axial force and mode {j} frequency of link 1"))
+                .panel(panel(
+                    Axis::new("P₁", "N"),
+                    [
+                        series(t, "P_B_1_N", "at B (slider)", solid(0)),
+                        series(t, "P_C_1_N", "at C (platform)", dashed(1)),
+                    ],
+                ))
+                .panel(panel(
+                    Axis::new(format!("f_{{1,{j}}}"), "Hz"),
+                    [series(t, &format!("f_1_{j}_Hz"), "", solid(2))],
+                ));
+            (format!("axial_force_frequency_mode{j}.svg"), f)
+        })
+        .collect()
+}
+
+/// The platform's deviation from its nominal path (coupled and nonlinear models):
+/// position above orientation.
+fn deviation_figure(t: &Table, figure: Titled<'_>) -> (String, Figure) {
+    let f = figure("Platform deviation from the nominal path")
+        .panel(panel(
+            Axis::new("Δx, Δy", "m"),
+            [
+                series(t, "dx_m", "Δx", solid(0)),
+                series(t, "dy_m", "Δy", dashed(1)),
+            ],
+        ))
+        .panel(panel(
+            Axis::new("Δφ", "rad"),
+            [series(t, "dphi_rad", "", solid(2))],
+        ));
+    ("platform_deviation.svg".to_string(), f)
 }

@@ -1,0 +1,384 @@
+//! What a work-precision measurement measures: the models side by side, the methods, the
+//! tolerance ladder, the error measure and how the reference is computed.
+
+use flexprr_dynamics::{CouplingModel, Formulation};
+use flexprr_scene::{Method, ScenarioError, Scene};
+
+use super::{DEFAULT_TOLERANCES, ErrorMeasure};
+
+/// A model to measure: the scene with `model.coupling` (and, for the nonlinear model,
+/// `model.elements`) replaced.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelChoice {
+    /// Kineto-elasto-dynamics with the scene's formulation (`"ked"`).
+    Ked,
+    /// The coupled rigid-flexible model (`"coupled"`; consistent formulation only).
+    Coupled,
+    /// Co-rotational nonlinear links (`"nonlinear"` with the scene's `model.elements`, or
+    /// `"nonlinear:N"` with `N` elements per link, even, 2 to 512).
+    Nonlinear(Option<usize>),
+}
+
+impl ModelChoice {
+    /// The names [`ModelChoice::parse`] accepts, for messages.
+    pub const NAMES: &'static str = "ked, coupled, nonlinear, nonlinear:N (N even, 2 to 512)";
+
+    /// The model named `name` (`ked`, `coupled`, `nonlinear`, `nonlinear:16`), if any.
+    pub fn parse(name: &str) -> Option<Self> {
+        match name {
+            "ked" => Some(Self::Ked),
+            "coupled" => Some(Self::Coupled),
+            "nonlinear" => Some(Self::Nonlinear(None)),
+            _ => {
+                let n: usize = name.strip_prefix("nonlinear:")?.parse().ok()?;
+                ((2..=512).contains(&n) && n % 2 == 0).then_some(Self::Nonlinear(Some(n)))
+            }
+        }
+    }
+
+    /// The name [`ModelChoice::parse`] reads back (`ked`, `nonlinear`, `nonlinear:16`).
+    pub fn name(self) -> String {
+        match self {
+            Self::Ked => "ked".to_string(),
+            Self::Coupled => "coupled".to_string(),
+            Self::Nonlinear(None) => "nonlinear".to_string(),
+            Self::Nonlinear(Some(n)) => format!("nonlinear:{n}"),
+        }
+    }
+
+    /// The scene's own model.
+    pub fn of(scene: &Scene) -> Self {
+        match scene.coupling {
+            CouplingModel::Ked => Self::Ked,
+            CouplingModel::Coupled => Self::Coupled,
+            CouplingModel::Nonlinear => Self::Nonlinear(Some(scene.large_deflection.elements)),
+        }
+    }
+
+    /// The elements per link of a nonlinear choice on `scene`.
+    fn elements(self, scene: &Scene) -> Option<usize> {
+        match self {
+            Self::Nonlinear(n) => Some(n.unwrap_or(scene.large_deflection.elements)),
+            _ => None,
+        }
+    }
+
+    /// The row label on `scene`: `ked (paper)`, `ked (consistent)`, `coupled`,
+    /// `nonlinear:16`.
+    pub fn label(self, scene: &Scene) -> String {
+        match self {
+            Self::Ked => format!("ked ({})", scene.formulation.name()),
+            Self::Coupled => "coupled".to_string(),
+            Self::Nonlinear(_) => format!("nonlinear:{}", self.elements(scene).unwrap_or(0)),
+        }
+    }
+
+    /// The model kind.
+    pub fn kind(self) -> CouplingModel {
+        match self {
+            Self::Ked => CouplingModel::Ked,
+            Self::Coupled => CouplingModel::Coupled,
+            Self::Nonlinear(_) => CouplingModel::Nonlinear,
+        }
+    }
+
+    /// How faithful the model is, for the default reference: KED below coupled below
+    /// nonlinear, and more elements above fewer (the mesh convergence of docs/coupled.md).
+    pub fn fidelity(self, scene: &Scene) -> usize {
+        match self {
+            Self::Ked => 0,
+            Self::Coupled => 1,
+            Self::Nonlinear(_) => 2 + self.elements(scene).unwrap_or(0),
+        }
+    }
+
+    /// `scene` with this model.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] at key `models` if the coupled or nonlinear model is asked of
+    /// a scene whose formulation is not the consistent one (they are built on it).
+    pub fn apply(self, scene: &Scene) -> Result<Scene, ScenarioError> {
+        let mut out = scene.clone();
+        out.coupling = self.kind();
+        if let Some(n) = self.elements(scene) {
+            out.large_deflection.elements = n;
+        }
+        if self != Self::Ked && scene.formulation != Formulation::consistent() {
+            return Err(ScenarioError::Input {
+                location: None,
+                key: "models".to_string(),
+                message: format!(
+                    "model {} needs model.formulation = \"consistent\"; scene {:?} uses {:?}",
+                    self.label(scene),
+                    scene.name,
+                    scene.formulation.name()
+                ),
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// How the reference of a model kind is computed by default: the method, its check, the
+/// relative tolerance and the accepted disagreement (in the error measure used).
+///
+/// * KED: [`Method::Rk45`] at `1e-14` checked by [`Method::Abm`] at the same tolerance (a
+///   one-step Runge-Kutta pair against a multistep Adams code, so their errors are
+///   independent); agreement below `1e-9`.
+/// * Coupled: [`Method::Abm`] at `1e-14` checked by [`Method::Rk45`] at the same tolerance;
+///   agreement below `1e-9` (the 0.2 s coupled scene at 20 Hz: `8.7e-12` in deflections).
+/// * Nonlinear: [`Method::Abm`] at `1e-10` checked by [`Method::Rk45`] at the same
+///   tolerance; agreement below `1e-8`. Tighter costs minutes per run: the elements' axial
+///   modes hold both methods to small steps already at loose tolerances, and from `1e-10`
+///   on the steps become accuracy-limited on top (32 elements over 20 ms: 376 000 ABM steps
+///   at `1e-10`, 1 003 000 at `1e-11`; RK45 193 000 steps of six right-hand sides each at
+///   `1e-10`).
+pub fn default_reference(kind: CouplingModel) -> ReferencePlan {
+    match kind {
+        CouplingModel::Ked => ReferencePlan {
+            method: Method::Rk45,
+            check_method: Method::Abm,
+            rtol: 1e-14,
+            check_factor: 1.0,
+            agreement_limit: 1e-9,
+        },
+        CouplingModel::Coupled => ReferencePlan {
+            method: Method::Abm,
+            check_method: Method::Rk45,
+            rtol: 1e-14,
+            check_factor: 1.0,
+            agreement_limit: 1e-9,
+        },
+        CouplingModel::Nonlinear => ReferencePlan {
+            method: Method::Abm,
+            check_method: Method::Rk45,
+            rtol: 1e-10,
+            check_factor: 1.0,
+            agreement_limit: 1e-8,
+        },
+    }
+}
+
+/// How a reference is computed: see [`default_reference`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferencePlan {
+    /// Method of the reference.
+    pub method: Method,
+    /// Method of its check.
+    pub check_method: Method,
+    /// Relative tolerance of the reference.
+    pub rtol: f64,
+    /// The check's tolerance over the reference's (1 for a second method, 0.1 for the same
+    /// method ten times tighter).
+    pub check_factor: f64,
+    /// Largest accepted disagreement between the reference and its check.
+    pub agreement_limit: f64,
+}
+
+/// What to measure and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WorkPrecisionConfig {
+    /// Relative tolerances of the ladder (loose to tight).
+    pub tolerances: Vec<f64>,
+    /// Methods to measure.
+    pub methods: Vec<Method>,
+    /// Models to measure, side by side; empty: the scene's own model.
+    pub models: Vec<ModelChoice>,
+    /// Model of the reference; `None`: the most faithful of [`Self::models`] (the scene's own
+    /// model when that is empty).
+    pub reference_model: Option<ModelChoice>,
+    /// Error measure; `None`: [`ErrorMeasure::State`] when every model is KED, else
+    /// [`ErrorMeasure::Deflection`].
+    pub error: Option<ErrorMeasure>,
+    /// Untimed runs before the timed ones (caches, branch predictors, page faults).
+    pub warmup: usize,
+    /// Timed runs per point; the median is reported.
+    pub repeats: usize,
+    /// Relative tolerance of the reference (far below the ladder); `None`: the reference
+    /// model's default ([`default_reference`]).
+    pub reference_rtol: Option<f64>,
+    /// Largest accepted disagreement between the reference and its check, in the error
+    /// measure; `None`: the reference model's default ([`default_reference`]).
+    pub reference_agreement_limit: Option<f64>,
+}
+
+impl Default for WorkPrecisionConfig {
+    fn default() -> Self {
+        Self {
+            tolerances: DEFAULT_TOLERANCES.to_vec(),
+            methods: vec![
+                Method::Abm,
+                Method::Rk45,
+                Method::Bdf,
+                Method::Magnus4,
+                Method::Magnus6,
+                Method::Auto,
+            ],
+            models: Vec::new(),
+            reference_model: None,
+            error: None,
+            warmup: 2,
+            repeats: 7,
+            reference_rtol: None,
+            reference_agreement_limit: None,
+        }
+    }
+}
+
+impl WorkPrecisionConfig {
+    /// Checks the configuration.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] naming the offending setting and value.
+    pub fn validate(&self) -> Result<(), ScenarioError> {
+        let bad = |key: &str, message: String| {
+            Err(ScenarioError::Input {
+                location: None,
+                key: key.to_string(),
+                message,
+            })
+        };
+        if self.tolerances.is_empty() {
+            return bad("tolerances", "the ladder is empty".to_string());
+        }
+        if let Some((k, tol)) = self
+            .tolerances
+            .iter()
+            .enumerate()
+            .find(|(_, t)| !(t.is_finite() && **t > 0.0 && **t < 1.0))
+        {
+            return bad(
+                "tolerances",
+                format!("tolerance {k} is {tol}; expected a value in (0, 1)"),
+            );
+        }
+        if self.methods.is_empty() {
+            return bad("methods", "no method to measure".to_string());
+        }
+        // Each method, model and tolerance once: a repeat would only give duplicate rows.
+        if let Some(m) = first_repeat(&self.methods, |a, b| a == b) {
+            return bad("methods", format!("{} is named twice", m.name()));
+        }
+        if let Some(m) = first_repeat(&self.models, |a, b| a == b) {
+            return bad("models", format!("{} is named twice", m.name()));
+        }
+        if let Some(t) = first_repeat(&self.tolerances, |a, b| a.to_bits() == b.to_bits()) {
+            return bad("tolerances", format!("{t:e} is named twice"));
+        }
+        if self.repeats == 0 {
+            return bad("repeats", "at least one timed run is needed".to_string());
+        }
+        let tightest = self.tightest();
+        if let Some(rtol) = self.reference_rtol
+            && !(rtol > 0.0 && rtol < tightest)
+        {
+            return bad(
+                "reference_rtol",
+                format!(
+                    "{rtol} must be positive and below the tightest ladder tolerance {tightest}"
+                ),
+            );
+        }
+        if let Some(limit) = self.reference_agreement_limit
+            && (limit.is_nan() || limit <= 0.0)
+        {
+            return bad(
+                "reference_agreement_limit",
+                format!("{limit} must be positive"),
+            );
+        }
+        Ok(())
+    }
+
+    /// The tightest tolerance of the ladder.
+    fn tightest(&self) -> f64 {
+        self.tolerances.iter().copied().fold(1.0, f64::min)
+    }
+
+    /// The models measured on `scene`: [`Self::models`], or the scene's own.
+    pub fn measured_models(&self, scene: &Scene) -> Vec<ModelChoice> {
+        if self.models.is_empty() {
+            vec![ModelChoice::of(scene)]
+        } else {
+            self.models.clone()
+        }
+    }
+
+    /// The model of the reference on `scene`: [`Self::reference_model`], or the most
+    /// faithful measured model ([`ModelChoice::fidelity`]).
+    pub fn reference_model(&self, scene: &Scene) -> ModelChoice {
+        self.reference_model.unwrap_or_else(|| {
+            self.measured_models(scene)
+                .into_iter()
+                .max_by_key(|m| m.fidelity(scene))
+                .unwrap_or_else(|| ModelChoice::of(scene))
+        })
+    }
+
+    /// The error measure on `scene` (see [`Self::error`]).
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] at key `error` if the state measure is asked for with a
+    /// coupled or nonlinear model (their states are not the KED modal state).
+    pub fn error_measure(&self, scene: &Scene) -> Result<ErrorMeasure, ScenarioError> {
+        let mut all = self.measured_models(scene);
+        all.push(self.reference_model(scene));
+        let other = all.iter().find(|m| **m != ModelChoice::Ked);
+        match (self.error, other) {
+            (Some(ErrorMeasure::State), Some(model)) => Err(ScenarioError::Input {
+                location: None,
+                key: "error".to_string(),
+                message: format!(
+                    "the state measure compares KED modal states and does not apply to model {}; \
+                     use the deflection measure",
+                    model.label(scene)
+                ),
+            }),
+            (Some(measure), _) => Ok(measure),
+            (None, Some(_)) => Ok(ErrorMeasure::Deflection),
+            (None, None) => Ok(ErrorMeasure::State),
+        }
+    }
+
+    /// How the reference is computed on `scene`: the reference model's
+    /// [`default_reference`] with [`Self::reference_rtol`] and
+    /// [`Self::reference_agreement_limit`] when given.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] at key `reference_rtol` if the reference tolerance is not
+    /// below the tightest ladder tolerance.
+    pub fn reference_plan(&self, scene: &Scene) -> Result<ReferencePlan, ScenarioError> {
+        let model = self.reference_model(scene);
+        let mut plan = default_reference(model.kind());
+        if let Some(rtol) = self.reference_rtol {
+            plan.rtol = rtol;
+        }
+        if let Some(limit) = self.reference_agreement_limit {
+            plan.agreement_limit = limit;
+        }
+        let tightest = self.tightest();
+        if plan.rtol >= tightest {
+            return Err(ScenarioError::Input {
+                location: None,
+                key: "reference_rtol".to_string(),
+                message: format!(
+                    "the reference ({}, {}) at rtol {:e} is not below the tightest ladder \
+                     tolerance {tightest:e}: loosen the ladder or tighten the reference",
+                    model.label(scene),
+                    plan.method.name(),
+                    plan.rtol
+                ),
+            });
+        }
+        Ok(plan)
+    }
+}
+
+/// The first element of `items` equal (by `same`) to an earlier one.
+pub(crate) fn first_repeat<T>(items: &[T], same: impl Fn(&T, &T) -> bool) -> Option<&T> {
+    items
+        .iter()
+        .enumerate()
+        .find(|(k, a)| items[..*k].iter().any(|b| same(a, b)))
+        .map(|(_, a)| a)
+}
