@@ -9,9 +9,9 @@ use std::time::{Duration, Instant};
 
 use flexprr_studies::search::{Criterion, Probe, SearchOutcome};
 use flexprr_studies::study::{
-    CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress,
+    CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress, worker_threads,
 };
-use flexprr_studies::{merge_studies, run_search_study, run_study};
+use flexprr_studies::{merge_studies_with, run_search_study, run_study};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::Failure;
@@ -24,7 +24,7 @@ pub struct StudyArgs {
     /// Output directory: `results.csv`, `study.json`, `cases/<id>.json`.
     #[arg(long)]
     pub out: PathBuf,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 4 per core).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Run only slice k of n (cases with id % n == k - 1), e.g. `--shard 2/8`.
@@ -40,6 +40,10 @@ pub struct StudyArgs {
     /// cases (off a terminal). Failed cases are still printed, one short line each.
     #[arg(long)]
     pub quiet: bool,
+    /// Write into a non-empty directory that flexprr did not write, next to its files (none
+    /// of them is overwritten or deleted; a file with the name of an output is refused).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Arguments of `flexprr merge`.
@@ -51,6 +55,10 @@ pub struct MergeArgs {
     /// Directory for the merged table.
     #[arg(long)]
     pub out: PathBuf,
+    /// Write into a non-empty directory that flexprr did not write, next to its files (none
+    /// of them is overwritten or deleted; a file with the name of an output is refused).
+    #[arg(long)]
+    pub force: bool,
 }
 
 fn failure(e: StudyError) -> Failure {
@@ -203,9 +211,7 @@ impl StudyProgressView {
 
 /// Runs a study.
 pub fn study(args: StudyArgs) -> Result<(), Failure> {
-    if args.threads == Some(0) {
-        return Err(Failure::bad_input("--threads must be at least 1"));
-    }
+    worker_threads(args.threads).map_err(failure)?;
     // A study file (or its base scene) that cannot be read is bad input, as for `flexprr run`.
     let study = Study::load(&args.study).map_err(|e| match e {
         StudyError::Io { .. } => Failure::bad_input(e),
@@ -217,6 +223,7 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
         shard: args.shard,
         resume: args.resume,
         case_outputs: args.case_outputs,
+        force: args.force,
     };
     if study.search.is_some() {
         return search(&study, &args, &options);
@@ -250,7 +257,8 @@ fn probe_line(study: &Study, search: &SearchOutcome, probe: &Probe, start: Insta
     let key = study.search.as_ref().map_or("", |s| s.key.as_str());
     let what = match (&probe.error, probe.reached, probe.time_s, probe.link) {
         (Some(e), _, _, _) => format!("failed: {}", shorten(e, 160)),
-        (None, true, Some(t), Some(link)) => format!(
+        (None, None, _, _) => "failed".to_string(),
+        (None, Some(true), Some(t), Some(link)) => format!(
             "{} at t = {:.4} s (link {link})",
             match search.criterion {
                 Criterion::Collapse => "collapses",
@@ -258,8 +266,10 @@ fn probe_line(study: &Study, search: &SearchOutcome, probe: &Probe, start: Insta
             },
             t
         ),
-        (None, true, _, _) => "reaches the limit".to_string(),
-        (None, false, _, _) => format!("no {} within {} s", search.criterion.name(), probe.end_s),
+        (None, Some(true), _, _) => "reaches the limit".to_string(),
+        (None, Some(false), _, _) => {
+            format!("no {} within {} s", search.criterion.name(), probe.end_s)
+        }
     };
     format!(
         "{} [{}]: {key} = {}: {what} ({:.1} s)",
@@ -313,7 +323,7 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
     if let Some(gaps) = shard_gaps(&args.dirs) {
         return Err(Failure::run(format!("{}: {gaps}", args.out.display())));
     }
-    let summary = merge_studies(&args.dirs, &args.out).map_err(failure)?;
+    let summary = merge_studies_with(&args.dirs, &args.out, args.force).map_err(failure)?;
     println!(
         "merged {} directories: {} cases, {} not ok; table {}",
         args.dirs.len(),
@@ -333,8 +343,10 @@ struct ManifestView {
     shard: Option<String>,
 }
 
+/// The manifest of `dir`, read only when it is a regular file of bounded size (a pipe or a
+/// device named `study.json` is never opened).
 fn manifest_view(dir: &Path) -> Option<ManifestView> {
-    let text = std::fs::read_to_string(dir.join("study.json")).ok()?;
+    let text = flexprr_studies::study::read_input_file(&dir.join("study.json")).ok()?;
     serde_json::from_str(&text).ok()
 }
 

@@ -63,12 +63,18 @@ pub struct WorkPrecisionArgs {
     /// Maximum relative error at which the methods are compared.
     #[arg(long, default_value_t = 1e-6)]
     pub target_error: f64,
+    /// Write into a non-empty directory that flexprr did not write, next to its files.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Measures, merges the peers' rows and writes `work_precision.csv`, `work_precision.svg`,
 /// `work_precision.md` and `reference.csv`.
 pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     let scene = Scene::load(&args.scene).map_err(failure)?;
+    for path in args.reference.iter().chain(&args.peers) {
+        flexprr_scene::check_input_file(path, flexprr_scene::MAX_DATA_BYTES).map_err(failure)?;
+    }
     let mut config = WorkPrecisionConfig {
         repeats: args.repeats,
         warmup: args.warmup,
@@ -185,8 +191,20 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
             .join(&scene.name)
             .join("work_precision")
     });
-    std::fs::create_dir_all(&out)
-        .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
+    let inputs: Vec<&std::path::Path> = [args.scene.as_path()]
+        .into_iter()
+        .chain(args.reference.as_deref())
+        .chain(args.peers.iter().map(PathBuf::as_path))
+        .collect();
+    flexprr_run::OutputDir::check(
+        &out,
+        flexprr_run::output_dir::WORK_PRECISION,
+        args.force,
+        &inputs,
+        &[],
+    )
+    .and_then(|dir| dir.open())
+    .map_err(|e| failure(e.into()))?;
 
     let clock = std::time::Instant::now();
     let reference = match &args.reference {

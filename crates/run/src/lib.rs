@@ -15,6 +15,7 @@ pub mod guard;
 mod integrate;
 mod nonlinear;
 mod output;
+pub mod output_dir;
 mod outputs;
 pub mod plot;
 mod run;
@@ -26,7 +27,9 @@ pub use column::{Column, Quantity};
 pub use error::{Collapse, RunError, RunFailure};
 pub use integrate::{Integration, integrate_model, stop_times};
 pub use output::{
-    WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs, write_outputs_with,
+    RUN_PRODUCTS, WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs,
+    write_outputs_into, write_outputs_with,
 };
+pub use output_dir::{OutputDir, OutputError};
 pub use run::{NONLINEAR_ADVICE_FRACTION, integrate, run, scene_integrator};
 pub use table::{RunResult, RunStats, Table};

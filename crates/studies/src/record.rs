@@ -331,10 +331,10 @@ pub(crate) fn read_case_record_files(
             path: path.display().to_string(),
             message,
         };
-        if !path.is_file() {
-            return Err(bad("not a regular file".into()));
-        }
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let text = crate::error::read_input_file(&path).map_err(|e| match e {
+            StudyError::InputFile { message, .. } => bad(message),
+            other => other,
+        })?;
         let record: CaseRecord =
             serde_json::from_str(&text).map_err(|e| bad(format!("not a case record: {e}")))?;
         if record.id != id {
