@@ -170,8 +170,16 @@ pub fn run(args: BeamArgs) -> Result<(), Failure> {
         CouplingConfig::Full => Coupling::Full,
         CouplingConfig::Diagonal => Coupling::Diagonal,
     };
-    let result = frequencies(&link.integrals, &load, coupling)
-        .map_err(|e| Failure::run(format!("{path}: {e}")))?;
+    // The link file is the only input: an eigenproblem that cannot be formed (a load so
+    // large that the stiffness overflows) is bad input, placed at the load.
+    let result = frequencies(&link.integrals, &load, coupling).map_err(|e| {
+        Failure::bad_input(input_error(
+            &path,
+            &text,
+            "load",
+            format!("the eigenproblem of this link and load cannot be solved: {e}; check the load's size"),
+        ))
+    })?;
     let report = if args.json {
         json_report(&file, &link, &load, &result) + "\n"
     } else {

@@ -140,7 +140,12 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
         Ok(result) => (result, None),
         Err(f) => (f.partial.as_ref(), Some(&f.error)),
     };
-    let written = write_outputs_into(&scene, result, error, &target).map_err(failure)?;
+    // The run has happened: a file that cannot be written now is a failure of the run
+    // (exit 1), not bad input.
+    let written = write_outputs_into(&scene, result, error, &target).map_err(|e| match e {
+        ScenarioError::Io { .. } => Failure::run(e),
+        other => failure(other),
+    })?;
     for w in &result.warnings {
         eprintln!("warning: {w}");
     }

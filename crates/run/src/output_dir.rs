@@ -282,6 +282,22 @@ impl OutputDir {
             ));
         }
         let (contents, is_link) = inspect(path, &products)?;
+        if contents == Contents::Absent {
+            if let Some(blocker) = real
+                .ancestors()
+                .skip(1)
+                .find(|a| a.exists())
+                .filter(|a| !a.is_dir())
+            {
+                return Err(OutputError::refused(
+                    path,
+                    format!(
+                        "cannot be created: {} is not a directory",
+                        blocker.display()
+                    ),
+                ));
+            }
+        }
         let dir = OutputDir {
             path: path.to_path_buf(),
             renamable: !is_link && renamable(path, &real, &inputs),
@@ -639,7 +655,14 @@ fn read_head(path: &Path, n: usize) -> Option<String> {
 /// What `path` holds, and whether it is a symbolic link.
 fn inspect(path: &Path, products: &Products) -> Result<(Contents, bool), OutputError> {
     let link = match std::fs::symlink_metadata(path) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Contents::Absent, false)),
+        Err(e)
+            if matches!(
+                e.kind(),
+                std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory
+            ) =>
+        {
+            return Ok((Contents::Absent, false));
+        }
         Err(e) => return Err(OutputError::io(path, e)),
         Ok(m) => m.file_type().is_symlink(),
     };

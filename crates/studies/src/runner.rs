@@ -171,7 +171,10 @@ fn read_manifest(dir: &Path) -> Result<Option<StudyManifest>, StudyError> {
     }
     let text = crate::error::read_input_file(&path).map_err(|e| StudyError::Directory {
         dir: path.display().to_string(),
-        message: format!("not a study manifest: {e}"),
+        message: match e {
+            StudyError::InputFile { message, .. } => format!("not a study manifest: it {message}"),
+            other => format!("not a study manifest: {other}"),
+        },
     })?;
     serde_json::from_str(&text)
         .map(Some)
@@ -276,10 +279,12 @@ pub fn run_study(
         return run_search_study(study, out, options, &|_, _| {});
     }
     let threads = worker_threads(options.threads)?;
-    output_dir(study, out, options.force, &[])?.open()?;
+    let target = output_dir(study, out, options.force, &[])?;
+    // Everything already there is checked before anything is written.
+    let existing = existing_records(study, out, options.resume)?;
+    target.open()?;
     let cases_dir = out.join("cases");
     std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
-    let existing = existing_records(study, out, options.resume)?;
     write_manifest(
         out,
         &StudyManifest {
@@ -492,7 +497,10 @@ fn merge_one(
         ));
     }
     let m = read_manifest(dir)
-        .map_err(|e| not_input(e.to_string()))?
+        .map_err(|e| match e {
+            StudyError::Directory { dir, message } => StudyError::MergeInput { dir, message },
+            other => other,
+        })?
         .ok_or_else(|| not_input("no study.json: not a study output directory".into()))?;
     if let Some(first) = first {
         if first.fingerprint != m.fingerprint || first.columns != m.columns {

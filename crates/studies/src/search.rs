@@ -174,7 +174,7 @@ impl Search {
             return Err((
                 "search.high",
                 format!(
-                    "expected finite low < high, got low = {} and high = {}",
+                    "expected finite low < high, got low = {:?} and high = {:?}",
                     c.low, c.high
                 ),
             ));
@@ -182,14 +182,14 @@ impl Search {
         if !(finite(c.tolerance) && c.tolerance > 0.0) {
             return Err((
                 "search.tolerance",
-                format!("expected a positive bracket width, got {}", c.tolerance),
+                format!("expected a positive bracket width, got {:?}", c.tolerance),
             ));
         }
         if (c.high - c.low) / c.tolerance > 2f64.powi(30) {
             return Err((
                 "search.tolerance",
                 format!(
-                    "{} is below 2^-30 of the bracket: the search would not end in a useful time",
+                    "{:?} is below 2^-30 of the bracket: the search would not end in a useful time",
                     c.tolerance
                 ),
             ));
@@ -208,13 +208,13 @@ impl Search {
                 if !(finite(n) && n > 0.0) {
                     return Err((
                         "search.revolutions",
-                        format!("expected a positive number, got {n}"),
+                        format!("expected a positive number, got {n:?}"),
                     ));
                 }
                 if c.low <= 0.0 {
                     return Err((
                         "search.low",
-                        format!("a frequency must be positive, got {}", c.low),
+                        format!("a frequency must be positive, got {:?}", c.low),
                     ));
                 }
                 Window::Revolutions(n)
@@ -223,7 +223,7 @@ impl Search {
                 if !(finite(t) && t > 0.0) {
                     return Err((
                         "search.time",
-                        format!("expected a positive time (s), got {t}"),
+                        format!("expected a positive time (s), got {t:?}"),
                     ));
                 }
                 Window::Time(t)

@@ -133,6 +133,12 @@ fn set_in_table(
         table.insert(first.to_string(), new);
         return Ok(());
     }
+    if !table.contains_key(*first) && rest.first().is_some_and(|p| p.parse::<usize>().is_ok()) {
+        return Err(format!(
+            "\"{key}\": there is no array `{first}` whose element could be set; give the whole \
+             array in the base scene (or in [set]) to vary one element"
+        ));
+    }
     let child = table
         .entry(first.to_string())
         .or_insert_with(|| toml::Value::Table(toml::Table::new()));
@@ -255,8 +261,23 @@ impl Study {
                 Some(search)
             }
         };
+        let name = match &raw.name {
+            Some(name) => {
+                if let Some(why) = flexprr_scene::unsafe_name_reason(name) {
+                    return Err(at.input(
+                        "name",
+                        format!(
+                            "\"{name}\" {why}: a study name is 1 to {} characters of A-Z a-z 0-9 . _ -, not starting with .",
+                            flexprr_scene::MAX_NAME_LEN
+                        ),
+                    ));
+                }
+                name.clone()
+            }
+            None => flexprr_scene::sanitize_name(default_name),
+        };
         let study = Study {
-            name: raw.name.clone().unwrap_or_else(|| default_name.to_string()),
+            name,
             file: file.to_string(),
             base,
             axes,
@@ -273,6 +294,7 @@ impl Study {
             set: &raw.set,
             source: &source,
             axes: &raw.axis,
+            base: &study.base,
         };
         match &study.search {
             Some(search) => crate::validate::check_searches(&study, search, &context)?,
@@ -699,7 +721,7 @@ fn range_values(
         return Err(at.input(
             &format!("{key}.count"),
             format!(
-                "count = 1 gives one value, but start ({}) and end ({}) differ: give count >= 2 \
+                "count = 1 gives one value, but start ({:?}) and end ({:?}) differ: give count >= 2 \
                  for both ends, or the one value as `values = [...]`",
                 r.start, r.end
             ),
@@ -718,7 +740,7 @@ fn range_values(
         return Err(at.input(
             key,
             format!(
-                "a log range needs positive start and end, got {} and {}",
+                "a log range needs positive start and end, got {:?} and {:?}",
                 r.start, r.end
             ),
         ));

@@ -36,6 +36,8 @@ pub(crate) struct Context<'a> {
     pub(crate) source: &'a BaseSource,
     /// `[[axis]]` as written.
     pub(crate) axes: &'a [AxisConfig],
+    /// The base scene with `[set]` applied.
+    pub(crate) base: &'a toml::Table,
 }
 
 impl Context<'_> {
@@ -46,15 +48,32 @@ impl Context<'_> {
         let ScenarioError::Input { key, message, .. } = e else {
             return StudyError::Scene(e);
         };
-        if let Some(k) = self.axes.iter().position(|a| keys_overlap(&a.key, &key)) {
+        let field = |k: usize| {
             let field = if self.axes[k].values.is_some() {
                 "values"
             } else {
                 "range"
             };
+            format!("axis.{k}.{field}")
+        };
+        if let Some(k) = self.axes.iter().position(|a| keys_overlap(&a.key, &key)) {
+            return self
+                .at
+                .input(&field(k), format!("{key}: {message} ({case})"));
+        }
+        // An axis whose table is missing from the base scene creates it holding only the
+        // axis's key; the table's other required keys are then missing.
+        if let Some((k, table)) = self.axes.iter().enumerate().find_map(|(k, a)| {
+            let created = created_table(self.base, &a.key)?;
+            keys_overlap(&created, &key).then_some((k, created))
+        }) {
             return self.at.input(
-                &format!("axis.{k}.{field}"),
-                format!("{key}: {message} ({case})"),
+                &format!("axis.{k}.key"),
+                format!(
+                    "{key}: {message}: the base scene has no `{table}` table, so the axis \
+                     creates one holding only its own key; give the table in the base scene or \
+                     in [set]"
+                ),
             );
         }
         if !key.is_empty() && defines(self.set, &key) {
@@ -70,6 +89,43 @@ impl Context<'_> {
             BaseSource::Inline => self.at.input(&format!("scene.{key}"), message),
         }
     }
+}
+
+/// The outermost table on the dotted `key`'s path that `base` lacks (setting the key would
+/// create it), if any.
+fn created_table(base: &toml::Table, key: &str) -> Option<String> {
+    let parts: Vec<&str> = key.split('.').collect();
+    let mut node = toml::Value::Table(base.clone());
+    for (k, part) in parts.iter().enumerate().take(parts.len().saturating_sub(1)) {
+        let next = match &node {
+            toml::Value::Table(t) => t.get(*part).cloned(),
+            toml::Value::Array(a) => part.parse::<usize>().ok().and_then(|i| a.get(i).cloned()),
+            _ => return None,
+        };
+        match next {
+            Some(v) => node = v,
+            None => return Some(parts[..=k].join(".")),
+        }
+    }
+    None
+}
+
+/// The value at the dotted `key` of a scene table, if it is there.
+fn value_at<'t>(table: &'t toml::Table, key: &str) -> Option<&'t toml::Value> {
+    let mut parts = key.split('.');
+    let mut node = table.get(parts.next()?)?;
+    for part in parts {
+        node = match node {
+            toml::Value::Table(t) => t.get(part)?,
+            toml::Value::Array(a) => a.get(part.parse::<usize>().ok()?)?,
+            _ => return None,
+        };
+    }
+    Some(node)
+}
+
+fn is_number(value: &toml::Value) -> bool {
+    matches!(value, toml::Value::Float(_) | toml::Value::Integer(_))
 }
 
 /// Whether `[set]` gives the value at the dotted `key`: the key itself, or a value (not a
@@ -207,6 +263,15 @@ pub(crate) fn check_searches(
         } else {
             format!("the case {}", case.join(", "))
         };
+        if let Some(held) = value_at(table, &search.key).filter(|v| !is_number(v)) {
+            return Err(at.input(
+                "search.key",
+                format!(
+                    "\"{}\" holds {held} in {case}, not a number: a search varies a numeric key",
+                    search.key
+                ),
+            ));
+        }
         let criterion = search.criterion_for(table).map_err(|m| {
             let message = if labels.is_empty() {
                 m
