@@ -341,6 +341,19 @@ impl OutputDir {
             Some(names) => names.iter().any(|n| n == name),
             None => self.products.is_product(name) || self.expected.contains(name),
         };
+        for input in &self.inputs {
+            let name = input.file_name().map(|n| n.to_string_lossy().into_owned());
+            if input.parent() == Some(self.real.as_path()) && name.as_deref().is_some_and(is_ours) {
+                return Err(OutputError::refused(
+                    &self.path,
+                    format!(
+                        "the input {} has the name of an output this command writes there; \
+                         move it or choose another output directory",
+                        input.display()
+                    ),
+                ));
+            }
+        }
         let clashes: BTreeSet<String> = contents
             .others()
             .into_iter()
@@ -355,19 +368,6 @@ impl OutputDir {
                     list(&clashes, 5)
                 ),
             ));
-        }
-        for input in &self.inputs {
-            let name = input.file_name().map(|n| n.to_string_lossy().into_owned());
-            if input.parent() == Some(self.real.as_path()) && name.as_deref().is_some_and(is_ours) {
-                return Err(OutputError::refused(
-                    &self.path,
-                    format!(
-                        "the input {} has the name of an output this command writes there; \
-                         move it or choose another output directory",
-                        input.display()
-                    ),
-                ));
-            }
         }
         Ok(())
     }

@@ -310,10 +310,12 @@ fn place_probe_error(
         return StudyError::Scene(e);
     };
     if keys_overlap(key, &search.key) {
-        let kind = message.contains("unknown field")
-            || message.contains("invalid type")
-            || message.contains("expected");
-        return if kind && !message.contains("got") {
+        // The parser's words for a key that takes no number; a value out of range is
+        // reported with what it `got`.
+        let not_numeric = ["unknown field", "invalid type", "wanted", "unknown variant"]
+            .iter()
+            .any(|w| message.contains(w));
+        return if not_numeric {
             at.input(
                 "search.key",
                 format!(
