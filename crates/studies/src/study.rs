@@ -665,6 +665,16 @@ fn expand_axes(
                 format!("axis \"{}\" has no values", a.key),
             ));
         }
+        if let Some(j) = values.iter().position(|v| !all_finite(v)) {
+            return Err(at.input(
+                &format!("{key}.values.{j}"),
+                format!(
+                    "{} is not a finite number: an axis value must be one (a case with it could \
+                     only be invalid)",
+                    values[j]
+                ),
+            ));
+        }
         if values.len() > MAX_CASES {
             return Err(at.input(
                 &format!("{key}.values"),
@@ -703,6 +713,16 @@ fn expand_axes(
         });
     }
     Ok(axes)
+}
+
+/// Whether every float in `value` (inside arrays and tables too) is finite.
+fn all_finite(value: &toml::Value) -> bool {
+    match value {
+        toml::Value::Float(f) => f.is_finite(),
+        toml::Value::Array(a) => a.iter().all(all_finite),
+        toml::Value::Table(t) => t.values().all(all_finite),
+        _ => true,
+    }
 }
 
 /// The values of a range after checking it (`key` is its study key, for messages).
