@@ -9,7 +9,8 @@ use std::time::{Duration, Instant};
 
 use flexprr_studies::search::{Criterion, Probe, SearchOutcome};
 use flexprr_studies::study::{
-    CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress, worker_threads,
+    CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress, format_value,
+    worker_threads,
 };
 use flexprr_studies::{merge_studies_with, run_search_study, run_study};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -268,14 +269,15 @@ fn probe_line(study: &Study, search: &SearchOutcome, probe: &Probe, start: Insta
         ),
         (None, Some(true), _, _) => "reaches the limit".to_string(),
         (None, Some(false), _, _) => {
-            format!("no {} within {} s", search.criterion.name(), probe.end_s)
+            let end = format_value(probe.end_s);
+            format!("no {} within {end} s", search.criterion.name())
         }
     };
     format!(
         "{} [{}]: {key} = {}: {what} ({:.1} s)",
         study.name,
         search.case_label(),
-        probe.value,
+        format_value(probe.value),
         start.elapsed().as_secs_f64()
     )
 }
@@ -291,7 +293,7 @@ fn search(study: &Study, args: &StudyArgs, options: &StudyOptions) -> Result<(),
         }
     })
     .map_err(failure)?;
-    let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
+    let show = |v: Option<f64>| v.map_or("-".to_string(), format_value);
     for s in &summary.searches {
         let cause = s
             .probes

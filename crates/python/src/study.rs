@@ -30,6 +30,7 @@ pub fn run_study<'py>(
             shard: None,
             resume,
             case_outputs,
+            force: false,
         };
         let summary = run_rust_study(&study, &out, &options, &|_, _| {})?;
         Ok::<_, flexprr_studies::StudyError>((study.name, summary))

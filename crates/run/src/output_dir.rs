@@ -389,8 +389,8 @@ impl OutputDir {
                 .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
             parent.join(format!("{WORKING_PREFIX}staging-{pid}-{name}"))
         } else {
-            std::fs::create_dir_all(&self.path).map_err(|e| OutputError::io(&self.path, e))?;
-            self.path.join(format!("{WORKING_PREFIX}staging-{pid}"))
+            std::fs::create_dir_all(&self.real).map_err(|e| OutputError::io(&self.path, e))?;
+            self.real.join(format!("{WORKING_PREFIX}staging-{pid}"))
         };
         if path.exists() {
             std::fs::remove_dir_all(&path).map_err(|e| OutputError::io(&path, e))?;
@@ -415,13 +415,14 @@ impl OutputDir {
 
     /// Opens the directory for a command that writes its files one by one (a study: case
     /// records as they finish): creates it and writes the marker, listing what it already
-    /// owned and every name expected. Files are then written into [`OutputDir::path`].
+    /// owned and every name expected. Files are then written into the directory returned
+    /// (the path as given, or its resolved form when it goes through `..`).
     ///
     /// # Errors
     /// [`OutputError::Io`] when the directory or the marker cannot be written.
     pub fn open(&self) -> Result<PathBuf, OutputError> {
-        std::fs::create_dir_all(&self.path).map_err(|e| OutputError::io(&self.path, e))?;
-        let (contents, _) = inspect(&self.path, &self.products)?;
+        std::fs::create_dir_all(&self.real).map_err(|e| OutputError::io(&self.path, e))?;
+        let (contents, _) = inspect(&self.real, &self.products)?;
         let mut owned = contents.owned();
         owned.extend(
             self.expected
@@ -429,8 +430,18 @@ impl OutputDir {
                 .cloned()
                 .chain(self.products.names.iter().map(|s| s.to_string())),
         );
-        write_marker(&self.path, self.products.kind, &owned)?;
-        Ok(self.path.clone())
+        write_marker(&self.real, self.products.kind, &owned)?;
+        // A `..` after a part that did not exist would create that part when written
+        // through: write through the resolved path then.
+        let through_parent = self
+            .path
+            .components()
+            .any(|c| matches!(c, Component::ParentDir));
+        Ok(if through_parent {
+            self.real.clone()
+        } else {
+            self.path.clone()
+        })
     }
 }
 
@@ -460,7 +471,7 @@ impl Staging {
     pub fn publish(self) -> Result<Vec<String>, OutputError> {
         let names = entry_names(&self.path)?;
         // Read again: the directory may have changed during the work.
-        let (contents, _) = inspect(&self.dir.path, &self.dir.products)?;
+        let (contents, _) = inspect(&self.dir.real, &self.dir.products)?;
         self.dir.check_names(&contents, Some(&names))?;
         if !self.inside {
             let whole = match &contents {
@@ -486,7 +497,7 @@ impl Staging {
     /// Renames the staging directory to the target, swapping out an old output; `false`
     /// when the target cannot be renamed (then nothing changed).
     fn swap_in(&self, contents: &Contents) -> Result<bool, OutputError> {
-        let target = &self.dir.path;
+        let target = &self.dir.real;
         if *contents == Contents::Absent {
             return Ok(std::fs::rename(&self.path, target).is_ok());
         }
@@ -507,7 +518,7 @@ impl Staging {
     /// Moves the staged files in one by one; removes the previous output's files that are
     /// not replaced (never an input).
     fn move_in(&self, names: &[String], contents: &Contents) -> Result<(), OutputError> {
-        let target = &self.dir.path;
+        let target = &self.dir.real;
         std::fs::create_dir_all(target).map_err(|e| OutputError::io(target, e))?;
         let owned = contents.owned();
         let kind = self.dir.products.kind;
@@ -846,7 +857,16 @@ pub fn check_output_file(
         ));
     }
     match std::fs::metadata(&real) {
-        Err(_) => Ok(real),
+        Err(_) => match real.ancestors().skip(1).find(|a| a.exists()) {
+            Some(blocker) if !blocker.is_dir() => Err(OutputError::refused(
+                path,
+                format!(
+                    "cannot be created: {} is not a directory",
+                    blocker.display()
+                ),
+            )),
+            _ => Ok(real),
+        },
         Ok(m) if m.is_dir() => Err(OutputError::refused(
             path,
             "is a directory; give a file name for the output",

@@ -282,7 +282,7 @@ pub fn run_study(
     let target = output_dir(study, out, options.force, &[])?;
     // Everything already there is checked before anything is written.
     let existing = existing_records(study, out, options.resume)?;
-    target.open()?;
+    let out = &target.open()?;
     let cases_dir = out.join("cases");
     std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
     write_manifest(

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::error::StudyError;
 use crate::file::AxisConfig;
-use crate::search::{Criterion, Search, probe_table, search_cases};
+use crate::search::{Search, probe_table, search_cases};
 use crate::study::{BaseSource, Case, Locator, Study, keys_overlap};
 
 /// Scene keys a search sets in every probe: the window (`time.end`) and the outputs its
@@ -285,9 +285,7 @@ pub(crate) fn check_searches(
                 .map_err(|m| at.input("search.key", m))?;
             let text = toml::to_string(&probe).map_err(|e| at.input("search", e.to_string()))?;
             if let Err(e) = Scene::from_text(&study.name, &study.name, &text) {
-                return Err(place_probe_error(
-                    context, search, criterion, e, end, value, &case,
-                ));
+                return Err(place_probe_error(context, search, e, end, value, &case));
             }
         }
     }
@@ -299,7 +297,6 @@ pub(crate) fn check_searches(
 fn place_probe_error(
     context: &Context<'_>,
     search: &Search,
-    criterion: Criterion,
     e: ScenarioError,
     end: &str,
     value: f64,
@@ -326,16 +323,12 @@ fn place_probe_error(
         } else {
             at.input(
                 &format!("search.{end}"),
-                format!("{} = {value} ({case}): {key}: {message}", search.key),
+                format!("{} = {value:?} ({case}): {key}: {message}", search.key),
             )
         };
     }
     if keys_overlap(key, "time") {
-        let window = if search.end(value).is_finite() {
-            format!("time.end = {} s", search.end(value))
-        } else {
-            "time.end".to_string()
-        };
+        let window = format!("time.end = {:?} s", search.end(value));
         let field = match search.window {
             crate::search::Window::Revolutions(_) => "search.revolutions",
             crate::search::Window::Time(_) => "search.time",
@@ -343,12 +336,11 @@ fn place_probe_error(
         return at.input(
             field,
             format!(
-                "the window gives {window} at {} = {value} ({case}): {key}: {message}",
+                "the window gives {window} at {} = {value:?} ({case}): {key}: {message}",
                 search.key
             ),
         );
     }
-    let _ = criterion;
     context.place(e, case)
 }
 
