@@ -74,17 +74,26 @@ fn failure(e: StudyError) -> Failure {
 const MAX_FAILURE_LINES: usize = 20;
 /// Longest failure message printed (characters); the full one is in `results.csv`.
 const MAX_FAILURE_MESSAGE: usize = 90;
+/// Parameters named in a failure line (the others are counted; all are in `results.csv`).
+const MAX_FAILURE_PARAMETERS: usize = 4;
 
 /// A short line for a failed case: its parameters by key, the status and kind, and the start
 /// of the message, e.g. `case 19 (links.section.thickness = 0.002, machine.platform_mass =
 /// 2): failed (diverged): link 2 diverged at t = 0.0084 s: deflection 1.027e-1 m at ...`.
 fn failure_line(study: &Study, record: &CaseRecord) -> String {
-    let parameters: Vec<String> = study
+    let mut parameters: Vec<String> = study
         .axes
         .iter()
         .zip(&record.parameters)
-        .map(|(axis, value)| format!("{} = {value}", axis.key))
+        .take(MAX_FAILURE_PARAMETERS)
+        .map(|(axis, value)| format!("{} = {}", axis.key, shorten(value, 40)))
         .collect();
+    if study.axes.len() > MAX_FAILURE_PARAMETERS {
+        parameters.push(format!(
+            "and {} more",
+            study.axes.len() - MAX_FAILURE_PARAMETERS
+        ));
+    }
     let kind = record.failure.as_ref().map(|f| f.kind);
     // The status and kind are printed: drop the words that repeat them.
     let mut message = record.error.as_str();

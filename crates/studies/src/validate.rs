@@ -142,14 +142,26 @@ fn defines(set: &toml::Table, key: &str) -> bool {
     true
 }
 
-/// `key = value, ...` of a case.
+/// `case <id>: key = value, ...` of a case (the first few axes, values cut short).
 fn describe(study: &Study, case: &Case) -> String {
-    let values: Vec<String> = study
+    const SHOWN: usize = 4;
+    let mut values: Vec<String> = study
         .axes
         .iter()
         .zip(study.case_parameters(case))
-        .map(|(a, v)| format!("{} = {v}", a.key))
+        .take(SHOWN)
+        .map(|(a, v)| {
+            let v: String = if v.chars().count() > 60 {
+                v.chars().take(57).chain("...".chars()).collect()
+            } else {
+                v
+            };
+            format!("{} = {v}", a.key)
+        })
         .collect();
+    if study.axes.len() > SHOWN {
+        values.push(format!("and {} more axes", study.axes.len() - SHOWN));
+    }
     format!("case {}: {}", case.id, values.join(", "))
 }
 
