@@ -4,7 +4,6 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use flexprr_studies::search::{Criterion, Probe, SearchOutcome};
@@ -131,7 +130,7 @@ struct StudyProgressView {
     name: String,
     start: Instant,
     last_tenth: std::sync::Mutex<usize>,
-    failure_lines: AtomicUsize,
+    failure_lines: std::sync::Mutex<usize>,
 }
 
 impl StudyProgressView {
@@ -155,7 +154,7 @@ impl StudyProgressView {
             name: study.name.clone(),
             start: Instant::now(),
             last_tenth: std::sync::Mutex::new(0),
-            failure_lines: AtomicUsize::new(0),
+            failure_lines: std::sync::Mutex::new(0),
         }
     }
 
@@ -169,7 +168,12 @@ impl StudyProgressView {
             bar.set_message(format!("{} failed", progress.failed));
         }
         if record.status != CaseStatus::Ok {
-            let shown = self.failure_lines.fetch_add(1, Ordering::SeqCst);
+            // Count and print under one lock, so that the line saying that more failed cases
+            // follow is printed after the last failure line, whatever the workers' timing.
+            let mut shown = self
+                .failure_lines
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
             let line = match shown.cmp(&MAX_FAILURE_LINES) {
                 std::cmp::Ordering::Less => Some(failure_line(study, record)),
                 std::cmp::Ordering::Equal => Some(
@@ -181,6 +185,7 @@ impl StudyProgressView {
             if let Some(line) = line {
                 self.print(&line);
             }
+            *shown += 1;
         }
         if self.lines && progress.total > 0 {
             let tenth = 10 * progress.done / progress.total;

@@ -196,7 +196,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         .chain(args.reference.as_deref())
         .chain(args.peers.iter().map(PathBuf::as_path))
         .collect();
-    flexprr_run::OutputDir::check(
+    let out = flexprr_run::OutputDir::check(
         &out,
         flexprr_run::output_dir::WORK_PRECISION,
         args.force,

@@ -387,6 +387,7 @@ impl OutputDir {
                 .real
                 .file_name()
                 .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+            remove_abandoned_staging(parent, &name);
             parent.join(format!("{WORKING_PREFIX}staging-{pid}-{name}"))
         } else {
             std::fs::create_dir_all(&self.real).map_err(|e| OutputError::io(&self.path, e))?;
@@ -554,6 +555,32 @@ impl Drop for Staging {
     /// nothing (it was renamed) or an empty directory after a publish.
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.path);
+    }
+}
+
+/// Removes the staging directories for `name` in `parent` left by flexprr processes that no
+/// longer run (killed during their work), so that they do not pile up beside the output.
+/// Only on systems with `/proc`; elsewhere they stay, hidden.
+fn remove_abandoned_staging(parent: &Path, name: &str) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    let prefix = format!("{WORKING_PREFIX}staging-");
+    let suffix = format!("-{name}");
+    for entry in entries.filter_map(Result::ok) {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let pid = file
+            .strip_prefix(&prefix)
+            .and_then(|rest| rest.strip_suffix(&suffix))
+            .and_then(|pid| pid.parse::<u32>().ok());
+        if let Some(pid) = pid {
+            if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+                let _ = std::fs::remove_dir_all(entry.path());
+            }
+        }
     }
 }
 

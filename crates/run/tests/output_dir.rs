@@ -74,6 +74,14 @@ fn a_new_directory_is_published_whole_and_marked() {
     let dir = OutputDir::check(&out, PRODUCTS, false, &[], &[]).unwrap();
     publish(&dir, &[("a.csv", "1"), ("b.csv", "2")]).unwrap();
     assert_eq!(marker_files(&out), ["a.csv", "b.csv"]);
+    // A staging directory abandoned by a killed process (no process has this id: Linux ids
+    // stay below 2^22) is removed by the next output of the same name.
+    let abandoned = tmp.path().join("new/.flexprr-staging-999999999-out");
+    std::fs::create_dir_all(abandoned.join("half")).unwrap();
+    let dir = OutputDir::check(&out, PRODUCTS, false, &[], &[]).unwrap();
+    publish(&dir, &[("a.csv", "1")]).unwrap();
+    #[cfg(target_os = "linux")]
+    assert!(!abandoned.exists());
     // Nothing is left beside it: the staging directory was renamed.
     let parent: Vec<_> = std::fs::read_dir(tmp.path().join("new")).unwrap().collect();
     assert_eq!(parent.len(), 1);
