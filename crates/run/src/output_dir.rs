@@ -391,6 +391,7 @@ impl OutputDir {
             parent.join(format!("{WORKING_PREFIX}staging-{pid}-{name}"))
         } else {
             std::fs::create_dir_all(&self.real).map_err(|e| OutputError::io(&self.path, e))?;
+            remove_abandoned_staging(&self.real, "");
             self.real.join(format!("{WORKING_PREFIX}staging-{pid}"))
         };
         if path.exists() {
@@ -558,9 +559,10 @@ impl Drop for Staging {
     }
 }
 
-/// Removes the staging directories for `name` in `parent` left by flexprr processes that no
-/// longer run (killed during their work), so that they do not pile up beside the output.
-/// Only on systems with `/proc`; elsewhere they stay, hidden.
+/// Removes the staging directories for `name` in `parent` (beside the output, or with an
+/// empty `name` inside it) left by flexprr processes that no longer run (killed during their
+/// work), so that they do not pile up. Only on systems with `/proc`; elsewhere they stay,
+/// hidden.
 fn remove_abandoned_staging(parent: &Path, name: &str) {
     if !Path::new("/proc/self").exists() {
         return;
@@ -569,7 +571,11 @@ fn remove_abandoned_staging(parent: &Path, name: &str) {
         return;
     };
     let prefix = format!("{WORKING_PREFIX}staging-");
-    let suffix = format!("-{name}");
+    let suffix = if name.is_empty() {
+        String::new()
+    } else {
+        format!("-{name}")
+    };
     for entry in entries.filter_map(Result::ok) {
         let file = entry.file_name().to_string_lossy().into_owned();
         let pid = file

@@ -234,12 +234,15 @@ fn the_current_directory_is_written_in_place() {
     let outcome = (|| {
         let dir = OutputDir::check(Path::new("."), PRODUCTS, false, &[], &[])?;
         publish(&dir, &[("a.csv", "1"), ("b.csv", "2")])?;
+        // What a killed process left inside is removed by the next output.
+        std::fs::create_dir_all(".flexprr-staging-999999999/half").unwrap();
         let dir = OutputDir::check(Path::new("."), PRODUCTS, false, &[], &[])?;
         publish(&dir, &[("a.csv", "3")])
     })();
     std::env::set_current_dir(previous).unwrap();
     outcome.unwrap();
     let files: Vec<String> = tree(&here).into_keys().collect();
+    #[cfg(target_os = "linux")]
     assert_eq!(files, [MARKER, "a.csv"]);
     let beside: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().collect();
     assert_eq!(beside.len(), 1, "a hidden staging directory was left");
