@@ -87,11 +87,9 @@ tolerance = 5.0
 time = 0.05
 "#;
 
-#[test]
-fn no_command_touches_an_input_or_a_foreign_file() {
-    let tmp = tempfile::tempdir().unwrap();
-    let root = tmp.path().join("work");
-    std::fs::create_dir(&root).unwrap();
+/// The work tree: inputs, files of the user's own (some with the names of outputs), and an
+/// empty directory to run in.
+fn work_tree(root: &Path) {
     let files = [
         ("scene.toml", TINY.to_string()),
         ("d/scene.toml", TINY.to_string()),
@@ -115,23 +113,12 @@ fn no_command_touches_an_input_or_a_foreign_file() {
         std::fs::write(path, text).unwrap();
     }
     std::fs::remove_file(root.join("here/.keep")).unwrap();
-    let wp = |out: &'static str| -> Vec<&'static str> {
-        vec![
-            "work-precision",
-            "scene.toml",
-            "--repeats",
-            "1",
-            "--warmup",
-            "0",
-            "--methods",
-            "abm",
-            "--tolerances",
-            "1e-4",
-            "--out",
-            out,
-        ]
-    };
-    let mut steps = vec![
+}
+
+/// The commands, in order (later ones read what earlier ones wrote: shards, references).
+/// The commands of runs, kinematics and beams, in order.
+fn run_steps() -> Vec<Step<'static>> {
+    vec![
         step(&["check", "scene.toml"], &[], 0),
         step(&["run", "scene.toml", "--out", "r", "--quiet"], &["r/"], 0),
         step(&["run", "scene.toml", "--out", "r", "--quiet"], &["r/"], 0),
@@ -187,6 +174,29 @@ fn no_command_touches_an_input_or_a_foreign_file() {
             0,
         ),
         step(&["beam", "link.toml"], &[], 0),
+    ]
+}
+
+/// The commands of studies, merges and work-precision, in order (later ones read what
+/// earlier ones wrote: shards, references).
+fn study_steps() -> Vec<Step<'static>> {
+    let wp = |out: &'static str| -> Vec<&'static str> {
+        vec![
+            "work-precision",
+            "scene.toml",
+            "--repeats",
+            "1",
+            "--warmup",
+            "0",
+            "--methods",
+            "abm",
+            "--tolerances",
+            "1e-4",
+            "--out",
+            out,
+        ]
+    };
+    let mut steps = vec![
         step(
             &["study", "study.toml", "--out", "s", "--quiet"],
             &["s/"],
@@ -276,6 +286,16 @@ fn no_command_touches_an_input_or_a_foreign_file() {
         &[],
         2,
     ));
+    steps
+}
+
+#[test]
+fn no_command_touches_an_input_or_a_foreign_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path().join("work");
+    std::fs::create_dir(&root).unwrap();
+    work_tree(&root);
+    let steps: Vec<Step> = run_steps().into_iter().chain(study_steps()).collect();
     for s in &steps {
         let before = tree(&root);
         let output = Command::new(env!("CARGO_BIN_EXE_flexprr"))
