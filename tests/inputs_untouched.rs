@@ -115,7 +115,6 @@ fn work_tree(root: &Path) {
     std::fs::remove_file(root.join("here/.keep")).unwrap();
 }
 
-/// The commands, in order (later ones read what earlier ones wrote: shards, references).
 /// The commands of runs, kinematics and beams, in order.
 fn run_steps() -> Vec<Step<'static>> {
     vec![
