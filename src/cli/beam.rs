@@ -27,8 +27,16 @@ pub fn run(args: BeamArgs) -> Result<(), Failure> {
     let link = file.build(&path, &text).map_err(Failure::bad_input)?;
     let load = file.load.axial_load();
     let coupling = file.coupling.coupling();
-    let result = frequencies(&link.integrals, &load, coupling)
-        .map_err(|e| Failure::run(format!("{path}: {e}")))?;
+    // The link file is the only input: an eigenproblem that cannot be formed (a load so
+    // large that the stiffness overflows) is bad input, placed at the load.
+    let result = frequencies(&link.integrals, &load, coupling).map_err(|e| {
+        Failure::bad_input(input_error(
+            &path,
+            &text,
+            "load",
+            format!("the eigenproblem of this link and load cannot be solved: {e}; check the load's size"),
+        ))
+    })?;
     let report = if args.json {
         json_report(&file, &link, &load, &result) + "\n"
     } else {
@@ -127,7 +135,9 @@ fn table_report(
         Some(factor) => {
             let _ = writeln!(
                 s,
-                "critical load factor: {factor:.9} (the link buckles at {factor:.6} x this load)"
+                "critical load factor: {} (the link buckles at {} x this load)",
+                significant(factor, 10),
+                significant(factor, 7)
             );
         }
         None => {
@@ -145,4 +155,49 @@ fn table_report(
         );
     }
     s
+}
+
+/// A bad-input message located at `key` of the link file.
+fn input_error(path: &str, text: &str, key: &str, message: impl Into<String>) -> String {
+    flexprr_scene::ScenarioError::Input {
+        location: flexprr_scene::locate(path, text, key),
+        key: key.to_string(),
+        message: message.into(),
+    }
+    .to_string()
+}
+
+/// `value` with `digits` significant digits: fixed-point between 1e-3 and 1e7
+/// (`2.345678901`, `1234.568`), scientific notation outside (`4.567890123e-7`), so that a tiny
+/// or a huge factor keeps its digits instead of reading `0.000000000`.
+fn significant(value: f64, digits: usize) -> String {
+    let digits = digits.max(1);
+    let magnitude = value.abs();
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    if (1e-3..1e7).contains(&magnitude) {
+        let exponent = magnitude.log10().floor() as i64;
+        let decimals = (digits as i64 - 1 - exponent).max(0) as usize;
+        format!("{value:.decimals$}")
+    } else {
+        format!("{value:.prec$e}", prec = digits - 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn factors_keep_their_significant_digits() {
+        assert_eq!(significant(2.345678901234, 10), "2.345678901");
+        assert_eq!(significant(1234.5678, 7), "1234.568");
+        assert_eq!(significant(4.567890123456e-7, 10), "4.567890123e-7");
+        assert_eq!(significant(3.0e9, 7), "3.000000e9");
+        assert_eq!(significant(0.00123456789, 4), "0.001235");
+        // The value read back equals the factor to the digits shown.
+        let tiny: f64 = significant(1.234567890123e-12, 10).parse().unwrap();
+        assert!((tiny / 1.234567890123e-12 - 1.0).abs() < 1e-9);
+    }
 }

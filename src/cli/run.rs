@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 use flexprr_dynamics::CouplingModel;
 use flexprr_run::{
-    RunResult, WriteOptions, run as run_scene, table_one_markdown, write_outputs_with,
+    OutputDir, RUN_PRODUCTS, RunResult, run as run_scene, table_one_markdown, write_outputs_into,
 };
 use flexprr_scene::{InputKind, ScenarioError, Scene};
 
@@ -26,7 +26,8 @@ pub struct RunArgs {
     /// time span (off a terminal). Both appear only once a run takes more than a second.
     #[arg(long)]
     pub quiet: bool,
-    /// Replace the output directory even if it is not a flexprr output directory.
+    /// Write into a non-empty directory that flexprr did not write, next to its files (none
+    /// of them is overwritten or deleted; a file with the name of an output is refused).
     #[arg(long)]
     pub force: bool,
 }
@@ -128,15 +129,23 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    // The directory is checked before the run, so that a refusal costs nothing.
+    let target = OutputDir::check(&out, RUN_PRODUCTS, args.force, &[&args.scene], &[])
+        .map_err(|e| failure(e.into()))?;
+    target.check_writable().map_err(|e| failure(e.into()))?;
     let mut progress = RunProgress::new(&scene.name, args.quiet);
     let outcome = run_scene(&scene, &mut |f| progress.update(f));
     progress.finish();
-    let options = WriteOptions { force: args.force };
     let (result, error) = match &outcome {
         Ok(result) => (result, None),
         Err(f) => (f.partial.as_ref(), Some(&f.error)),
     };
-    let written = write_outputs_with(&scene, result, error, &out, options).map_err(failure)?;
+    // The run has happened: a file that cannot be written now is a failure of the run
+    // (exit 1), not bad input.
+    let written = write_outputs_into(&scene, result, error, &target).map_err(|e| match e {
+        ScenarioError::Io { .. } => Failure::run(e),
+        other => failure(other),
+    })?;
     for w in &result.warnings {
         eprintln!("warning: {w}");
     }

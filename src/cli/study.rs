@@ -4,14 +4,14 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use flexprr_studies::search::{Criterion, Probe, SearchOutcome};
 use flexprr_studies::study::{
-    CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress,
+    CaseRecord, CaseStatus, Shard, Study, StudyError, StudyOptions, StudyProgress, format_value,
+    worker_threads,
 };
-use flexprr_studies::{merge_studies, run_search_study, run_study};
+use flexprr_studies::{merge_studies_with, run_search_study, run_study};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::Failure;
@@ -24,7 +24,7 @@ pub struct StudyArgs {
     /// Output directory: `results.csv`, `study.json`, `cases/<id>.json`.
     #[arg(long)]
     pub out: PathBuf,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 4 per core).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Run only slice k of n (cases with id % n == k - 1), e.g. `--shard 2/8`.
@@ -40,6 +40,10 @@ pub struct StudyArgs {
     /// cases (off a terminal). Failed cases are still printed, one short line each.
     #[arg(long)]
     pub quiet: bool,
+    /// Write into a non-empty directory that flexprr did not write, next to its files (none
+    /// of them is overwritten or deleted; a file with the name of an output is refused).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Arguments of `flexprr merge`.
@@ -51,6 +55,10 @@ pub struct MergeArgs {
     /// Directory for the merged table.
     #[arg(long)]
     pub out: PathBuf,
+    /// Write into a non-empty directory that flexprr did not write, next to its files (none
+    /// of them is overwritten or deleted; a file with the name of an output is refused).
+    #[arg(long)]
+    pub force: bool,
 }
 
 fn failure(e: StudyError) -> Failure {
@@ -65,17 +73,26 @@ fn failure(e: StudyError) -> Failure {
 const MAX_FAILURE_LINES: usize = 20;
 /// Longest failure message printed (characters); the full one is in `results.csv`.
 const MAX_FAILURE_MESSAGE: usize = 90;
+/// Parameters named in a failure line (the others are counted; all are in `results.csv`).
+const MAX_FAILURE_PARAMETERS: usize = 4;
 
 /// A short line for a failed case: its parameters by key, the status and kind, and the start
 /// of the message, e.g. `case 19 (links.section.thickness = 0.002, machine.platform_mass =
 /// 2): failed (diverged): link 2 diverged at t = 0.0084 s: deflection 1.027e-1 m at ...`.
 fn failure_line(study: &Study, record: &CaseRecord) -> String {
-    let parameters: Vec<String> = study
+    let mut parameters: Vec<String> = study
         .axes
         .iter()
         .zip(&record.parameters)
-        .map(|(axis, value)| format!("{} = {value}", axis.key))
+        .take(MAX_FAILURE_PARAMETERS)
+        .map(|(axis, value)| format!("{} = {}", axis.key, shorten(value, 40)))
         .collect();
+    if study.axes.len() > MAX_FAILURE_PARAMETERS {
+        parameters.push(format!(
+            "and {} more",
+            study.axes.len() - MAX_FAILURE_PARAMETERS
+        ));
+    }
     let kind = record.failure.as_ref().map(|f| f.kind);
     // The status and kind are printed: drop the words that repeat them.
     let mut message = record.error.as_str();
@@ -113,7 +130,7 @@ struct StudyProgressView {
     name: String,
     start: Instant,
     last_tenth: std::sync::Mutex<usize>,
-    failure_lines: AtomicUsize,
+    failure_lines: std::sync::Mutex<usize>,
 }
 
 impl StudyProgressView {
@@ -137,7 +154,7 @@ impl StudyProgressView {
             name: study.name.clone(),
             start: Instant::now(),
             last_tenth: std::sync::Mutex::new(0),
-            failure_lines: AtomicUsize::new(0),
+            failure_lines: std::sync::Mutex::new(0),
         }
     }
 
@@ -151,7 +168,12 @@ impl StudyProgressView {
             bar.set_message(format!("{} failed", progress.failed));
         }
         if record.status != CaseStatus::Ok {
-            let shown = self.failure_lines.fetch_add(1, Ordering::SeqCst);
+            // Count and print under one lock, so that the line saying that more failed cases
+            // follow is printed after the last failure line, whatever the workers' timing.
+            let mut shown = self
+                .failure_lines
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
             let line = match shown.cmp(&MAX_FAILURE_LINES) {
                 std::cmp::Ordering::Less => Some(failure_line(study, record)),
                 std::cmp::Ordering::Equal => Some(
@@ -163,6 +185,7 @@ impl StudyProgressView {
             if let Some(line) = line {
                 self.print(&line);
             }
+            *shown += 1;
         }
         if self.lines && progress.total > 0 {
             let tenth = 10 * progress.done / progress.total;
@@ -203,9 +226,7 @@ impl StudyProgressView {
 
 /// Runs a study.
 pub fn study(args: StudyArgs) -> Result<(), Failure> {
-    if args.threads == Some(0) {
-        return Err(Failure::bad_input("--threads must be at least 1"));
-    }
+    worker_threads(args.threads).map_err(failure)?;
     // A study file (or its base scene) that cannot be read is bad input, as for `flexprr run`.
     let study = Study::load(&args.study).map_err(|e| match e {
         StudyError::Io { .. } => Failure::bad_input(e),
@@ -217,6 +238,7 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
         shard: args.shard,
         resume: args.resume,
         case_outputs: args.case_outputs,
+        force: args.force,
     };
     if study.search.is_some() {
         return search(&study, &args, &options);
@@ -250,7 +272,8 @@ fn probe_line(study: &Study, search: &SearchOutcome, probe: &Probe, start: Insta
     let key = study.search.as_ref().map_or("", |s| s.key.as_str());
     let what = match (&probe.error, probe.reached, probe.time_s, probe.link) {
         (Some(e), _, _, _) => format!("failed: {}", shorten(e, 160)),
-        (None, true, Some(t), Some(link)) => format!(
+        (None, None, _, _) => "failed".to_string(),
+        (None, Some(true), Some(t), Some(link)) => format!(
             "{} at t = {:.4} s (link {link})",
             match search.criterion {
                 Criterion::Collapse => "collapses",
@@ -258,14 +281,17 @@ fn probe_line(study: &Study, search: &SearchOutcome, probe: &Probe, start: Insta
             },
             t
         ),
-        (None, true, _, _) => "reaches the limit".to_string(),
-        (None, false, _, _) => format!("no {} within {} s", search.criterion.name(), probe.end_s),
+        (None, Some(true), _, _) => "reaches the limit".to_string(),
+        (None, Some(false), _, _) => {
+            let end = format_value(probe.end_s);
+            format!("no {} within {end} s", search.criterion.name())
+        }
     };
     format!(
         "{} [{}]: {key} = {}: {what} ({:.1} s)",
         study.name,
         search.case_label(),
-        probe.value,
+        format_value(probe.value),
         start.elapsed().as_secs_f64()
     )
 }
@@ -281,7 +307,7 @@ fn search(study: &Study, args: &StudyArgs, options: &StudyOptions) -> Result<(),
         }
     })
     .map_err(failure)?;
-    let show = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
+    let show = |v: Option<f64>| v.map_or("-".to_string(), format_value);
     for s in &summary.searches {
         let cause = s
             .probes
@@ -313,7 +339,7 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
     if let Some(gaps) = shard_gaps(&args.dirs) {
         return Err(Failure::run(format!("{}: {gaps}", args.out.display())));
     }
-    let summary = merge_studies(&args.dirs, &args.out).map_err(failure)?;
+    let summary = merge_studies_with(&args.dirs, &args.out, args.force).map_err(failure)?;
     println!(
         "merged {} directories: {} cases, {} not ok; table {}",
         args.dirs.len(),
@@ -333,8 +359,10 @@ struct ManifestView {
     shard: Option<String>,
 }
 
+/// The manifest of `dir`, read only when it is a regular file of bounded size (a pipe or a
+/// device named `study.json` is never opened).
 fn manifest_view(dir: &Path) -> Option<ManifestView> {
-    let text = std::fs::read_to_string(dir.join("study.json")).ok()?;
+    let text = flexprr_studies::study::read_input_file(&dir.join("study.json")).ok()?;
     serde_json::from_str(&text).ok()
 }
 

@@ -63,23 +63,24 @@ pub struct WorkPrecisionArgs {
     /// Maximum relative error at which the methods are compared.
     #[arg(long, default_value_t = 1e-6)]
     pub target_error: f64,
+    /// Write into a non-empty directory that flexprr did not write, next to its files.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Measures, merges the peers' rows and writes `work_precision.csv`, `work_precision.svg`,
 /// `work_precision.md` and `reference.csv`.
 pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     let scene = Scene::load(&args.scene).map_err(failure)?;
+    for path in args.reference.iter().chain(&args.peers) {
+        flexprr_scene::check_input_file(path, flexprr_scene::MAX_DATA_BYTES).map_err(failure)?;
+    }
     let config = config_of(&args, &scene)?;
     let measure_name = check_choices(&args, &config, &scene)?;
-    let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("out")
-            .join(&scene.name)
-            .join("work_precision")
-    });
+    let out_dir = output_dir(&args, &scene)?;
     let (reference, reference_line) = reference_of(&args, &config, &scene, measure_name)?;
-    // Created once there is a reference to measure against: a refused one writes nothing.
-    std::fs::create_dir_all(&out)
-        .map_err(|e| Failure::bad_input(format!("{}: {e}", out.display())))?;
+    // Opened once there is a reference to measure against: a refused one writes nothing.
+    let out = out_dir.open().map_err(|e| failure(e.into()))?;
     reference
         .write_csv(&out.join("reference.csv"))
         .map_err(failure)?;
@@ -402,4 +403,31 @@ fn refuse_repeats(option: &str, names: &[String]) -> Result<(), Failure> {
         ))),
         None => Ok(()),
     }
+}
+
+/// The output directory (`--out`, default `out/<scene name>/work_precision`) checked
+/// against the output-directory policy before any work: refused when foreign without
+/// `--force`, when it is an input, or `/`.
+///
+/// # Errors
+/// Bad input (exit 2) saying why the directory is refused.
+fn output_dir(args: &WorkPrecisionArgs, scene: &Scene) -> Result<flexprr_run::OutputDir, Failure> {
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out")
+            .join(&scene.name)
+            .join("work_precision")
+    });
+    let inputs: Vec<&std::path::Path> = [args.scene.as_path()]
+        .into_iter()
+        .chain(args.reference.as_deref())
+        .chain(args.peers.iter().map(PathBuf::as_path))
+        .collect();
+    flexprr_run::OutputDir::check(
+        &out,
+        flexprr_run::output_dir::WORK_PRECISION,
+        args.force,
+        &inputs,
+        &[],
+    )
+    .map_err(|e| failure(e.into()))
 }

@@ -50,6 +50,7 @@ pub fn run_study<'py>(
             shard: None,
             resume,
             case_outputs,
+            force: false,
         };
         let on_case = |p: &flexprr_studies::study::StudyProgress, _: &_| {
             if p.total > 0 {

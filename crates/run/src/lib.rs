@@ -14,6 +14,7 @@ mod error;
 pub mod guard;
 mod integrate;
 mod output;
+pub mod output_dir;
 mod outputs;
 pub mod plot;
 mod run;
@@ -26,7 +27,9 @@ pub use error::{Collapse, RunError, RunFailure};
 pub use flexprr_dynamics::NONLINEAR_ADVICE_FRACTION;
 pub use integrate::{Integration, integrate_model, stop_times};
 pub use output::{
-    WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs, write_outputs_with,
+    RUN_PRODUCTS, WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs,
+    write_outputs_into, write_outputs_with,
 };
+pub use output_dir::{OutputDir, OutputError};
 pub use run::{integrate, run, run_model, scene_integrator};
 pub use table::{RunResult, RunStats, Table};

@@ -1,10 +1,10 @@
 //! Writing a run's results: one CSV per time series, `summary.json`, Table I and SVG plots.
 //!
-//! A run's directory is written whole: every file goes into a temporary sibling directory,
-//! which then replaces the target in one rename, so a crash never leaves a half-written
-//! directory and a second run never leaves stale files of the first. A previous flexprr
-//! output directory (one with a `summary.json`) is replaced; any other non-empty directory is
-//! refused unless the caller forces it.
+//! A run's directory is written whole, by the policy of [`crate::output_dir`]: every file
+//! goes into a staging directory, published at the end, so a crash never leaves a
+//! half-written directory and a second run never leaves stale files of the first. A
+//! directory flexprr did not write is refused unless the caller forces it, and even then
+//! none of its files is overwritten or deleted.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -12,6 +12,7 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use crate::error::RunError;
+use crate::output_dir::{Legacy, OutputDir, Products};
 use crate::table::{RunResult, Table};
 use flexprr_scene::ScenarioError;
 use flexprr_scene::Scene;
@@ -192,41 +193,54 @@ pub fn table_one_markdown(result: &RunResult) -> Option<String> {
 /// How [`write_outputs_with`] treats an existing directory.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct WriteOptions {
-    /// Replace a non-empty directory even if it is not a flexprr output directory.
+    /// Write into a non-empty directory that is not a flexprr output, next to its files
+    /// (none of which is overwritten or deleted).
     pub force: bool,
 }
 
-/// Whether `dir` may be replaced: absent, empty, or a previous flexprr output (it has a
-/// `summary.json`); anything else only with `force`.
-fn check_target(dir: &Path, options: WriteOptions) -> Result<(), ScenarioError> {
-    let refuse = |message: String| ScenarioError::Input {
-        location: None,
-        key: "--out".to_string(),
-        message,
-    };
-    match std::fs::symlink_metadata(dir) {
-        Err(_) => Ok(()),
-        Ok(m) if !m.is_dir() => Err(refuse(format!(
-            "{} exists and is not a directory",
-            dir.display()
-        ))),
-        Ok(_) => {
-            let empty = std::fs::read_dir(dir).map_err(io(dir))?.next().is_none();
-            if empty || dir.join("summary.json").is_file() || options.force {
-                Ok(())
-            } else {
-                Err(refuse(format!(
-                    "{} is a non-empty directory that is not a flexprr output (no summary.json); \
-                     choose another --out or pass --force to replace it",
-                    dir.display()
-                )))
-            }
-        }
-    }
-}
+/// The files of a run (`docs/scenes.md`, "Outputs and their CSV columns" and "Plots"): what
+/// [`crate::output_dir`] refuses to write over when it finds them in a directory flexprr did
+/// not write, and what it recognises an earlier run's directory by.
+pub const RUN_PRODUCTS: Products = Products {
+    kind: "run",
+    names: &[
+        "summary.json",
+        "table1.md",
+        "table1.csv",
+        "viewer.html",
+        "snapshots.svg",
+        "machine.svg",
+        "kinematics.csv",
+        "driving_forces.csv",
+        "joint_reactions.csv",
+        "axial_forces.csv",
+        "frequencies.csv",
+        "modes.csv",
+        "modal_forces.csv",
+        "deflections.csv",
+        "energies.csv",
+        "platform_deviation.csv",
+        "coupled_forces.csv",
+        "nonlinear_forces.csv",
+        "modes.svg",
+        "modal_forces.svg",
+        "driving_forces.svg",
+        "axial_forces.svg",
+        "platform_deviation.svg",
+        "kinematics.svg",
+        "energies.svg",
+    ],
+    patterns: &[
+        ("deflections_xi", ".svg"),
+        ("axial_force_frequency_mode", ".svg"),
+    ],
+    legacy: Some(Legacy::JsonKey {
+        file: "summary.json",
+        key: "flexprr_version",
+    }),
+};
 
-/// Writes every output of a successful run into `dir`, replacing a previous flexprr output
-/// there (see [`write_outputs_with`]).
+/// Writes every output of a successful run into `dir` (see [`write_outputs_with`]).
 ///
 /// # Errors
 /// As [`write_outputs_with`].
@@ -239,15 +253,15 @@ pub fn write_outputs(
 }
 
 /// Writes every output of `result` (a complete run, or the partial outputs of a failed one
-/// with its `failure`) into `dir`: CSV tables, `summary.json` with the status,
+/// with its `failure`) into `dir`, checked by [`OutputDir::check`] with the policy of
+/// [`crate::output_dir`]: CSV tables, `summary.json` with the status,
 /// `table1.md`/`table1.csv` when frequencies were computed, SVG plots unless the scene turned
-/// them off. The files are written into a temporary sibling directory that then replaces
-/// `dir` whole.
+/// them off. A command should rather check the directory before the run, with
+/// [`OutputDir::check`] and [`RUN_PRODUCTS`], and then call [`write_outputs_into`].
 ///
 /// # Errors
-/// [`ScenarioError::Input`] for a target that is not replaceable (a file, or a non-empty
-/// directory that is not a flexprr output, without `force`); [`ScenarioError::Io`] when a
-/// file cannot be written.
+/// [`ScenarioError::Input`] (key `--out`) for a target the policy refuses;
+/// [`ScenarioError::Io`] when a file cannot be written.
 pub fn write_outputs_with(
     scene: &Scene,
     result: &RunResult,
@@ -255,44 +269,29 @@ pub fn write_outputs_with(
     dir: &Path,
     options: WriteOptions,
 ) -> Result<Vec<String>, ScenarioError> {
-    check_target(dir, options)?;
-    let parent = match dir.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    std::fs::create_dir_all(&parent).map_err(io(&parent))?;
-    let stem = dir
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let staging = parent.join(format!(".{stem}.partial-{}", std::process::id()));
-    if staging.exists() {
-        std::fs::remove_dir_all(&staging).map_err(io(&staging))?;
-    }
-    std::fs::create_dir(&staging).map_err(io(&staging))?;
-    let names = match write_files(scene, result, failure, &staging) {
-        Ok(names) => names,
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&staging);
-            return Err(e);
-        }
-    };
-    replace_dir(&staging, dir)?;
-    Ok(names
-        .iter()
-        .map(|n| dir.join(n).display().to_string())
-        .collect())
+    let target = OutputDir::check(dir, RUN_PRODUCTS, options.force, &[], &[])?;
+    write_outputs_into(scene, result, failure, &target)
 }
 
-/// Moves `staging` into place at `dir`, removing what was there.
-fn replace_dir(staging: &Path, dir: &Path) -> Result<(), ScenarioError> {
-    if std::fs::symlink_metadata(dir).is_ok() {
-        let old = staging.with_extension("old");
-        std::fs::rename(dir, &old).map_err(io(dir))?;
-        std::fs::rename(staging, dir).map_err(io(dir))?;
-        std::fs::remove_dir_all(&old).map_err(io(&old))
-    } else {
-        std::fs::rename(staging, dir).map_err(io(dir))
-    }
+/// Writes the outputs of `result` into a checked directory: into a staging directory first,
+/// published at the end ([`crate::output_dir::Staging::publish`]). Returns the paths written.
+///
+/// # Errors
+/// [`ScenarioError::Input`] (key `--out`) when a file would replace one flexprr did not
+/// write; [`ScenarioError::Io`] when a file cannot be written.
+pub fn write_outputs_into(
+    scene: &Scene,
+    result: &RunResult,
+    failure: Option<&RunError>,
+    target: &OutputDir,
+) -> Result<Vec<String>, ScenarioError> {
+    let staging = target.stage()?;
+    let names = write_files(scene, result, failure, staging.path())?;
+    staging.publish()?;
+    Ok(names
+        .iter()
+        .map(|n| target.path().join(n).display().to_string())
+        .collect())
 }
 
 /// Writes the files of a run into `dir`; returns their names.

@@ -9,6 +9,48 @@ use crate::error::ScenarioError;
 /// Largest input file read (bytes): the shipped scenes are a few kB.
 pub const MAX_INPUT_BYTES: u64 = 4 * 1024 * 1024;
 
+/// Largest data file read (bytes): a reference solution or rows of other packages given to
+/// `flexprr work-precision` (`--reference`, `--peers`). A reference holds every output time
+/// of a run, so it may be far larger than a scene file, but a device or a mistyped path to
+/// a huge file must still not be read into memory.
+pub const MAX_DATA_BYTES: u64 = 1024 * 1024 * 1024;
+
+/// Checks, from its metadata alone, that `path` is a regular file of at most `max_bytes`:
+/// a device (`/dev/zero`), a pipe, a socket or a directory is refused at once, without
+/// being opened (opening a pipe would block).
+///
+/// # Errors
+/// [`ScenarioError::Io`] when it does not exist or cannot be examined,
+/// [`ScenarioError::Input`] (naming the file) when it is not a regular file or is too large.
+pub fn check_input_file(path: &Path, max_bytes: u64) -> Result<(), ScenarioError> {
+    let shown = path.display().to_string();
+    let meta = std::fs::metadata(path).map_err(|source| ScenarioError::Io {
+        path: shown.clone(),
+        source,
+    })?;
+    let refuse = |message: String| ScenarioError::Input {
+        location: None,
+        key: String::new(),
+        message: format!("{shown}: {message}"),
+    };
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "a directory"
+        } else {
+            "not a regular file (a device, pipe or socket)"
+        };
+        return Err(refuse(format!("is {what}; expected a file")));
+    }
+    if meta.len() > max_bytes {
+        return Err(refuse(format!(
+            "is {} bytes, more than the {} MiB allowed",
+            meta.len(),
+            max_bytes / (1024 * 1024)
+        )));
+    }
+    Ok(())
+}
+
 /// Longest scene name (characters).
 pub const MAX_NAME_LEN: usize = 100;
 

@@ -25,7 +25,8 @@ pub use flexprr_integrators::DynIntegrator;
 
 pub use error::{Location, ScenarioError};
 pub use input::{
-    InputKind, MAX_INPUT_BYTES, MAX_NAME_LEN, read_input_file, sanitize_name, unsafe_name_reason,
+    InputKind, MAX_DATA_BYTES, MAX_INPUT_BYTES, MAX_NAME_LEN, check_input_file, read_input_file,
+    sanitize_name, unsafe_name_reason,
 };
 pub use locate::{line_column, locate};
 pub use parse::{parse_scene, parse_toml};

@@ -424,7 +424,7 @@ fn build_times(c: &Checker<'_>, time: &TimeConfig) -> Result<Vec<f64>, ScenarioE
         return Err(c.error(
             "time.output_step",
             format!(
-                "{dt} s is longer than the time span {} s (time.end - time.start)",
+                "{dt:?} s is longer than the time span {:?} s (time.end - time.start)",
                 t1 - t0
             ),
         ));
@@ -433,7 +433,7 @@ fn build_times(c: &Checker<'_>, time: &TimeConfig) -> Result<Vec<f64>, ScenarioE
     if samples > 5e6 {
         return Err(c.error(
             "time.output_step",
-            format!("{samples} output samples is too many (limit 5e6)"),
+            format!("{samples:.3e} output samples is too many (limit 5e6)"),
         ));
     }
     let samples = (samples as usize).max(1);

@@ -72,6 +72,26 @@ pub enum StudyError {
         /// What is wrong.
         message: String,
     },
+    /// A directory given to `merge` is not a study's output, or belongs to another study.
+    #[error("{dir}: {message}")]
+    MergeInput {
+        /// The directory as given.
+        dir: String,
+        /// What it is instead.
+        message: String,
+    },
+    /// An option that does not fit the study (too many threads, `--resume` of a search).
+    #[error("{option}: {message}")]
+    Option {
+        /// The option, e.g. `--threads`.
+        option: String,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
+    /// The output directory is refused by the output-directory policy
+    /// ([`flexprr_run::output_dir`]), or cannot be written.
+    #[error("{0}")]
+    Output(#[from] flexprr_run::OutputError),
 }
 
 impl StudyError {
@@ -80,7 +100,12 @@ impl StudyError {
     pub fn is_input(&self) -> bool {
         matches!(
             self,
-            StudyError::Input { .. } | StudyError::Scene(_) | StudyError::InputFile { .. }
+            StudyError::Input { .. }
+                | StudyError::Scene(_)
+                | StudyError::InputFile { .. }
+                | StudyError::MergeInput { .. }
+                | StudyError::Option { .. }
+                | StudyError::Output(flexprr_run::OutputError::Refused { .. })
         )
     }
 

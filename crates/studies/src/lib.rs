@@ -14,5 +14,8 @@ mod record;
 mod runner;
 pub mod search;
 pub mod study;
+mod validate;
 
-pub use study::{Study, StudyError, StudyOptions, merge_studies, run_search_study, run_study};
+pub use study::{
+    Study, StudyError, StudyOptions, merge_studies, merge_studies_with, run_search_study, run_study,
+};

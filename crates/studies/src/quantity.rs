@@ -248,6 +248,54 @@ impl Quantity {
         }
     }
 
+    /// Why a case whose scene is `scene` cannot give this quantity (an output it does not
+    /// request, a mode its links do not have, a model that cannot collapse); `None` when it
+    /// can. A case is refused on this before it runs.
+    pub fn unavailable(&self, scene: &flexprr_scene::Scene) -> Option<String> {
+        use flexprr_scene::OutputKind;
+        let has = |k: OutputKind| scene.outputs.contains(&k);
+        let name = self.columns()[0].clone();
+        let needs = |output: &str| {
+            Some(format!(
+                "quantity {name} needs the output \"{output}\" (add it to output.requests, \
+                 e.g. in [set.output])"
+            ))
+        };
+        match *self {
+            Quantity::FrequencyRange { mode, .. } | Quantity::StiffnessRatio { mode, .. } => {
+                if !has(OutputKind::Frequencies) {
+                    return needs("frequencies");
+                }
+                let modes = scene.machine.links[0].modes();
+                (mode > modes)
+                    .then(|| format!("quantity {name}: the links have {modes} modes, not {mode}"))
+            }
+            Quantity::Buckling { .. } => (!has(OutputKind::Frequencies))
+                .then(|| needs("frequencies"))
+                .flatten(),
+            Quantity::PeakAxialForce { .. } => (!has(OutputKind::AxialForces)
+                && !has(OutputKind::Frequencies))
+            .then(|| needs("axial_forces\" or \"frequencies"))
+            .flatten(),
+            Quantity::PeakDeflection { .. } => (!has(OutputKind::Deflections))
+                .then(|| needs("deflections"))
+                .flatten(),
+            Quantity::Collapse => {
+                if scene.coupling.name() == "ked" {
+                    Some(
+                        "quantity collapses needs a coupled or nonlinear model (model.coupling): \
+                         a KED model follows the rigid motion and cannot collapse"
+                            .into(),
+                    )
+                } else if !scene.needs_integration() {
+                    needs("deflections")
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
     /// The quantity's values for one run, formatted with [`format_value`].
     ///
     /// # Errors

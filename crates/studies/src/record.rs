@@ -12,13 +12,20 @@ use crate::error::{StudyError, io_err};
 use crate::quantity::Column;
 
 /// Formats a float deterministically: rounded to 10 significant digits, then written in
-/// Rust's shortest round-trip form (`20`, `116.4389235`, `1e-6`); `nan`, `inf`, `-inf`.
+/// Rust's shortest round-trip form (`20`, `116.4389235`, `0.000001`), in scientific notation
+/// only where that form would run to more than about twenty digits (below 1e-15 or from 1e21
+/// on: `1e-300`, not three hundred zeros); `nan`, `inf`, `-inf`.
 pub fn format_value(value: f64) -> String {
     if !value.is_finite() {
         return format!("{value}").to_lowercase();
     }
     let rounded: f64 = format!("{value:.9e}").parse().unwrap_or(value);
-    format!("{rounded}")
+    let magnitude = rounded.abs();
+    if magnitude != 0.0 && !(1e-15..1e21).contains(&magnitude) {
+        format!("{rounded:e}")
+    } else {
+        format!("{rounded}")
+    }
 }
 
 /// An axis value as written in the table: floats by [`format_value`], strings bare.
@@ -331,10 +338,10 @@ pub(crate) fn read_case_record_files(
             path: path.display().to_string(),
             message,
         };
-        if !path.is_file() {
-            return Err(bad("not a regular file".into()));
-        }
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let text = crate::error::read_input_file(&path).map_err(|e| match e {
+            StudyError::InputFile { message, .. } => bad(message),
+            other => other,
+        })?;
         let record: CaseRecord =
             serde_json::from_str(&text).map_err(|e| bad(format!("not a case record: {e}")))?;
         if record.id != id {

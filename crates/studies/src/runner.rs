@@ -10,6 +10,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use flexprr_run::output_dir::{Legacy, OutputDir, Products, write_file_atomic};
 use flexprr_run::write_outputs;
 
 use crate::error::{StudyError, io_err};
@@ -54,10 +55,58 @@ impl std::fmt::Display for Shard {
     }
 }
 
+/// The files of a study's output directory (`docs/studies.md`, "Output directory"), for the
+/// output-directory policy of [`flexprr_run::output_dir`]; the plots' own names are added
+/// per study.
+pub const STUDY_PRODUCTS: Products = Products {
+    kind: "study",
+    names: &[
+        "study.json",
+        "results.csv",
+        "cases",
+        "search.json",
+        "search.md",
+    ],
+    patterns: &[],
+    legacy: Some(Legacy::JsonKey {
+        file: "study.json",
+        key: "fingerprint",
+    }),
+};
+
+/// Most worker threads per available CPU. A case runs on one thread and uses the CPU all
+/// the time, so threads beyond the CPUs only share them; a few times more is harmless (a
+/// machine whose CPU count is reported low), thousands exhaust memory and processes.
+pub const MAX_THREADS_PER_CPU: usize = 4;
+
+/// The number of worker threads for `requested` (`None`: one per available CPU, whatever
+/// `RAYON_NUM_THREADS` says).
+///
+/// # Errors
+/// [`StudyError::Option`] for 0, or more than [`MAX_THREADS_PER_CPU`] times the CPUs.
+pub fn worker_threads(requested: Option<usize>) -> Result<usize, StudyError> {
+    let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+    let max = MAX_THREADS_PER_CPU * cpus;
+    match requested {
+        None => Ok(cpus),
+        Some(0) => Err(StudyError::Option {
+            option: "--threads".into(),
+            message: "must be at least 1".into(),
+        }),
+        Some(n) if n > max => Err(StudyError::Option {
+            option: "--threads".into(),
+            message: format!(
+                "{n} is more than {MAX_THREADS_PER_CPU} per available CPU ({cpus} CPUs, so at                  most {max}): each case keeps one thread busy, so more threads only share the                  CPUs and cost memory"
+            ),
+        }),
+        Some(n) => Ok(n),
+    }
+}
+
 /// How to run a study.
 #[derive(Debug, Clone, Default)]
 pub struct StudyOptions {
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most [`MAX_THREADS_PER_CPU`] per CPU).
     pub threads: Option<usize>,
     /// Run only this slice of the cases.
     pub shard: Option<Shard>,
@@ -65,6 +114,9 @@ pub struct StudyOptions {
     pub resume: bool,
     /// Write each case's full outputs into `cases/<id>/`.
     pub case_outputs: bool,
+    /// Write into a non-empty directory flexprr did not write, next to its files (none of
+    /// which is overwritten or deleted).
+    pub force: bool,
 }
 
 /// Progress after a case finished (for a progress bar).
@@ -104,6 +156,7 @@ struct StudyManifest {
     shard: Option<String>,
 }
 
+/// Writes a case record through a hidden temporary file `.<id>.json.<pid>.tmp` and a rename.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
     let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
@@ -113,10 +166,16 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
 
 fn read_manifest(dir: &Path) -> Result<Option<StudyManifest>, StudyError> {
     let path = dir.join("study.json");
-    if !path.exists() {
+    if std::fs::symlink_metadata(&path).is_err() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+    let text = crate::error::read_input_file(&path).map_err(|e| StudyError::Directory {
+        dir: path.display().to_string(),
+        message: match e {
+            StudyError::InputFile { message, .. } => format!("not a study manifest: it {message}"),
+            other => format!("not a study manifest: {other}"),
+        },
+    })?;
     serde_json::from_str(&text)
         .map(Some)
         .map_err(|e| StudyError::Directory {
@@ -127,7 +186,28 @@ fn read_manifest(dir: &Path) -> Result<Option<StudyManifest>, StudyError> {
 
 fn write_manifest(dir: &Path, manifest: &StudyManifest) -> Result<(), StudyError> {
     let text = serde_json::to_string_pretty(manifest).unwrap_or_default();
-    write_atomic(&dir.join("study.json"), text.as_bytes())
+    Ok(write_file_atomic(&dir.join("study.json"), text.as_bytes())?)
+}
+
+/// The study's output directory, checked by the output-directory policy before any work:
+/// never an input, never a foreign directory without `force`, never over a file flexprr did
+/// not write.
+fn output_dir(
+    study: &Study,
+    out: &Path,
+    force: bool,
+    extra: &[&Path],
+) -> Result<OutputDir, StudyError> {
+    let mut inputs: Vec<&Path> = study.inputs.iter().map(PathBuf::as_path).collect();
+    inputs.extend_from_slice(extra);
+    let plots: Vec<&str> = study.plots.iter().map(|p| p.file.as_str()).collect();
+    Ok(OutputDir::check(
+        out,
+        STUDY_PRODUCTS,
+        force,
+        &inputs,
+        &plots,
+    )?)
 }
 
 /// The records already in `out`, each checked against its case with [`Study::check_record`];
@@ -198,9 +278,13 @@ pub fn run_study(
     if study.search.is_some() {
         return run_search_study(study, out, options, &|_, _| {});
     }
+    let threads = worker_threads(options.threads)?;
+    let target = output_dir(study, out, options.force, &[])?;
+    // Everything already there is checked before anything is written.
+    let existing = existing_records(study, out, options.resume)?;
+    let out = &target.open()?;
     let cases_dir = out.join("cases");
     std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
-    let existing = existing_records(study, out, options.resume)?;
     write_manifest(
         out,
         &StudyManifest {
@@ -233,7 +317,7 @@ pub fn run_study(
         failed: failed_before,
         resumed,
     };
-    let progress = run_pending(study, out, options, &pending, progress, on_case)?;
+    let progress = run_pending(study, out, options, threads, &pending, progress, on_case)?;
 
     let records: BTreeMap<usize, CaseRecord> = read_case_record_files(out)?
         .into_iter()
@@ -241,7 +325,7 @@ pub fn run_study(
         .collect();
     let mine_records: Vec<&CaseRecord> = mine.iter().filter_map(|c| records.get(&c.id)).collect();
     let results = out.join("results.csv");
-    write_atomic(
+    write_file_atomic(
         &results,
         &results_csv(&study.columns(), mine_records.iter().copied())?,
     )?;
@@ -276,14 +360,25 @@ pub fn run_search_study(
         });
     };
     if options.shard.is_some() || options.resume {
-        return Err(StudyError::Directory {
-            dir: out.display().to_string(),
+        return Err(StudyError::Option {
+            option: if options.resume {
+                "--resume"
+            } else {
+                "--shard"
+            }
+            .into(),
             message: "a speed search runs its probes one after the other, each depending on the \
                       last: it cannot be sharded or resumed"
                 .into(),
         });
     }
-    let searches = crate::search::run_search(study, search, out, options.threads, on_probe)?;
+    let threads = worker_threads(options.threads)?;
+    let target = output_dir(study, out, options.force, &[])?;
+    target.check_writable()?;
+    let searches = crate::search::run_search(study, search, threads, on_probe)?;
+    let staging = target.stage()?;
+    crate::search::write_search_files(study, search, &searches, staging.path())?;
+    staging.publish()?;
     let probes = || searches.iter().flat_map(|s| &s.probes);
     let n = probes().count();
     let failed = probes().filter(|p| p.error.is_some()).count();
@@ -306,6 +401,7 @@ fn run_pending(
     study: &Study,
     out: &Path,
     options: &StudyOptions,
+    threads: usize,
     pending: &[&Case],
     start: StudyProgress,
     on_case: &(dyn Fn(&StudyProgress, &CaseRecord) + Sync),
@@ -354,7 +450,7 @@ fn run_pending(
         });
     };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads.unwrap_or(0))
+        .num_threads(threads)
         .build()
         .map_err(|e| dir_err(format!("cannot start worker threads: {e}")))?;
     pool.install(work);
@@ -391,11 +487,24 @@ fn merge_one(
         dir: dir.display().to_string(),
         message,
     };
-    let m = read_manifest(dir)?
-        .ok_or_else(|| dir_err("no study.json: not a study output directory".into()))?;
+    let not_input = |message: String| StudyError::MergeInput {
+        dir: dir.display().to_string(),
+        message,
+    };
+    if !dir.is_dir() {
+        return Err(not_input(
+            "is not a directory: give the output directories of the shards".into(),
+        ));
+    }
+    let m = read_manifest(dir)
+        .map_err(|e| match e {
+            StudyError::Directory { dir, message } => StudyError::MergeInput { dir, message },
+            other => other,
+        })?
+        .ok_or_else(|| not_input("no study.json: not a study output directory".into()))?;
     if let Some(first) = first {
         if first.fingerprint != m.fingerprint || first.columns != m.columns {
-            return Err(dir_err(format!(
+            return Err(not_input(format!(
                 "belongs to study \"{}\" (fingerprint {}), the first directory to \"{}\" ({})",
                 m.name, m.fingerprint, first.name, first.fingerprint
             )));
@@ -441,16 +550,34 @@ fn merge_one(
     Ok(m)
 }
 
+/// Combines shard directories of one study into `out` (see [`merge_studies_with`]), which
+/// must not be a foreign non-empty directory.
+///
+/// # Errors
+/// As [`merge_studies_with`].
+pub fn merge_studies(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary, StudyError> {
+    merge_studies_with(dirs, out, false)
+}
+
 /// Combines shard directories of one study into `out`: checks that they belong to the same
 /// study, that each record is consistent, that duplicated cases agree and that every case
 /// is present, then writes the case records, `study.json` and the same `results.csv` a
-/// single run gives.
+/// single run gives, staged and published by the output-directory policy (`out` is checked
+/// first: never one of the shards, never a foreign directory without `force`, never another
+/// study's results).
 ///
 /// # Errors
-/// [`StudyError::Directory`] for mixed studies, conflicting or missing cases;
-/// [`StudyError::Record`] for an inconsistent record; [`StudyError::Io`] for unreadable or
-/// unwritable files.
-pub fn merge_studies(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary, StudyError> {
+/// [`StudyError::Directory`] for mixed studies, conflicting or missing cases, or an `out`
+/// holding another study's results; [`StudyError::Record`] for an inconsistent record;
+/// [`StudyError::Output`] for an `out` the policy refuses; [`StudyError::Io`] for unreadable
+/// or unwritable files.
+pub fn merge_studies_with(
+    dirs: &[PathBuf],
+    out: &Path,
+    force: bool,
+) -> Result<MergeSummary, StudyError> {
+    let inputs: Vec<&Path> = dirs.iter().map(PathBuf::as_path).collect();
+    let target = OutputDir::check(out, STUDY_PRODUCTS, force, &inputs, &[])?;
     let mut manifest: Option<StudyManifest> = None;
     let mut records: BTreeMap<usize, CaseRecord> = BTreeMap::new();
     for dir in dirs {
@@ -474,27 +601,35 @@ pub fn merge_studies(dirs: &[PathBuf], out: &Path) -> Result<MergeSummary, Study
             shown.join(", ")
         )));
     }
-    let cases_dir = out.join("cases");
-    std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
     if let Some(existing) = read_manifest(out)? {
         if existing.fingerprint != manifest.fingerprint {
-            return Err(out_err("holds results of another study".into()));
+            return Err(out_err(format!(
+                "holds results of another study (\"{}\"); use a new directory",
+                existing.name
+            )));
         }
     }
+    let staging = target.stage()?;
+    let dir = staging.path();
+    let cases_dir = dir.join("cases");
+    std::fs::create_dir_all(&cases_dir).map_err(io_err(&cases_dir))?;
     manifest.shard = None;
-    write_manifest(out, &manifest)?;
+    write_manifest(dir, &manifest)?;
     for r in records.values() {
         let bytes = serde_json::to_vec_pretty(r).unwrap_or_default();
-        write_atomic(&case_file(out, r.id), &bytes)?;
+        write_atomic(&case_file(dir, r.id), &bytes)?;
     }
-    let results = out.join("results.csv");
-    write_atomic(&results, &results_csv(&manifest.columns, records.values())?)?;
+    write_file_atomic(
+        &dir.join("results.csv"),
+        &results_csv(&manifest.columns, records.values())?,
+    )?;
+    staging.publish()?;
     Ok(MergeSummary {
         cases: records.len(),
         failed: records
             .values()
             .filter(|r| r.status != CaseStatus::Ok)
             .count(),
-        results,
+        results: out.join("results.csv"),
     })
 }

@@ -115,8 +115,10 @@ pub struct Probe {
     pub value: f64,
     /// The end of its window (s).
     pub end_s: f64,
-    /// Whether it reached the limit (collapsed, or buckled) within the window.
-    pub reached: bool,
+    /// Whether it reached the limit (collapsed, or buckled) within the window; `None` (JSON
+    /// `null`, `failed` in `results.csv`) when the probe failed for another reason, given
+    /// in `error`.
+    pub reached: Option<bool>,
     /// When (s): the collapse, or the start of the first buckling interval.
     pub time_s: Option<f64>,
     /// Link (1-based) that collapsed or buckled first.
@@ -172,7 +174,7 @@ impl Search {
             return Err((
                 "search.high",
                 format!(
-                    "expected finite low < high, got low = {} and high = {}",
+                    "expected finite low < high, got low = {:?} and high = {:?}",
                     c.low, c.high
                 ),
             ));
@@ -180,14 +182,14 @@ impl Search {
         if !(finite(c.tolerance) && c.tolerance > 0.0) {
             return Err((
                 "search.tolerance",
-                format!("expected a positive bracket width, got {}", c.tolerance),
+                format!("expected a positive bracket width, got {:?}", c.tolerance),
             ));
         }
         if (c.high - c.low) / c.tolerance > 2f64.powi(30) {
             return Err((
                 "search.tolerance",
                 format!(
-                    "{} is below 2^-30 of the bracket: the search would not end in a useful time",
+                    "{:?} is below 2^-30 of the bracket: the search would not end in a useful time",
                     c.tolerance
                 ),
             ));
@@ -206,13 +208,13 @@ impl Search {
                 if !(finite(n) && n > 0.0) {
                     return Err((
                         "search.revolutions",
-                        format!("expected a positive number, got {n}"),
+                        format!("expected a positive number, got {n:?}"),
                     ));
                 }
                 if c.low <= 0.0 {
                     return Err((
                         "search.low",
-                        format!("a frequency must be positive, got {}", c.low),
+                        format!("a frequency must be positive, got {:?}", c.low),
                     ));
                 }
                 Window::Revolutions(n)
@@ -221,7 +223,7 @@ impl Search {
                 if !(finite(t) && t > 0.0) {
                     return Err((
                         "search.time",
-                        format!("expected a positive time (s), got {t}"),
+                        format!("expected a positive time (s), got {t:?}"),
                     ));
                 }
                 Window::Time(t)
@@ -279,9 +281,43 @@ impl Search {
     }
 }
 
-/// One probe: the case's scene with the key set to `value` and `time.end` set to the window,
-/// run; the limit reached or not, or the failure. A buckling probe asks for the frequencies
-/// only (nothing is integrated).
+/// The scene table of a probe: the case's scene with the key set to `value`, `time.end`
+/// set to the window, and the outputs the criterion needs, only those: the frequencies for
+/// buckling (nothing is integrated), the deflections for a collapse (the model is
+/// integrated, whatever the base scene requests); no plots.
+///
+/// # Errors
+/// The message of [`set_key`] when a key cannot be set.
+pub(crate) fn probe_table(
+    search: &Search,
+    scene: &toml::Table,
+    criterion: Criterion,
+    value: f64,
+) -> Result<toml::Table, String> {
+    let mut scene = scene.clone();
+    let requests = match criterion {
+        Criterion::Buckling => "frequencies",
+        Criterion::Collapse => "deflections",
+    };
+    let requests = toml::Value::Array(vec![toml::Value::String(requests.into())]);
+    set_key(&mut scene, &search.key, &toml::Value::Float(value))?;
+    set_key(
+        &mut scene,
+        "time.end",
+        &toml::Value::Float(search.end(value)),
+    )?;
+    set_key(&mut scene, "output.requests", &requests)?;
+    set_key(&mut scene, "output.plots", &toml::Value::Boolean(false))?;
+    set_key(
+        &mut scene,
+        "output.compare_without_axial_force",
+        &toml::Value::Boolean(false),
+    )?;
+    Ok(scene)
+}
+
+/// One probe: the probe scene ([`probe_table`]) run; the limit reached or not, or the
+/// failure.
 fn probe(
     study: &Study,
     search: &Search,
@@ -293,29 +329,18 @@ fn probe(
     let mut out = Probe {
         value,
         end_s: end,
-        reached: false,
+        reached: None,
         time_s: None,
         link: None,
         deflection_m: None,
         error: None,
     };
-    let mut scene = scene.clone();
-    let mut set = set_key(&mut scene, &search.key, &toml::Value::Float(value))
-        .and_then(|()| set_key(&mut scene, "time.end", &toml::Value::Float(end)));
-    if criterion == Criterion::Buckling {
-        let requests = toml::Value::Array(vec![toml::Value::String("frequencies".into())]);
-        set = set
-            .and_then(|()| set_key(&mut scene, "output.requests", &requests))
-            .and_then(|()| set_key(&mut scene, "output.plots", &toml::Value::Boolean(false)));
-    }
-    if let Err(e) = set {
-        out.error = Some(e);
-        return out;
-    }
-    let text = match toml::to_string(&scene) {
+    let text = probe_table(search, scene, criterion, value)
+        .and_then(|table| toml::to_string(&table).map_err(|e| e.to_string()));
+    let text = match text {
         Ok(t) => t,
         Err(e) => {
-            out.error = Some(e.to_string());
+            out.error = Some(e);
             return out;
         }
     };
@@ -328,7 +353,14 @@ fn probe(
             return out;
         }
     };
-    match (flexprr_run::run(&scene, &mut |_| {}), criterion) {
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        flexprr_run::run(&scene, &mut |_| {})
+    }));
+    let Ok(outcome) = outcome else {
+        out.error = Some("the run panicked (a bug: please report it)".into());
+        return out;
+    };
+    match (outcome, criterion) {
         (Ok(result), Criterion::Buckling) => {
             let first = result.frequencies.as_ref().and_then(|h| {
                 h.buckling
@@ -338,18 +370,24 @@ fn probe(
             });
             match (first, &result.frequencies) {
                 (Some(b), _) => {
-                    out.reached = true;
+                    out.reached = Some(true);
                     out.time_s = Some(b.t_start);
                     out.link = Some(b.link + 1);
                 }
-                (None, Some(_)) => {}
+                (None, Some(_)) => out.reached = Some(false),
                 (None, None) => out.error = Some("the run gave no frequencies".into()),
             }
         }
-        (Ok(_), Criterion::Collapse) => {}
+        (Ok(result), Criterion::Collapse) => {
+            if result.stats.integrated {
+                out.reached = Some(false);
+            } else {
+                out.error = Some("the probe was not integrated, so it cannot collapse".into());
+            }
+        }
         (Err(failure), criterion) => match (failure.error.collapse(), criterion) {
             (Some(c), Criterion::Collapse) => {
-                out.reached = true;
+                out.reached = Some(true);
                 out.time_s = Some(c.t);
                 out.link = Some(c.link + 1);
                 out.deflection_m = Some(c.deflection);
@@ -388,10 +426,10 @@ fn bisect(
     outcome.status = 'search: {
         for (value, must_reach) in [(high, true), (low, false)] {
             let p = run(value, &mut outcome);
-            if p.error.is_some() {
+            let Some(reached) = p.reached else {
                 break 'search "failed";
-            }
-            if p.reached != must_reach {
+            };
+            if reached != must_reach {
                 break 'search if must_reach {
                     "high-does-not-reach"
                 } else {
@@ -402,10 +440,10 @@ fn bisect(
         while high - low > search.tolerance {
             let mid = 0.5 * (low + high);
             let p = run(mid, &mut outcome);
-            if p.error.is_some() {
+            let Some(reached) = p.reached else {
                 break 'search "failed";
-            }
-            if p.reached {
+            };
+            if reached {
                 high = mid;
             } else {
                 low = mid;
@@ -413,18 +451,16 @@ fn bisect(
         }
         "bracketed"
     };
-    let ok = |p: &&Probe| p.error.is_none();
     outcome.below = outcome
         .probes
         .iter()
-        .filter(ok)
-        .filter(|p| !p.reached)
+        .filter(|p| p.reached == Some(false))
         .map(|p| p.value)
         .reduce(f64::max);
     outcome.at_or_above = outcome
         .probes
         .iter()
-        .filter(|p| p.reached)
+        .filter(|p| p.reached == Some(true))
         .map(|p| p.value)
         .reduce(f64::min);
     outcome
@@ -459,26 +495,20 @@ pub fn search_cases(study: &Study) -> Result<Vec<(CaseLabels, toml::Table)>, Str
 }
 
 /// Runs every search of `study` (one per case of its axes, or one on the base scene), the
-/// searches in parallel on `threads` workers (each search's probes in order), and writes
-/// `search.json`, `search.md` (the speeds side by side) and `results.csv` (one row per
-/// probe) into `out`. `on_probe` sees each probe as it ends, with its search.
+/// searches in parallel on `threads` workers (each search's probes in order). `on_probe`
+/// sees each probe as it ends, with its search. Nothing is written: see
+/// [`write_search_files`].
 ///
 /// # Errors
-/// [`StudyError::Io`] when the files cannot be written or the workers cannot start;
-/// [`StudyError::Input`] when a case's scene cannot be formed.
+/// [`StudyError::Input`] when a case's scene cannot be formed; [`StudyError::Io`] when the
+/// workers cannot start.
 pub fn run_search(
     study: &Study,
     search: &Search,
-    out: &Path,
-    threads: Option<usize>,
+    threads: usize,
     on_probe: &(dyn Fn(&SearchOutcome, &Probe) + Sync),
 ) -> Result<Vec<SearchOutcome>, StudyError> {
     use rayon::prelude::*;
-    let io = |path: &Path| {
-        let path = path.display().to_string();
-        move |source| StudyError::Io { path, source }
-    };
-    std::fs::create_dir_all(out).map_err(io(out))?;
     let input = |key: &str, message: String| StudyError::Input {
         file: study.file.clone(),
         location: None,
@@ -494,28 +524,45 @@ pub fn run_search(
         jobs.push((labels, table, criterion));
     }
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
+        .num_threads(threads)
         .build()
         .map_err(|e| StudyError::Io {
-            path: out.display().to_string(),
+            path: study.file.clone(),
             source: std::io::Error::other(format!("cannot start worker threads: {e}")),
         })?;
-    let outcomes: Vec<SearchOutcome> = pool.install(|| {
+    Ok(pool.install(|| {
         jobs.into_par_iter()
             .map(|(labels, table, criterion)| {
                 bisect(study, search, labels, &table, criterion, on_probe)
             })
             .collect()
-    });
-    let json = search_json(study, search, &outcomes);
-    let file = out.join("search.json");
+    }))
+}
+
+/// Writes `search.json`, `search.md` (the speeds side by side) and `results.csv` (one row
+/// per probe) of the searches' outcomes into `dir`.
+///
+/// # Errors
+/// [`StudyError::Io`] when a file cannot be written.
+pub fn write_search_files(
+    study: &Study,
+    search: &Search,
+    outcomes: &[SearchOutcome],
+    dir: &Path,
+) -> Result<(), StudyError> {
+    let io = |path: &Path| {
+        let path = path.display().to_string();
+        move |source| StudyError::Io { path, source }
+    };
+    let json = search_json(study, search, outcomes);
+    let file = dir.join("search.json");
     let bytes = serde_json::to_vec_pretty(&json).unwrap_or_default();
     std::fs::write(&file, bytes).map_err(io(&file))?;
-    let markdown = out.join("search.md");
-    std::fs::write(&markdown, search_markdown(study, search, &outcomes)).map_err(io(&markdown))?;
-    let results = out.join("results.csv");
-    std::fs::write(&results, search_csv(study, search, &outcomes)?).map_err(io(&results))?;
-    Ok(outcomes)
+    let markdown = dir.join("search.md");
+    std::fs::write(&markdown, search_markdown(study, search, outcomes)).map_err(io(&markdown))?;
+    let results = dir.join("results.csv");
+    std::fs::write(&results, search_csv(study, search, outcomes)?).map_err(io(&results))?;
+    Ok(())
 }
 
 /// `search.json`: the settings and every search with its probes. With a single search its
@@ -569,7 +616,7 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
         let first = o.at_or_above.and_then(|v| {
             o.probes
                 .iter()
-                .find(|p| p.reached && p.value.total_cmp(&v).is_eq())
+                .find(|p| p.reached == Some(true) && p.value.total_cmp(&v).is_eq())
         });
         md.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
@@ -584,6 +631,23 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
                 .map_or("-".to_string(), |l| l.to_string()),
             o.probes.len()
         ));
+    }
+    let failed: Vec<String> = outcomes
+        .iter()
+        .filter_map(|o| {
+            let probe = o.probes.iter().find(|p| p.error.is_some())?;
+            Some(format!(
+                "- {}: the probe at {} = {} failed: {}\n",
+                o.case_label(),
+                search.key,
+                crate::record::format_value(probe.value),
+                probe.error.as_deref().unwrap_or_default()
+            ))
+        })
+        .collect();
+    if !failed.is_empty() {
+        md.push_str("\nFailed searches (no bracket is claimed):\n\n");
+        md.push_str(&failed.concat());
     }
     md
 }
@@ -630,7 +694,12 @@ fn search_csv(
                 k.to_string(),
                 crate::record::format_value(p.value),
                 crate::record::format_value(p.end_s),
-                if p.reached { "yes" } else { "no" }.to_string(),
+                match p.reached {
+                    Some(true) => "yes",
+                    Some(false) => "no",
+                    None => "failed",
+                }
+                .to_string(),
                 num(p.time_s),
                 p.link.map(|l| l.to_string()).unwrap_or_default(),
                 num(p.deflection_m),

@@ -35,8 +35,8 @@ pub use crate::record::{
     read_case_records, results_csv,
 };
 pub use crate::runner::{
-    MergeSummary, Shard, StudyOptions, StudyProgress, StudySummary, merge_studies,
-    run_search_study, run_study,
+    MAX_THREADS_PER_CPU, MergeSummary, STUDY_PRODUCTS, Shard, StudyOptions, StudyProgress,
+    StudySummary, merge_studies, merge_studies_with, run_search_study, run_study, worker_threads,
 };
 
 use crate::record::format_parameter;
@@ -81,6 +81,9 @@ pub struct Study {
     pub fingerprint: String,
     /// The speed search, when the study is one (`[search]`) instead of a sweep.
     pub search: Option<crate::search::Search>,
+    /// The files the study reads (the study file, when loaded from one, and the base
+    /// scene file): an output directory never overwrites them.
+    pub inputs: Vec<std::path::PathBuf>,
 }
 
 /// Deep merge: tables merge key by key, anything else replaces.
@@ -130,6 +133,12 @@ fn set_in_table(
         table.insert(first.to_string(), new);
         return Ok(());
     }
+    if !table.contains_key(*first) && rest.first().is_some_and(|p| p.parse::<usize>().is_ok()) {
+        return Err(format!(
+            "\"{key}\": there is no array `{first}` whose element could be set; give the whole \
+             array in the base scene (or in [set]) to vary one element"
+        ));
+    }
     let child = table
         .entry(first.to_string())
         .or_insert_with(|| toml::Value::Table(toml::Table::new()));
@@ -178,14 +187,14 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 /// Locates study keys in the study's text for messages.
-struct Locator<'a> {
-    file: &'a str,
-    text: &'a str,
+pub(crate) struct Locator<'a> {
+    pub(crate) file: &'a str,
+    pub(crate) text: &'a str,
 }
 
 impl Locator<'_> {
     /// A [`StudyError::Input`] for `key`, located in the study file when the key is there.
-    fn input(&self, key: &str, message: impl Into<String>) -> StudyError {
+    pub(crate) fn input(&self, key: &str, message: impl Into<String>) -> StudyError {
         StudyError::Input {
             file: self.file.to_string(),
             location: locate(self.file, self.text, key),
@@ -207,7 +216,9 @@ impl Study {
         let text = read_input_file(path)?;
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("study");
         let dir = path.parent().unwrap_or(Path::new("."));
-        Self::from_text(&path.display().to_string(), name, &text, dir)
+        let mut study = Self::from_text(&path.display().to_string(), name, &text, dir)?;
+        study.inputs.insert(0, path.to_path_buf());
+        Ok(study)
     }
 
     /// Whether `text` looks like a study file rather than a scene or link file: it parses
@@ -236,7 +247,7 @@ impl Study {
         let raw: StudyFile =
             parse_toml(file, text).map_err(|e| StudyError::from_study_parse(file, e))?;
         let at = Locator { file, text };
-        let mut base = load_base(&raw, dir, &at)?;
+        let (mut base, source) = load_base(&raw, dir, &at)?;
         merge_into(&mut base, &raw.set);
         let axes = expand_axes(&raw.axis, &base, &at)?;
         let cases = combine_cases(raw.combine, &axes, &at)?;
@@ -246,20 +257,27 @@ impl Study {
             Some(config) => {
                 let search = crate::search::Search::from_config(config)
                     .map_err(|(key, message)| at.input(key, message))?;
-                if let Some(axis) = axes.iter().position(|a| a.key == search.key) {
-                    return Err(at.input(
-                        &format!("axis.{axis}.key"),
-                        format!(
-                            "the search varies {} itself: an axis may vary any other key (one search runs per case)",
-                            search.key
-                        ),
-                    ));
-                }
+                crate::validate::check_search_keys(&search, &axes, &at)?;
                 Some(search)
             }
         };
+        let name = match &raw.name {
+            Some(name) => {
+                if let Some(why) = flexprr_scene::unsafe_name_reason(name) {
+                    return Err(at.input(
+                        "name",
+                        format!(
+                            "\"{name}\" {why}: a study name is 1 to {} characters of A-Z a-z 0-9 . _ -, not starting with .",
+                            flexprr_scene::MAX_NAME_LEN
+                        ),
+                    ));
+                }
+                name.clone()
+            }
+            None => flexprr_scene::sanitize_name(default_name),
+        };
         let study = Study {
-            name: raw.name.clone().unwrap_or_else(|| default_name.to_string()),
+            name,
             file: file.to_string(),
             base,
             axes,
@@ -268,21 +286,21 @@ impl Study {
             plots: raw.plot.clone(),
             fingerprint: String::new(),
             search,
+            inputs: source.path().into_iter().collect(),
         };
         study.check_plots(&at)?;
-        if let Some(search) = &study.search {
-            let cases = crate::search::search_cases(&study).map_err(|m| at.input("axis", m))?;
-            for (labels, table) in &cases {
-                search.criterion_for(table).map_err(|m| {
-                    let case: Vec<String> =
-                        labels.iter().map(|(k, v)| format!("{k} = {v}")).collect();
-                    let message = if case.is_empty() {
-                        m
-                    } else {
-                        format!("in the case {}: {m}", case.join(", "))
-                    };
-                    at.input("search.criterion", message)
-                })?;
+        let context = crate::validate::Context {
+            at: &at,
+            set: &raw.set,
+            source: &source,
+            axes: &raw.axis,
+            base: &study.base,
+        };
+        match &study.search {
+            Some(search) => crate::validate::check_searches(&study, search, &context)?,
+            None => {
+                crate::validate::check_cases(&study, &context)?;
+                crate::validate::check_quantities_available(&study, &context)?;
             }
         }
         let fingerprint = study.compute_fingerprint(raw.combine);
@@ -292,18 +310,44 @@ impl Study {
         })
     }
 
-    /// Plot keys must be axes and plotted columns must be quantity columns.
+    /// Plot files must be plain `.svg` names, each once; plot keys must be axes, `x` a
+    /// numeric one; plotted columns must be quantity columns.
     fn check_plots(&self, at: &Locator<'_>) -> Result<(), StudyError> {
         let columns = self.quantity_column_specs();
         for (k, p) in self.plots.iter().enumerate() {
+            if let Some(why) = crate::validate::plot_file_problem(&p.file) {
+                return Err(at.input(&format!("plot.{k}.file"), why));
+            }
+            if let Some(j) = self.plots[..k].iter().position(|q| q.file == p.file) {
+                return Err(at.input(
+                    &format!("plot.{k}.file"),
+                    format!(
+                        "\"{}\" is also the file of plot {j}: give each plot its own file",
+                        p.file
+                    ),
+                ));
+            }
             let keys = [("x", Some(&p.x)), ("series", p.series.as_ref())];
             for (field, key) in keys {
                 let Some(key) = key else { continue };
-                if !self.axes.iter().any(|a| &a.key == key) {
+                let Some(axis) = self.axes.iter().find(|a| &a.key == key) else {
                     let axes: Vec<&str> = self.axes.iter().map(|a| a.key.as_str()).collect();
                     return Err(at.input(
                         &format!("plot.{k}.{field}"),
                         format!("\"{key}\" is not an axis key (axes: {})", axes.join(", ")),
+                    ));
+                };
+                let text = axis
+                    .values
+                    .iter()
+                    .find(|v| v.as_float().is_none() && v.as_integer().is_none());
+                if let (Some(text), "x") = (text, field) {
+                    return Err(at.input(
+                        &format!("plot.{k}.x"),
+                        format!(
+                            "the axis \"{key}\" has values that are not numbers ({}): x must be a numeric axis; draw a text axis as `series`",
+                            format_parameter(text)
+                        ),
                     ));
                 }
             }
@@ -455,7 +499,10 @@ impl Study {
     fn try_case(&self, case: &Case) -> Result<(Vec<String>, Scene, RunResult), CaseFailure> {
         let scene = self
             .case_scene(case)
-            .map_err(|e| CaseFailure::new(FailureKind::InvalidInput, None, &e.to_string()))?;
+            .map_err(|e| CaseFailure::new(FailureKind::InvalidInput, None, &unlocated(e)))?;
+        if let Some(why) = self.quantities.iter().find_map(|q| q.unavailable(&scene)) {
+            return Err(CaseFailure::new(FailureKind::Quantity, None, &why));
+        }
         let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| run(&scene, &mut |_| {})));
         let wants_collapse = self.quantities.contains(&Quantity::Collapse);
         let (result, collapse) = match outcome {
@@ -522,19 +569,45 @@ impl Study {
     }
 }
 
+/// Where the base scene comes from, to place its errors.
+#[derive(Debug, Clone)]
+pub(crate) enum BaseSource {
+    /// A scene file: its path, the path as shown in messages, and its text.
+    File {
+        path: std::path::PathBuf,
+        shown: String,
+        text: String,
+    },
+    /// The study's inline `[scene]` table.
+    Inline,
+}
+
+impl BaseSource {
+    /// The base scene file, if there is one.
+    pub(crate) fn path(&self) -> Option<std::path::PathBuf> {
+        match self {
+            BaseSource::File { path, .. } => Some(path.clone()),
+            BaseSource::Inline => None,
+        }
+    }
+}
+
 /// The base scene as a TOML table: the file named by `base` (relative to `dir`, parsed with
 /// located errors) or the inline `[scene]`.
-fn load_base(raw: &StudyFile, dir: &Path, at: &Locator<'_>) -> Result<toml::Table, StudyError> {
+fn load_base(
+    raw: &StudyFile,
+    dir: &Path,
+    at: &Locator<'_>,
+) -> Result<(toml::Table, BaseSource), StudyError> {
     match (&raw.base, &raw.scene) {
         (Some(base), None) => {
             let path = dir.join(base);
             let text = read_input_file(&path)?;
-            Ok(parse_toml::<toml::Table>(
-                &path.display().to_string(),
-                &text,
-            )?)
+            let shown = path.display().to_string();
+            let table = parse_toml::<toml::Table>(&shown, &text)?;
+            Ok((table, BaseSource::File { path, shown, text }))
         }
-        (None, Some(scene)) => Ok(scene.clone()),
+        (None, Some(scene)) => Ok((scene.clone(), BaseSource::Inline)),
         (Some(_), Some(_)) => Err(at.input(
             "base",
             "give either `base = \"scene.toml\"` or an inline `[scene]` table, not both",
@@ -546,8 +619,25 @@ fn load_base(raw: &StudyFile, dir: &Path, at: &Locator<'_>) -> Result<toml::Tabl
     }
 }
 
+/// Most cases a study may have: every case is one record file in `cases/` and one row of
+/// `results.csv`, assembled in memory; a million is already a job for a cluster (at the
+/// milliseconds to seconds a case takes) and far more than any directory listing handles
+/// comfortably. A larger sweep is almost always a typing error (`count = 1e12`).
+pub const MAX_CASES: usize = 1_000_000;
+
+/// Whether two dotted keys overlap: equal, or one names a table or array holding the other
+/// (`machine` and `machine.platform_mass`).
+pub(crate) fn keys_overlap(a: &str, b: &str) -> bool {
+    let inside = |inner: &str, outer: &str| {
+        inner.len() > outer.len()
+            && inner.starts_with(outer)
+            && inner.as_bytes()[outer.len()] == b'.'
+    };
+    a == b || inside(a, b) || inside(b, a)
+}
+
 /// The axes with their values: explicit or from a checked range; each key must be settable
-/// in the base scene and appear once.
+/// in the base scene and overlap no other axis key (one would overwrite the other's values).
 fn expand_axes(
     configs: &[AxisConfig],
     base: &toml::Table,
@@ -575,10 +665,44 @@ fn expand_axes(
                 format!("axis \"{}\" has no values", a.key),
             ));
         }
+        if let Some(j) = values.iter().position(|v| !all_finite(v)) {
+            return Err(at.input(
+                &format!("{key}.values.{j}"),
+                format!(
+                    "{} is not a finite number: an axis value must be one (a case with it could \
+                     only be invalid)",
+                    values[j]
+                ),
+            ));
+        }
+        if values.len() > MAX_CASES {
+            return Err(at.input(
+                &format!("{key}.values"),
+                format!(
+                    "{} values, more than the {MAX_CASES} cases a study may have",
+                    values.len()
+                ),
+            ));
+        }
         if axes.iter().any(|b| b.key == a.key) {
             return Err(at.input(
                 &format!("{key}.key"),
                 format!("axis \"{}\" appears twice", a.key),
+            ));
+        }
+        if let Some((j, b)) = axes
+            .iter()
+            .enumerate()
+            .find(|(_, b)| keys_overlap(&a.key, &b.key))
+        {
+            return Err(at.input(
+                &format!("{key}.key"),
+                format!(
+                    "\"{}\" overlaps axis {j} (\"{}\"): setting one would overwrite the other's \
+                     values; vary the whole table in one axis (its values hold both), or two \
+                     separate keys",
+                    a.key, b.key
+                ),
             ));
         }
         let mut probe = base.clone();
@@ -589,6 +713,16 @@ fn expand_axes(
         });
     }
     Ok(axes)
+}
+
+/// Whether every float in `value` (inside arrays and tables too) is finite.
+fn all_finite(value: &toml::Value) -> bool {
+    match value {
+        toml::Value::Float(f) => f.is_finite(),
+        toml::Value::Array(a) => a.iter().all(all_finite),
+        toml::Value::Table(t) => t.values().all(all_finite),
+        _ => true,
+    }
 }
 
 /// The values of a range after checking it (`key` is its study key, for messages).
@@ -603,11 +737,30 @@ fn range_values(
     if r.count == 0 {
         return Err(at.input(&format!("{key}.count"), "count must be at least 1"));
     }
+    if r.count == 1 && r.start.total_cmp(&r.end).is_ne() {
+        return Err(at.input(
+            &format!("{key}.count"),
+            format!(
+                "count = 1 gives one value, but start ({:?}) and end ({:?}) differ: give count >= 2 \
+                 for both ends, or the one value as `values = [...]`",
+                r.start, r.end
+            ),
+        ));
+    }
+    if r.count > MAX_CASES {
+        return Err(at.input(
+            &format!("{key}.count"),
+            format!(
+                "{} values, more than the {MAX_CASES} cases a study may have",
+                r.count
+            ),
+        ));
+    }
     if r.spacing == Spacing::Log && !(r.start > 0.0 && r.end > 0.0) {
         return Err(at.input(
             key,
             format!(
-                "a log range needs positive start and end, got {} and {}",
+                "a log range needs positive start and end, got {:?} and {:?}",
                 r.start, r.end
             ),
         ));
@@ -615,7 +768,8 @@ fn range_values(
     Ok(r.values().into_iter().map(toml::Value::Float).collect())
 }
 
-/// The cases in id order: the product (first axis slowest) or the zip of the axes.
+/// The cases in id order: the product (first axis slowest) or the zip of the axes; at most
+/// [`MAX_CASES`].
 fn combine_cases(
     combine: Combine,
     axes: &[Axis],
@@ -623,7 +777,23 @@ fn combine_cases(
 ) -> Result<Vec<Case>, StudyError> {
     match combine {
         Combine::Product => {
-            let total: usize = axes.iter().map(|a| a.values.len()).product();
+            let mut total: usize = 1;
+            for (k, a) in axes.iter().enumerate() {
+                total = total
+                    .checked_mul(a.values.len())
+                    .filter(|&t| t <= MAX_CASES)
+                    .ok_or_else(|| {
+                        let counts: Vec<String> =
+                            axes[..=k].iter().map(|a| a.values.len().to_string()).collect();
+                        at.input(
+                            &format!("axis.{k}"),
+                            format!(
+                                "the axes so far give {} cases, more than the {MAX_CASES} a study may have",
+                                counts.join(" x ")
+                            ),
+                        )
+                    })?;
+            }
             Ok((0..total)
                 .map(|id| {
                     let mut rest = id;
@@ -674,6 +844,16 @@ fn check_quantities(quantities: &[Quantity], at: &Locator<'_>) -> Result<(), Stu
         }
     }
     Ok(())
+}
+
+/// A case's scene error without its place in the generated scene text (which is in no
+/// file): the key and the message.
+fn unlocated(e: ScenarioError) -> String {
+    match e {
+        ScenarioError::Input { key, message, .. } if !key.is_empty() => format!("{key}: {message}"),
+        ScenarioError::Input { message, .. } => message,
+        other => other.to_string(),
+    }
 }
 
 /// Why a finished run is not physical: a non-finite value in a table (a runaway deflection

@@ -122,8 +122,13 @@ fn the_speed_search_brackets_the_threshold_found_by_direct_runs() {
     assert_eq!(direct(below, window), None, "{below} Hz");
     assert!(direct(above, window).is_some(), "{above} Hz");
     for p in &outcome.probes {
-        assert_eq!(p.reached, direct(p.value, window).is_some(), "{}", p.value);
-        assert_eq!(p.reached, p.value >= above, "{} vs {above}", p.value);
+        assert_eq!(
+            p.reached,
+            Some(direct(p.value, window).is_some()),
+            "{}",
+            p.value
+        );
+        assert_eq!(p.reached, Some(p.value >= above), "{} vs {above}", p.value);
     }
     // The files: search.json with the bracket, results.csv with a row per probe.
     let json: serde_json::Value =

@@ -1,0 +1,623 @@
+//! The examples of issue 28, each as the user met it, through the built binary: silent wrong
+//! answers, lost files, crashes and late errors of studies, speed searches, `merge`,
+//! `work-precision`, `kinematics`, `beam` and output directories. Each test says what the
+//! command now does, and checks numbers against a second method (a direct `flexprr run`, the
+//! Euler buckling load) where there are numbers.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn flexprr() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_flexprr"))
+}
+
+fn configs() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
+}
+
+fn stderr_of(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// Runs `flexprr args...` in `dir`.
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    flexprr().current_dir(dir).args(args).output().unwrap()
+}
+
+/// Asserts exit code 2 with one error line holding every one of `words`.
+fn assert_bad_input(output: &Output, words: &[&str]) {
+    let stderr = stderr_of(output);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    for word in words {
+        assert!(errors[0].contains(word), "{word:?} not in {}", errors[0]);
+    }
+}
+
+/// A KED scene that runs in milliseconds.
+const TINY: &str = r#"name = "tiny"
+[trajectory]
+kind = "circle"
+frequency = 10.0
+[time]
+end = 0.01
+output_step = 1e-3
+[output]
+requests = ["frequencies", "deflections"]
+plots = false
+"#;
+
+/// A temporary directory holding `scene.toml` (TINY) and the files given.
+fn sandbox(files: &[(&str, &str)]) -> tempfile::TempDir {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("scene.toml"), TINY).unwrap();
+    for (name, text) in files {
+        let path = tmp.path().join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+    tmp
+}
+
+const QUANTITY: &str = "quantities = [{ kind = \"frequency_range\", link = 1, mode = 1 }]\n";
+const AXIS: &str = "[[axis]]\nkey = \"trajectory.frequency\"\nvalues = [5.0, 10.0]\n";
+
+/// The 1-based line of the first line of `text` that starts with `start`.
+fn line_of(text: &str, start: &str) -> usize {
+    text.lines().position(|l| l.starts_with(start)).unwrap() + 1
+}
+
+/// A collapse search whose base scene requests only `frequencies` used to never integrate,
+/// and reported `high-does-not-reach` with exit 0. The probe now integrates whatever the
+/// base requests, and its bracket agrees with direct runs that request the deflections.
+#[test]
+fn a_collapse_search_integrates_whatever_the_base_scene_requests() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::copy(configs().join("coupled_f20.toml"), dir.join("c.toml")).unwrap();
+    let study = "base = \"c.toml\"\n[set.output]\nrequests = [\"frequencies\"]\nplots = false\n\
+                 [set.time]\noutput_step = 1e-3\n[search]\nkey = \"trajectory.frequency\"\n\
+                 low = 20.0\nhigh = 34.0\ntolerance = 4.0\ntime = 0.1\ncriterion = \"collapse\"\n";
+    std::fs::write(dir.join("s.toml"), study).unwrap();
+    let out = run_in(dir, &["study", "s.toml", "--out", "o", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("o/search.json")).unwrap()).unwrap();
+    assert_eq!(json["status"], "bracketed", "{json}");
+    let below = json["below"].as_f64().unwrap();
+    let above = json["at_or_above"].as_f64().unwrap();
+    assert!(above - below <= 4.0 && below >= 20.0 && above <= 34.0);
+    // Direct runs of the coupled scene over the same window, deflections requested.
+    let base = std::fs::read_to_string(configs().join("coupled_f20.toml")).unwrap();
+    for (frequency, collapses) in [(below, false), (above, true)] {
+        let text = base
+            .replace("frequency = 20.0", &format!("frequency = {frequency:?}"))
+            .replace("end = 0.2", "end = 0.1")
+            .replace("output_step = 1e-4", "output_step = 1e-3")
+            .replace("plots = true", "plots = false");
+        std::fs::write(dir.join("direct.toml"), text).unwrap();
+        let run = run_in(dir, &["run", "direct.toml", "--out", "d", "--quiet"]);
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("d/summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            summary["failure"]["kind"] == "collapse",
+            collapses,
+            "f = {frequency}: {}",
+            stderr_of(&run)
+        );
+    }
+}
+
+/// An axis over `machine` after one over `machine.platform_mass` used to discard the mass
+/// axis without a word. Overlapping axis keys are refused where they are written, in either
+/// order, before anything runs.
+#[test]
+fn overlapping_axes_are_refused_at_load() {
+    for (first, second) in [
+        ("machine.platform_mass", "machine"),
+        ("machine", "machine.platform_mass"),
+    ] {
+        let value = |key: &str| {
+            if key == "machine" {
+                "[{ layout = \"radial\" }]"
+            } else {
+                "[0.1, 2.0]"
+            }
+        };
+        let study = format!(
+            "base = \"scene.toml\"\n{QUANTITY}[[axis]]\nkey = \"{first}\"\nvalues = {}\n\
+             [[axis]]\nkey = \"{second}\"\nvalues = {}\n",
+            value(first),
+            value(second)
+        );
+        let tmp = sandbox(&[("s.toml", &study)]);
+        let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+        let line = study
+            .match_indices("key =")
+            .nth(1)
+            .map(|(i, _)| study[..i].lines().count() + 1);
+        assert_bad_input(
+            &out,
+            &[
+                &format!("s.toml:{}:1: axis.1.key", line.unwrap()),
+                "overlaps axis 0",
+            ],
+        );
+        assert!(!tmp.path().join("o").exists(), "work was done");
+    }
+}
+
+/// A search over `time.end` used to be overwritten by its window. The window and the
+/// outputs a criterion sets cannot be searched or swept in a search study.
+#[test]
+fn the_window_and_forced_outputs_cannot_be_searched_or_swept() {
+    let search = |key: &str| {
+        format!(
+            "[search]\nkey = \"{key}\"\nlow = 0.01\nhigh = 0.2\ntolerance = 0.05\ntime = 0.05\n"
+        )
+    };
+    for key in ["time.end", "time", "output.requests"] {
+        let study = format!("base = \"scene.toml\"\n{}", search(key));
+        let tmp = sandbox(&[("s.toml", &study)]);
+        let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+        assert_bad_input(&out, &["s.toml:3:1: search.key", "set by every probe"]);
+    }
+    let study = format!(
+        "base = \"scene.toml\"\n[[axis]]\nkey = \"time.end\"\nvalues = [0.1, 0.2]\n{}",
+        search("trajectory.frequency")
+            .replace("low = 0.01", "low = 5.0")
+            .replace("high = 0.2", "high = 40.0")
+            .replace("tolerance = 0.05", "tolerance = 5.0")
+    );
+    let tmp = sandbox(&[("s.toml", &study)]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+    assert_bad_input(&out, &["s.toml:3:1: axis.0.key", "set by every probe"]);
+}
+
+/// Base-scene errors, `[set]` errors and non-numeric or unknown search keys used to be
+/// found case by case, after the work, with exit 0 and locations such as `badbase case
+/// 0:2:1`. They are found when the study loads, at their place in the user's files.
+#[test]
+fn errors_are_found_at_load_in_the_users_files() {
+    // A [set] value: the study file's line.
+    let study = format!("base = \"scene.toml\"\n{QUANTITY}[set.links]\nlength = -1.0\n{AXIS}");
+    let tmp = sandbox(&[("s.toml", &study)]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+    let line = line_of(&study, "length");
+    assert_bad_input(
+        &out,
+        &[&format!("s.toml:{line}:1: set.links.length"), "positive"],
+    );
+    assert!(!tmp.path().join("o").exists());
+    // A base scene value: the base scene's line.
+    let base = TINY.replace("frequency = 10.0", "frequency = 10.0\nradius = -0.05");
+    let study = format!("base = \"b.toml\"\n{QUANTITY}{AXIS}");
+    let tmp = sandbox(&[("s.toml", &study), ("b.toml", &base)]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+    let line = line_of(&base, "radius");
+    assert_bad_input(
+        &out,
+        &[&format!("base scene: b.toml:{line}:1: trajectory.radius")],
+    );
+    assert!(!stderr_of(&out).contains("case 0:"), "{}", stderr_of(&out));
+    // Search keys: unknown, not a number.
+    for (key, what) in [
+        ("trajectory.frequencyy", "unknown field"),
+        ("model.formulation", "not a numeric scene key"),
+        ("links.modes", "not a numeric scene key"),
+    ] {
+        let study = format!(
+            "base = \"scene.toml\"\n[search]\nkey = \"{key}\"\nlow = 1.0\nhigh = 5.0\n\
+             tolerance = 1.0\ntime = 0.01\n"
+        );
+        let tmp = sandbox(&[("s.toml", &study)]);
+        let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+        assert_bad_input(&out, &["s.toml:3:1: search.key", what]);
+        assert!(!tmp.path().join("o").exists());
+    }
+}
+
+/// `count = 1e12` used to abort on an allocation failure and `--threads 10000` to take the
+/// machine down: both are refused with the limit and its reason.
+#[test]
+fn case_and_thread_counts_are_capped() {
+    let study = format!(
+        "base = \"scene.toml\"\n{QUANTITY}[[axis]]\nkey = \"trajectory.frequency\"\n\
+         range = {{ start = 1.0, end = 2.0, count = 1000000000000 }}\n"
+    );
+    let tmp = sandbox(&[("s.toml", &study)]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+    assert_bad_input(&out, &["axis.0.range.count", "1000000 cases"]);
+    let axes: String = (0..3)
+        .map(|i| {
+            format!(
+                "[[axis]]\nkey = \"machine.alpha_deg.{i}\"\nrange = {{ start = 1.0, end = 2.0, count = 1000 }}\n"
+            )
+        })
+        .collect();
+    let study = format!(
+        "base = \"scene.toml\"\n{QUANTITY}[set.machine]\nalpha_deg = [150.0, 270.0, 30.0]\n{axes}"
+    );
+    let tmp = sandbox(&[("s.toml", &study)]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+    assert_bad_input(&out, &["axis.2", "1000 x 1000 x 1000"]);
+    let study = format!("base = \"scene.toml\"\n{QUANTITY}{AXIS}");
+    let tmp = sandbox(&[("s.toml", &study)]);
+    let out = run_in(
+        tmp.path(),
+        &["study", "s.toml", "--out", "o", "--threads", "10000"],
+    );
+    assert_bad_input(&out, &["--threads", "per available CPU"]);
+    assert!(!tmp.path().join("o").exists());
+}
+
+/// `count = 1` gave `start` although the docs say the last value is `end`: one value cannot
+/// be both ends, so it is refused unless they are equal.
+#[test]
+fn a_range_of_one_value_needs_equal_ends() {
+    let range = |end: f64| {
+        format!(
+            "base = \"scene.toml\"\n{QUANTITY}[[axis]]\nkey = \"trajectory.frequency\"\n\
+             range = {{ start = 5.0, end = {end:?}, count = 1 }}\n"
+        )
+    };
+    let tmp = sandbox(&[("s.toml", &range(10.0))]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+    assert_bad_input(
+        &out,
+        &["axis.0.range.count", "start (5.0) and end (10.0) differ"],
+    );
+    let tmp = sandbox(&[("s.toml", &range(5.0))]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let table = std::fs::read_to_string(tmp.path().join("o/results.csv")).unwrap();
+    assert_eq!(table.lines().nth(1).unwrap().split(',').nth(1), Some("5"));
+}
+
+/// A plot's `file` could be `results.csv`, `study.json`, `../x.svg` or an absolute path, and
+/// a text `x` drew an empty chart. All are refused at the plot's place in the study file.
+#[test]
+fn plot_files_and_axes_are_checked_at_load() {
+    let plot = |file: &str, x: &str| {
+        format!(
+            "base = \"scene.toml\"\n{QUANTITY}{AXIS}[[axis]]\nkey = \"model.formulation\"\n\
+             values = [\"paper\", \"consistent\"]\n[[plot]]\nfile = \"{file}\"\nx = \"{x}\"\n\
+             y = [\"f_min_1_1_Hz\"]\n"
+        )
+    };
+    for file in [
+        "results.csv",
+        "study.json",
+        "../x.svg",
+        "/tmp/x.svg",
+        ".hidden.svg",
+    ] {
+        let study = plot(file, "trajectory.frequency");
+        let tmp = sandbox(&[("s.toml", &study)]);
+        let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+        let line = line_of(&study, "file");
+        assert_bad_input(&out, &[&format!("s.toml:{line}:1: plot.0.file")]);
+        assert!(!tmp.path().join("o").exists());
+    }
+    let study = plot("f.svg", "model.formulation");
+    let tmp = sandbox(&[("s.toml", &study)]);
+    let out = run_in(tmp.path(), &["study", "s.toml", "--out", "o"]);
+    assert_bad_input(&out, &["plot.0.x", "numeric axis"]);
+}
+
+/// A probe that failed read `reached = no`. It reads `failed` in `results.csv` and `null` in
+/// `search.json`, with the reason, and the search claims no bracket.
+#[test]
+fn a_failed_probe_says_it_failed_and_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::copy(configs().join("coupled_f20.toml"), dir.join("c.toml")).unwrap();
+    let study = "base = \"c.toml\"\n[set.integrator]\nmax_steps = 5\n[set.time]\n\
+                 output_step = 1e-3\n[search]\nkey = \"trajectory.frequency\"\nlow = 20.0\n\
+                 high = 34.0\ntolerance = 4.0\ntime = 0.1\n";
+    std::fs::write(dir.join("s.toml"), study).unwrap();
+    let out = run_in(dir, &["study", "s.toml", "--out", "o", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let table = std::fs::read_to_string(dir.join("o/results.csv")).unwrap();
+    let row: Vec<&str> = table.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(row[5], "failed", "{table}");
+    assert!(row[9].contains("5 steps"), "{table}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("o/search.json")).unwrap()).unwrap();
+    assert_eq!(json["status"], "failed");
+    assert!(json["probes"][0]["reached"].is_null());
+    assert!(json["below"].is_null() && json["at_or_above"].is_null());
+    let md = std::fs::read_to_string(dir.join("o/search.md")).unwrap();
+    assert!(md.contains("failed:"), "{md}");
+}
+
+/// `flexprr run d/scene.toml --out d --force` deleted the scene file itself. It now writes
+/// next to it; and `run --out .` writes into the current directory, leaving nothing hidden.
+#[test]
+fn run_never_deletes_its_scene_and_writes_into_the_current_directory() {
+    let tmp = sandbox(&[("d/scene.toml", TINY)]);
+    let dir = tmp.path();
+    let refused = run_in(dir, &["run", "d/scene.toml", "--out", "d", "--quiet"]);
+    assert_bad_input(&refused, &["--force"]);
+    let forced = run_in(
+        dir,
+        &["run", "d/scene.toml", "--out", "d", "--quiet", "--force"],
+    );
+    assert!(forced.status.success(), "{}", stderr_of(&forced));
+    assert_eq!(
+        std::fs::read_to_string(dir.join("d/scene.toml")).unwrap(),
+        TINY
+    );
+    assert!(dir.join("d/summary.json").is_file());
+    // Again, without --force: the directory is ours now, and the scene still stays.
+    let again = run_in(dir, &["run", "d/scene.toml", "--out", "d", "--quiet"]);
+    assert!(again.status.success(), "{}", stderr_of(&again));
+    assert_eq!(
+        std::fs::read_to_string(dir.join("d/scene.toml")).unwrap(),
+        TINY
+    );
+    // `--out .` in an empty directory.
+    let here = dir.join("here");
+    std::fs::create_dir(&here).unwrap();
+    let out = run_in(&here, &["run", "../scene.toml", "--out", ".", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    assert!(here.join("summary.json").is_file());
+    let hidden: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "{hidden:?}");
+}
+
+/// `kinematics --out` could overwrite its input; it never does, even with `--force`, and
+/// replaces only its own earlier table without `--force`.
+#[test]
+fn kinematics_never_overwrites_its_input() {
+    let tmp = sandbox(&[("data.csv", "a,b\n1,2\n")]);
+    let dir = tmp.path();
+    for extra in [&[][..], &["--force"][..]] {
+        let mut args = vec!["kinematics", "scene.toml", "--out", "scene.toml"];
+        args.extend_from_slice(extra);
+        assert_bad_input(&run_in(dir, &args), &["input"]);
+        assert_eq!(
+            std::fs::read_to_string(dir.join("scene.toml")).unwrap(),
+            TINY
+        );
+    }
+    assert_bad_input(
+        &run_in(dir, &["kinematics", "scene.toml", "--out", "data.csv"]),
+        &["--force"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("data.csv")).unwrap(),
+        "a,b\n1,2\n"
+    );
+    for _ in 0..2 {
+        let out = run_in(dir, &["kinematics", "scene.toml", "--out", "k.csv"]);
+        assert!(out.status.success(), "{}", stderr_of(&out));
+    }
+    let stdout = run_in(dir, &["kinematics", "scene.toml"]).stdout;
+    assert_eq!(std::fs::read(dir.join("k.csv")).unwrap(), stdout);
+}
+
+/// `study`, `merge` and `work-precision` wrote into any directory, `/` included, and
+/// overwrote a user's own `results.csv`. They refuse `/`, a foreign directory (without
+/// `--force`), a foreign file with an output's name (even with it), and their inputs.
+#[test]
+fn study_merge_and_work_precision_refuse_foreign_directories() {
+    let study = format!("base = \"scene.toml\"\n{QUANTITY}{AXIS}");
+    let tmp = sandbox(&[("s.toml", &study)]);
+    let dir = tmp.path();
+    for k in ["1", "2"] {
+        let (out, shard) = (format!("s{k}"), format!("{k}/2"));
+        let made = run_in(
+            dir,
+            &[
+                "study", "s.toml", "--out", &out, "--shard", &shard, "--quiet",
+            ],
+        );
+        assert!(made.status.success(), "{}", stderr_of(&made));
+    }
+    let wp = [
+        "work-precision",
+        "scene.toml",
+        "--repeats",
+        "1",
+        "--warmup",
+        "0",
+        "--methods",
+        "abm",
+        "--tolerances",
+        "1e-4",
+    ];
+    let commands: [(&[&str], &str); 3] = [
+        (&["study", "s.toml"], "results.csv"),
+        (&["merge", "s1", "s2"], "results.csv"),
+        (&wp, "reference.csv"),
+    ];
+    for (k, (command, clash)) in commands.iter().enumerate() {
+        let mine = format!("mine{k}");
+        std::fs::create_dir(dir.join(&mine)).unwrap();
+        for name in ["results.csv", "reference.csv"] {
+            std::fs::write(dir.join(&mine).join(name), "my data\n").unwrap();
+        }
+        let with = |out: &str, extra: &[&str]| {
+            let mut args = command.to_vec();
+            args.extend_from_slice(&["--out", out]);
+            args.extend_from_slice(extra);
+            run_in(dir, &args)
+        };
+        assert_bad_input(&with("/", &["--force"]), &["root directory"]);
+        assert_bad_input(&with(&mine, &[]), &["did not write", "--force"]);
+        assert_bad_input(
+            &with(&mine, &["--force"]),
+            &[clash, "not written by flexprr"],
+        );
+        for name in ["results.csv", "reference.csv"] {
+            let text = std::fs::read_to_string(dir.join(&mine).join(name)).unwrap();
+            assert_eq!(text, "my data\n", "{mine}/{name}");
+        }
+        assert_eq!(std::fs::read_dir(dir.join(&mine)).unwrap().count(), 2);
+    }
+    let merge_into_input = run_in(dir, &["merge", "s1", "s2", "--out", "s1", "--force"]);
+    assert_bad_input(&merge_into_input, &["input"]);
+    let study_into_input = run_in(dir, &["study", "s.toml", "--out", "s.toml", "--force"]);
+    assert_bad_input(&study_into_input, &["input"]);
+    // Merged next to a foreign file, with --force: the file stays.
+    std::fs::create_dir(dir.join("notes")).unwrap();
+    std::fs::write(dir.join("notes/notes.txt"), "keep").unwrap();
+    let merged = run_in(dir, &["merge", "s1", "s2", "--out", "notes", "--force"]);
+    assert!(merged.status.success(), "{}", stderr_of(&merged));
+    assert_eq!(
+        std::fs::read_to_string(dir.join("notes/notes.txt")).unwrap(),
+        "keep"
+    );
+    assert!(dir.join("notes/results.csv").is_file());
+}
+
+/// Creates a named pipe.
+#[cfg(unix)]
+fn mkfifo(path: &Path) {
+    let status = Command::new("mkfifo").arg(path).status().unwrap();
+    assert!(status.success());
+}
+
+/// Runs `flexprr args...` in `dir` while `fifo` exists: if the program opens the pipe for
+/// reading (where it would block for ever), the test opens it for writing and closes it, so
+/// the program sees an empty file and ends; returns the output and whether that happened.
+#[cfg(unix)]
+fn run_beside_fifo(dir: &Path, args: &[&str], fifo: &Path) -> (Output, bool) {
+    use std::os::unix::fs::OpenOptionsExt;
+    let child = flexprr()
+        .current_dir(dir)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let waiter = std::thread::spawn(move || child.wait_with_output().unwrap());
+    let mut opened = false;
+    while !waiter.is_finished() {
+        // Opening a pipe for writing without blocking succeeds only when a reader has it.
+        if std::fs::OpenOptions::new()
+            .write(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(fifo)
+            .is_ok()
+        {
+            opened = true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    (waiter.join().unwrap(), opened)
+}
+
+/// Files that are not regular files are refused at once, from their metadata: the CLI's
+/// check, applied to the study file, its base scene, `work-precision --reference` and
+/// `--peers`, and the link file of `beam`.
+#[cfg(unix)]
+#[test]
+fn devices_and_pipes_are_refused_without_being_read() {
+    let tmp = sandbox(&[]);
+    let dir = tmp.path();
+    let fifo = dir.join("pipe");
+    mkfifo(&fifo);
+    let wp = |option: &'static str, file: &'static str| -> Vec<&'static str> {
+        vec![
+            "work-precision",
+            "scene.toml",
+            "--repeats",
+            "1",
+            "--warmup",
+            "0",
+            "--out",
+            "w",
+            option,
+            file,
+        ]
+    };
+    std::fs::write(
+        dir.join("s.toml"),
+        format!("base = \"pipe\"\n{QUANTITY}{AXIS}"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("z.toml"),
+        format!("base = \"/dev/zero\"\n{QUANTITY}{AXIS}"),
+    )
+    .unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["study", "pipe", "--out", "o"],
+        vec!["study", "s.toml", "--out", "o"],
+        vec!["study", "z.toml", "--out", "o"],
+        vec!["beam", "pipe"],
+        vec!["beam", "/dev/zero"],
+        vec!["kinematics", "pipe"],
+        wp("--reference", "pipe"),
+        wp("--reference", "/dev/zero"),
+        wp("--peers", "pipe"),
+        wp("--peers", "/dev/zero"),
+    ];
+    for args in cases {
+        let (output, opened) = run_beside_fifo(dir, &args, &fifo);
+        assert!(!opened, "{args:?} opened the pipe");
+        assert_bad_input(&output, &["not a regular file"]);
+    }
+}
+
+/// `beam` printed a tiny critical-load factor as `0.000000000`; it keeps ten significant
+/// digits, and equals the Euler load `pi^2 EI / l^2` over the applied compression.
+#[test]
+fn beam_prints_a_tiny_critical_load_factor_with_its_digits() {
+    let link = std::fs::read_to_string(configs().join("link_paper.toml")).unwrap();
+    let head = link.split("[load]").next().unwrap();
+    let tmp = sandbox(&[("l.toml", &format!("{head}\n[load]\np0 = -1e12\n"))]);
+    let out = run_in(tmp.path(), &["beam", "l.toml"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("critical load factor:"))
+        .unwrap();
+    let factor: f64 = line
+        .trim_start_matches("critical load factor: ")
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    // Paper link: E = 7.3e10 Pa, 2 mm x 30 mm, l = 0.2 m.
+    let ei = 7.3e10 * 0.03 * 0.002_f64.powi(3) / 12.0;
+    let euler = std::f64::consts::PI.powi(2) * ei / 0.2_f64.powi(2);
+    assert!((factor / (euler / 1e12) - 1.0).abs() < 1e-6, "{line}");
+    assert!(line.contains("e-10"), "{line}");
+}
+
+/// Bad options exit 2, not 1: `--resume` or `--shard` of a search, a directory given to
+/// `merge` that is not a study's output.
+#[test]
+fn bad_options_exit_2() {
+    let search = "base = \"scene.toml\"\n[search]\nkey = \"trajectory.frequency\"\nlow = 5.0\n\
+                  high = 40.0\ntolerance = 5.0\ntime = 0.05\n";
+    let tmp = sandbox(&[("s.toml", search), ("x/notes.txt", "x")]);
+    let dir = tmp.path();
+    assert_bad_input(
+        &run_in(dir, &["study", "s.toml", "--out", "o", "--resume"]),
+        &["--resume", "cannot be sharded or resumed"],
+    );
+    assert_bad_input(
+        &run_in(dir, &["study", "s.toml", "--out", "o", "--shard", "1/2"]),
+        &["--shard"],
+    );
+    assert_bad_input(
+        &run_in(dir, &["merge", "x", "--out", "m"]),
+        &["not a study output directory"],
+    );
+    assert_bad_input(
+        &run_in(dir, &["merge", "nowhere", "--out", "m"]),
+        &["not a directory"],
+    );
+}
