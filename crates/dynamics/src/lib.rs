@@ -43,8 +43,9 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{
-    ActuatorState, ExternalLoads, MachineSnapshot, PointForce, ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION,
-    SceneModel, SliderMotion, force_table, platform_deviation_table,
+    ActuatorState, ExternalLoads, MachineSnapshot, ModelCounters, ModelEnergies,
+    NONLINEAR_ADVICE_FRACTION, PointForce, SceneModel, SliderMotion, force_table,
+    platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
 

@@ -486,6 +486,11 @@ impl ModalSystem {
         Ok(out)
     }
 
+    /// Counts one rigid inverse-dynamics solve made for this system's outputs.
+    pub(crate) fn count_inverse_dynamics(&mut self) {
+        self.counters.inverse_dynamics_solves += 1;
+    }
+
     /// Elastic transverse inertia of each link for modal accelerations `eta_ddot`.
     pub fn elastic_inertia(&self, eta_ddot: &[f64]) -> ElasticInertia {
         let mut e = ElasticInertia::default();

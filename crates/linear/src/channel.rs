@@ -209,7 +209,13 @@ mod tests {
             };
             assert_eq!(printed, text);
         }
-        for bad in ["slider_force:4", "point_force:1@1.5", "deflection:0@0.5", "platform:z", "x"] {
+        for bad in [
+            "slider_force:4",
+            "point_force:1@1.5",
+            "deflection:0@0.5",
+            "platform:z",
+            "x",
+        ] {
             let e = bad
                 .parse::<Output>()
                 .err()

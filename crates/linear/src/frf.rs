@@ -5,7 +5,7 @@
 use faer::linalg::solvers::{DenseSolveCore, Eigen};
 use faer::{Mat, c64};
 
-use crate::{Linearization, LinearError};
+use crate::{LinearError, Linearization};
 
 /// A complex number `re + i im` (the eigenvalues, shapes and responses).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -71,17 +71,27 @@ pub fn frequency_response(
     frequencies_hz: &[f64],
 ) -> Result<Vec<Vec<Vec<Complex>>>, LinearError> {
     let n = lin.a.nrows();
-    let eigen = Eigen::new_from_real(lin.a.as_ref())
+    let (balanced, scaling) = crate::balance::balance(&lin.a);
+    let eigen = Eigen::new_from_real(balanced.as_ref())
         .map_err(|e| LinearError::Numerics(format!("eigenvalues of A ({n} x {n}): {e:?}")))?;
     let (values, vectors) = (eigen.S(), eigen.U());
-    let v = vectors.to_owned();
+    // The eigenvectors of A itself: D times those of the balanced matrix.
+    let v = Mat::<c64>::from_fn(n, n, |i, j| vectors[(i, j)] * scaling[i]);
     let lu = v.partial_piv_lu();
     let inverse = lu.inverse();
-    let to_complex = |m: &Mat<f64>| Mat::<c64>::from_fn(m.nrows(), m.ncols(), |i, j| c64::new(m[(i, j)], 0.0));
+    let to_complex =
+        |m: &Mat<f64>| Mat::<c64>::from_fn(m.nrows(), m.ncols(), |i, j| c64::new(m[(i, j)], 0.0));
     let cv = &to_complex(&lin.c) * &v;
     let vb = &inverse * &to_complex(&lin.b);
     // The eigenvectors must reconstruct A: a defective A would make V^-1 meaningless.
-    let reconstructed = &v * Mat::<c64>::from_fn(n, n, |i, j| if i == j { values[i] } else { c64::new(0.0, 0.0) }) * &inverse;
+    let reconstructed =
+        &v * Mat::<c64>::from_fn(n, n, |i, j| {
+            if i == j {
+                values[i]
+            } else {
+                c64::new(0.0, 0.0)
+            }
+        }) * &inverse;
     let error = (0..n)
         .flat_map(|i| (0..n).map(move |j| (i, j)))
         .map(|(i, j)| (reconstructed[(i, j)] - c64::new(lin.a[(i, j)], 0.0)).norm())
@@ -100,7 +110,9 @@ pub fn frequency_response(
         .iter()
         .map(|f| {
             let s = c64::new(0.0, std::f64::consts::TAU * f);
-            let weights: Vec<c64> = (0..n).map(|k| c64::new(1.0, 0.0) / (s - values[k])).collect();
+            let weights: Vec<c64> = (0..n)
+                .map(|k| c64::new(1.0, 0.0) / (s - values[k]))
+                .collect();
             (0..p)
                 .map(|o| {
                     (0..m)

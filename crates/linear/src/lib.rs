@@ -6,6 +6,7 @@
 //! whole-machine modes (frequencies, damping ratios, shapes) and frequency responses. Nothing
 //! here knows a model kind: the coupled, nonlinear and actuated models are linearised alike.
 
+mod balance;
 mod channel;
 mod error;
 mod frf;

@@ -52,9 +52,7 @@ const STEP_FLOOR: f64 = 1e-2;
 
 /// The difference step of state component `j`.
 fn step(y: f64) -> f64 {
-    let r = std::env::var("LIN_STEP").ok().and_then(|s| s.parse().ok()).unwrap_or(RELATIVE_STEP);
-    let f = std::env::var("LIN_FLOOR").ok().and_then(|s| s.parse().ok()).unwrap_or(STEP_FLOOR);
-    r * y.abs().max(f)
+    RELATIVE_STEP * y.abs().max(STEP_FLOOR)
 }
 
 /// `(g(y + h e_j) - g(y - h e_j)) / 2h` extrapolated from `h` and `h / 2`, for every `j` of

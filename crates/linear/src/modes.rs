@@ -7,7 +7,7 @@ use faer::Mat;
 use faer::linalg::solvers::Eigen;
 
 use crate::frf::Complex;
-use crate::{Linearization, LinearError};
+use crate::{LinearError, Linearization};
 
 /// Frequencies below this (Hz) are rigid-body (zero) modes and are left out.
 const ZERO_FREQUENCY_HZ: f64 = 1e-3;
@@ -34,7 +34,8 @@ pub struct Mode {
 /// The eigenvalue problem did not converge.
 pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
     let n = lin.a.nrows();
-    let eigen = Eigen::new_from_real(lin.a.as_ref())
+    let (balanced, scaling) = crate::balance::balance(&lin.a);
+    let eigen = Eigen::new_from_real(balanced.as_ref())
         .map_err(|e| LinearError::Numerics(format!("eigenvalues of A ({n} x {n}): {e:?}")))?;
     let (values, vectors) = (eigen.S(), eigen.U());
     let scale = (0..n)
@@ -47,13 +48,12 @@ pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
     for k in 0..n {
         let lambda = Complex::new(values[k].re, values[k].im);
         let modulus = lambda.norm();
-        if modulus / std::f64::consts::TAU < ZERO_FREQUENCY_HZ
-            || lambda.im < -1e-9 * scale.max(1.0)
+        if modulus / std::f64::consts::TAU < ZERO_FREQUENCY_HZ || lambda.im < -1e-9 * scale.max(1.0)
         {
             continue;
         }
         let column: Vec<Complex> = (0..n)
-            .map(|j| Complex::new(vectors[(j, k)].re, vectors[(j, k)].im))
+            .map(|j| Complex::new(vectors[(j, k)].re, vectors[(j, k)].im).scale(scaling[j]))
             .collect();
         modes.push(Mode {
             eigenvalue: lambda,
@@ -69,9 +69,7 @@ pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
 /// `C v`, divided by its entry of largest modulus.
 fn normalised(c: &Mat<f64>, v: &[Complex]) -> Vec<Complex> {
     let seen: Vec<Complex> = (0..c.nrows())
-        .map(|i| {
-            (0..c.ncols()).fold(Complex::default(), |sum, j| sum + v[j].scale(c[(i, j)]))
-        })
+        .map(|i| (0..c.ncols()).fold(Complex::default(), |sum, j| sum + v[j].scale(c[(i, j)])))
         .collect();
     let largest = seen
         .iter()

@@ -7,7 +7,7 @@ use flexprr_dynamics::{
     NonlinearOptions, NonlinearSystem, SceneModel,
 };
 
-use crate::Scene;
+use crate::{ScenarioError, Scene};
 
 impl Scene {
     /// Builds the dynamical system the scene integrates: the KED [`ModalSystem`] with the
@@ -113,5 +113,52 @@ impl Scene {
             self.damping.clone(),
             options,
         )
+    }
+
+    /// The scene with its platform held at rest in `pose` (m, m, rad) from the scene's start
+    /// time: the operating point of whole-machine modes and frequency responses at a pose
+    /// (docs/linear.md). The scene's model, damping and control are kept: prescribed sliders
+    /// stay locked on the pose's inverse kinematics, actuated ones are held there by their
+    /// controller.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] at `pose` when the machine cannot reach it or the pose is
+    /// (nearly) type-II singular, where the platform is not held.
+    pub fn at_rest(&self, pose: flexprr_kinematics::Pose) -> Result<Scene, ScenarioError> {
+        use flexprr_kinematics::{Line, PlatformMotion};
+        let bad = |message: String| ScenarioError::Input {
+            location: None,
+            key: "pose".into(),
+            message,
+        };
+        let where_ = format!(
+            "(x, y, phi) = ({} m, {} m, {} deg)",
+            pose.x,
+            pose.y,
+            pose.phi.to_degrees()
+        );
+        let state = self
+            .machine
+            .geometry
+            .inverse_kinematics(&PlatformMotion::at_rest(pose))
+            .map_err(|e| {
+                bad(format!(
+                    "the machine cannot hold the platform at {where_}: {e}"
+                ))
+            })?;
+        let measure = flexprr_dynamics::equilibrium_measure(&state);
+        let threshold = self.machine.geometry.thresholds.type_ii;
+        if measure.is_nan() || measure < threshold {
+            return Err(bad(format!(
+                "{where_} is type-II singular (measure {measure:.2e} below {threshold:.1e}): \
+                 the link lines meet in a point and the links do not hold the platform"
+            )));
+        }
+        let t0 = self.output_times[0];
+        let line = Line::new(pose, nalgebra::Vector3::zeros(), t0)
+            .map_err(|e| bad(format!("{where_}: {e}")))?;
+        let mut scene = self.clone();
+        scene.trajectory = std::sync::Arc::new(line);
+        Ok(scene)
     }
 }

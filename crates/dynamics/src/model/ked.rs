@@ -37,6 +37,7 @@ impl SceneModel for ModalSystem {
         let instant = self.instant(t)?;
         let acceleration = self.modal_accelerations(t, y)?;
         let elastic = self.elastic_inertia(&acceleration);
+        self.count_inverse_dynamics();
         let machine = ModalSystem::machine(self);
         let reactions = inverse_dynamics(machine, &instant.state, Some(&elastic), t)?;
         let ends: [(f64, f64); 3] =

@@ -1,0 +1,160 @@
+//! Whole-machine modes at rest (crates/linear) against an independent eigen-analysis:
+//! Exudyn's constrained `ComputeODE2Eigenvalues` of the paper's machine with ANCF links
+//! (axially elastic), a rigid platform and slider bodies locked or on servo springs
+//! (`validation/exudyn_modes.py`, data in `validation/data/modes.json`, 64 elements per link,
+//! converged to 0.008 %), at four poses, sliders locked and on a PD servo
+//! (`kp = 2e5 N/m`, `kd = 0` and `400 N s/m`).
+//!
+//! Targets of the linear-models issue: the lowest 9 frequencies of the coupled model
+//! (r = 3) and the lowest 12 of the nonlinear model within 0.5 %. Measured (printed) and
+//! asserted here, with the two places the models fall short stated and bounded:
+//! * the coupled model's chords are axially rigid, so with the sliders locked its third
+//!   bending family stays at the pinned-pinned 1047.5 Hz where the axially elastic
+//!   machine's sits up to 0.6 % lower at poses where a platform (axial) mode comes near it
+//!   (1371-1444 Hz); everything else is within 0.5 %;
+//! * the nonlinear model's lumped masses converge at second order: 32 elements meet the
+//!   target, 16 elements are within 1 %.
+
+use std::sync::Arc;
+
+use flexprr_control::{Actuator, IdealForce, Pid};
+use flexprr_dynamics::{
+    Actuation, CoupledOptions, CoupledSystem, Machine, ModalDamping, NonlinearOptions,
+    NonlinearSystem, SceneModel, paper,
+};
+use flexprr_kinematics::{Line, Pose, Trajectory};
+use flexprr_linear::{Output, linearize, modes};
+use nalgebra::Vector3;
+use serde_json::Value;
+
+fn external() -> Value {
+    let path = format!("{}/validation/data/modes.json", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    serde_json::from_str(&text).expect("modes.json")
+}
+
+/// `(frequency_hz, damping_ratio)` of the lowest modes of the external model.
+fn external_modes(pose: &Value, variant: &str) -> Vec<(f64, f64)> {
+    pose["variants"][variant]["64"]["modes"]
+        .as_array()
+        .expect("modes")
+        .iter()
+        .map(|m| {
+            (
+                m["frequency_hz"].as_f64().expect("f"),
+                m["damping_ratio"].as_f64().expect("zeta"),
+            )
+        })
+        .collect()
+}
+
+fn servo(kd: f64) -> Actuation {
+    let force: Arc<dyn Actuator> = Arc::new(IdealForce);
+    Actuation {
+        controller: Arc::new(Pid::pd(2.0e5, kd, true, 0.0).unwrap()),
+        actuators: [force.clone(), force.clone(), force],
+    }
+}
+
+/// The scene model held at rest at `pose`: coupled (`elements` = None) or nonlinear.
+fn model(pose: Pose, variant: &str, elements: Option<usize>) -> Box<dyn SceneModel> {
+    let machine: Arc<Machine> = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
+    let rest: Arc<dyn Trajectory + Send + Sync> =
+        Arc::new(Line::new(pose, Vector3::zeros(), 0.0).unwrap());
+    let actuation = match variant {
+        "locked" => None,
+        "servo" => Some(servo(0.0)),
+        _ => Some(servo(400.0)),
+    };
+    match elements {
+        None => {
+            let c = CoupledSystem::new(machine, rest, ModalDamping::none(), CoupledOptions::full())
+                .unwrap();
+            match actuation {
+                Some(a) => Box::new(c.with_actuation(a, 0.0).unwrap()),
+                None => Box::new(c),
+            }
+        }
+        Some(n) => {
+            let options = NonlinearOptions {
+                elements: n,
+                ..NonlinearOptions::paper(paper::YOUNGS_MODULUS)
+            };
+            let mut m = NonlinearSystem::new(machine, rest, options).unwrap();
+            m.start_at(0.0).unwrap();
+            match actuation {
+                Some(a) => Box::new(m.with_actuation(a, 0.0).unwrap()),
+                None => Box::new(m),
+            }
+        }
+    }
+}
+
+/// The largest relative frequency difference over the lowest `count` modes, and the largest
+/// damping-ratio difference.
+fn compare(pose: &Value, variant: &str, elements: Option<usize>, count: usize) -> (f64, f64) {
+    let p = &pose["pose"];
+    let at = Pose::new(
+        p["x_m"].as_f64().unwrap(),
+        p["y_m"].as_f64().unwrap(),
+        p["phi_deg"].as_f64().unwrap().to_radians(),
+    );
+    let mut model = model(at, variant, elements);
+    let y0 = model.initial_state();
+    let lin = linearize(
+        model.as_mut(),
+        0.0,
+        &y0,
+        &[],
+        &[Output::Deflection { link: 0, xi: 0.5 }],
+    )
+    .expect("linearises");
+    let ours = modes(&lin).expect("modes");
+    let theirs = external_modes(pose, variant);
+    let (mut frequency, mut damping) = (0.0_f64, 0.0_f64);
+    for (k, (f, zeta)) in theirs.iter().take(count).enumerate() {
+        frequency = frequency.max((ours[k].frequency_hz - f).abs() / f);
+        damping = damping.max((ours[k].damping_ratio - zeta).abs());
+    }
+    println!(
+        "pose ({}, {}, {}) {variant:13} {:10}: frequencies {:.3} %, damping ratios {:.4}",
+        p["x_m"],
+        p["y_m"],
+        p["phi_deg"],
+        elements.map_or("coupled".to_string(), |n| format!("nonlin. {n}")),
+        100.0 * frequency,
+        damping
+    );
+    (frequency, damping)
+}
+
+#[test]
+fn coupled_whole_machine_modes_match_the_external_eigen_analysis() {
+    let data = external();
+    for pose in data["poses"].as_array().unwrap() {
+        for variant in ["servo", "servo_damped"] {
+            let (f, zeta) = compare(pose, variant, None, 9);
+            assert!(f < 5e-3 && zeta < 5e-3, "{variant}: {f} {zeta}");
+        }
+        let (first_six, _) = compare(pose, "locked", None, 6);
+        assert!(first_six < 5e-3, "locked, first six: {first_six}");
+        let (nine, _) = compare(pose, "locked", None, 9);
+        assert!(nine < 7e-3, "locked, nine: {nine}");
+    }
+}
+
+#[test]
+fn nonlinear_whole_machine_modes_match_the_external_eigen_analysis() {
+    let data = external();
+    for pose in data["poses"].as_array().unwrap() {
+        for variant in ["locked", "servo", "servo_damped"] {
+            let (f32, z32) = compare(pose, variant, Some(32), 12);
+            assert!(
+                f32 < 5e-3 && z32 < 5e-3,
+                "{variant}, 32 elements: {f32} {z32}"
+            );
+            let (f16, _) = compare(pose, variant, Some(16), 12);
+            assert!(f16 < 1e-2, "{variant}, 16 elements: {f16}");
+        }
+    }
+}
