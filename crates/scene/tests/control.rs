@@ -337,7 +337,7 @@ struct ProportionalFactory;
 impl ControllerFactory for ProportionalFactory {
     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError> {
         let keys: Keys = params.parse()?;
-        if !(keys.k > 0.0) {
+        if !(keys.k.is_finite() && keys.k > 0.0) {
             return Err(params.error("k", format!("expected a positive gain, got {}", keys.k)));
         }
         Ok(Arc::new(Proportional(keys.k)))
