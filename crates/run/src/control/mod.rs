@@ -2,7 +2,7 @@
 //! tables, the feasibility of the commanded motion for the scene's motors, the servo
 //! summary of an actuated run, their warnings, `summary.json` sections and figures.
 //!
-//! Everything here reads the shared [`Samples`] (the commanded motion, its inverse
+//! Everything here reads the run's shared samples (the commanded motion, its inverse
 //! kinematics and rigid inverse dynamics) and the model's [`MachineSnapshot`]s; nothing asks
 //! which model ran. A snapshot with [`MachineSnapshot::actuators`] is an actuated model's; a
 //! snapshot without is a model whose sliders are prescribed.
