@@ -4,7 +4,6 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use flexprr_dynamics::CouplingModel;
 use flexprr_run::{
     OutputDir, RUN_PRODUCTS, RunResult, run as run_scene, table_one_markdown, write_outputs_into,
 };
@@ -223,24 +222,7 @@ pub fn check(args: CheckArgs) -> Result<(), Failure> {
         .unwrap_or("scene");
     let scene = Scene::from_text(&shown, name, &text).map_err(failure)?;
     let requests: Vec<&str> = scene.outputs.iter().map(|k| k.name()).collect();
-    let links = &scene.machine.links[0];
-    let model = match scene.coupling {
-        CouplingModel::Nonlinear => format!(
-            "nonlinear model, {} co-rotational elements per link",
-            scene.large_deflection.elements
-        ),
-        coupling => format!(
-            "{} model, {} formulation, {} modes per link: {}",
-            if coupling == CouplingModel::Ked {
-                "KED"
-            } else {
-                "coupled"
-            },
-            scene.formulation.name(),
-            links.modes(),
-            links.basis.name()
-        ),
-    };
+    let model = scene.model_description();
     println!(
         "{}: ok ({model}, {} integrator, {} output times, outputs: {})",
         args.scene.display(),

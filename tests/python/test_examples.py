@@ -55,3 +55,31 @@ def test_compare_formulations_runs(root, tmp_path, monkeypatch, capsys):
     except ImportError:
         return
     assert out.stat().st_size > 0
+
+
+def test_servo_tuning_beats_a_gain_grid_under_the_torque_limit(root):
+    """tune_servo's gains meet the torque limit with the limit active, and no admissible
+    point of an independent 9 x 9 grid over the same box tracks better."""
+    pytest.importorskip("scipy")
+    tune = load_example(root, "tune_servo")
+    limit, end = 0.16, 0.05
+    (kp, kd), error, torque, runs = tune.tune(limit, end=end)
+    assert torque <= limit * (1 + 1e-6)
+    assert runs < 60
+    # the rms error falls with kp: the optimum spends the torque budget
+    assert torque >= 0.98 * limit
+    base = tune.base_scene(end)
+    stiffer = flexprr.run(base.copy().set("control.kp", kp * 1.05).set("control.kd", kd))
+    assert tune.peak_torque(stiffer) > limit or tune.rms_error(stiffer) >= error
+    # an independent grid over the box, run in parallel
+    (lo_p, hi_p), (lo_d, hi_d) = tune.BOUNDS
+    grid = [(10.0**a, 10.0**b) for a in np.linspace(lo_p, hi_p, 9) for b in np.linspace(lo_d, hi_d, 9)]
+    results = flexprr.run_many([base.copy().set("control.kp", p).set("control.kd", d) for p, d in grid])
+    admissible = [tune.rms_error(r) for r in results if tune.peak_torque(r) <= limit]
+    assert admissible, "the grid has admissible gains"
+    assert error <= min(admissible) * (1 + 1e-3), (error, min(admissible))
+    # the summary's control section says the same as the tables
+    result = flexprr.run(base.copy().set("control.kp", kp).set("control.kd", kd))
+    sliders = result.summary["control"]["sliders"]
+    assert max(s["peak_torque_N_m"] for s in sliders) == pytest.approx(tune.peak_torque(result), rel=1e-12)
+    assert np.mean([s["rms_error_m"] for s in sliders]) == pytest.approx(tune.rms_error(result), rel=1e-12)

@@ -140,3 +140,33 @@ def _deep(levels):
         cur.append(nxt)
         cur = nxt
     return top
+
+
+def test_control_keys_are_set_and_checked_like_any_other(root):
+    """[actuators] and [control] keys through Scene.set: unknown keys, bad words and bad
+    gains are refused at set; a servo built key by key runs and returns the new tables."""
+    scene = flexprr.Scene.load(root / "configs" / "coupled_f20.toml")
+    scene.set("control.kind", "pd")  # incomplete until kp and kd are set: that is allowed
+    for key, value, expected in [
+        ("control.kq", 1.0, "unknown field `kq`"),
+        ("actuators.kind", "linear_motor", "linear_motor"),
+    ]:
+        with pytest.raises(flexprr.SceneError) as info:
+            scene.set(key, value)
+        assert info.value.key == key and expected in str(info.value)
+    scene.set("control.kp", 200000).set("control.kd", 400)
+    with pytest.raises(flexprr.SceneError) as info:
+        scene.set("control.kp", -1.0)
+    assert info.value.key == "control.kp" and "got -1" in str(info.value)
+    scene.set("time.end", 0.01).set("output.requests", ["tracking", "actuators"])
+    result = flexprr.run(scene)
+    tracking = result.table("tracking")
+    assert "slider_error_1_m" in tracking and "platform_error_phi_rad" in tracking
+    assert "actuator_force_2_N" in result.table("actuators")
+    assert result.summary["control"]["controller"] == "pd"
+    assert result.summary["feasibility"] is None
+    # the KED model prescribes the sliders: [control] is refused at validation, at its key
+    scene.set("model.coupling", "ked")
+    with pytest.raises(flexprr.SceneError) as info:
+        scene.validate()
+    assert info.value.key == "control" and "coupled" in str(info.value)

@@ -88,6 +88,24 @@ pub enum Quantity {
     KineticEnergy,
     /// Type-II measure of the (deflected) chords (dimensionless).
     TypeIIMeasure,
+    /// Slider tracking error `rho_ref - rho` (m): commanded minus actual slider position.
+    SliderError,
+    /// Platform tracking error, x: commanded minus actual (m).
+    PlatformErrorX,
+    /// Platform tracking error, y: commanded minus actual (m).
+    PlatformErrorY,
+    /// Platform tracking error, phi: commanded minus actual (rad).
+    PlatformErrorPhi,
+    /// The controller's force command to a slider's actuator (N).
+    ForceCommand,
+    /// The force an actuator exerts on its slider along the guide (N).
+    ActuatorForce,
+    /// Motor torque after saturation (N m).
+    MotorTorque,
+    /// Motor speed (rev/s).
+    MotorSpeed,
+    /// Whether the motor torque is saturated at its peak (1) or not (0).
+    MotorSaturated,
 }
 
 /// How a quantity is written: header stem, optional suffix after the indices, unit, and the
@@ -159,6 +177,15 @@ impl Quantity {
             Q::MaxChordShortening => sp("max_chord_shortening", None, "m", "δ_max", "m"),
             Q::KineticEnergy => sp("kinetic", None, "J", "T", "J"),
             Q::TypeIIMeasure => sp("type_ii", None, "measure", "μ_II", "1"),
+            Q::SliderError => sp("slider_error", None, "m", "e_ρ", "m"),
+            Q::PlatformErrorX => sp("platform_error_x", None, "m", "e_x", "m"),
+            Q::PlatformErrorY => sp("platform_error_y", None, "m", "e_y", "m"),
+            Q::PlatformErrorPhi => sp("platform_error_phi", None, "rad", "e_φ", "rad"),
+            Q::ForceCommand => sp("force_command", None, "N", "F_c", "N"),
+            Q::ActuatorForce => sp("actuator_force", None, "N", "F", "N"),
+            Q::MotorTorque => sp("motor_torque", None, "N_m", "τ", "N·m"),
+            Q::MotorSpeed => sp("motor_speed", None, "rev_s", "n", "rev/s"),
+            Q::MotorSaturated => sp("motor_saturated", None, "flag", "sat", "1"),
         }
     }
 
@@ -351,5 +378,22 @@ mod tests {
             "dphi_with_stretch_rad"
         );
         assert_eq!(Column::mode(Q::ModalCoordinate, 1, 2).label(), "η₂,₃");
+        assert_eq!(Column::link(Q::SliderError, 0).header(), "slider_error_1_m");
+        assert_eq!(
+            Column::of(Q::PlatformErrorPhi).header(),
+            "platform_error_phi_rad"
+        );
+        assert_eq!(
+            Column::link(Q::MotorTorque, 2).header(),
+            "motor_torque_3_N_m"
+        );
+        assert_eq!(
+            Column::link(Q::MotorSpeed, 1).header(),
+            "motor_speed_2_rev_s"
+        );
+        assert_eq!(
+            Column::link(Q::MotorSaturated, 0).header(),
+            "motor_saturated_1_flag"
+        );
     }
 }

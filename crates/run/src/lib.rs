@@ -10,6 +10,7 @@
 //! ```
 
 pub mod column;
+pub mod control;
 mod error;
 pub mod guard;
 mod integrate;

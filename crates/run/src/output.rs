@@ -127,6 +127,7 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         })
         .collect();
     let (status, failure) = status_json(failure);
+    let (control, feasibility) = crate::control::summary_sections(result);
     json!({
         "status": status,
         "failure": failure,
@@ -153,6 +154,8 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         },
         "integrator": integrator,
         "frequencies": frequencies,
+        "control": control,
+        "feasibility": feasibility,
         "peak_abs": peaks,
         "scene_file": serde_json::to_value(&scene.file).unwrap_or(Value::Null),
     })

@@ -226,11 +226,12 @@ fn produce(
         OutputKind::Snapshots,
         OutputKind::Machine,
     ];
-    let mut samples = if rigid_outputs.iter().any(|k| wants(scene, *k)) {
-        Some(Samples::new(scene, times)?)
-    } else {
-        None
-    };
+    let mut samples =
+        if rigid_outputs.iter().any(|k| wants(scene, *k)) || crate::control::needs_samples(scene) {
+            Some(Samples::new(scene, times)?)
+        } else {
+            None
+        };
     if let Some(s) = samples.as_mut() {
         produce_rigid(scene, s, integrated.as_deref_mut(), result)?;
     }
@@ -238,6 +239,13 @@ fn produce(
         let (table, hist) = outputs::frequencies(ked, times)?;
         result.tables.push(table);
         result.frequencies = Some(hist);
+    }
+    if let Some(s) = samples.as_mut() {
+        let snapshots = match integrated.as_deref_mut() {
+            Some(i) if crate::control::needs_snapshots(scene) => Some(i.snapshots()?),
+            _ => None,
+        };
+        crate::control::produce(scene, s, snapshots, result)?;
     }
     let Some(integrated) = integrated else {
         return Ok(());

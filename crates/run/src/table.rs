@@ -40,6 +40,9 @@ pub struct RunResult {
     /// What `viewer.html` and `snapshots.svg` draw, when either was requested: the run's
     /// frames mapped to [`flexprr_viewer::ViewerData`] (see docs/viewer.md).
     pub viewer: Option<flexprr_viewer::ViewerData>,
+    /// The feasibility of the commanded motion for the scene's motors and the servo summary
+    /// of an actuated run (docs/control.md).
+    pub control: crate::control::ControlReport,
 }
 
 impl RunResult {

@@ -3,8 +3,9 @@
 //!
 //! The mapping, per link `i` and frame `k` (one frame per output time reached):
 //!
-//! - slider positions `rho_i` and the platform pose: the closed-form inverse kinematics of
-//!   the commanded motion (the shared [`Samples`]);
+//! - the platform pose: the commanded motion (the shared [`Samples`]); slider positions
+//!   `rho_i`: the model's snapshots (the closed-form inverse kinematics of the commanded
+//!   motion where the model prescribes the sliders);
 //! - shapes: for a model whose deflection is linear in its coordinates, the deflection of
 //!   each unit coordinate (the scene's own basis `psi_j(xi)` for the modal models) sampled
 //!   at [`SHAPE_POINTS`] points, and the coordinates `eta_ij` from the integrated state, so
@@ -18,7 +19,9 @@
 //!   stiffness along the motion ([`FrequencyHistory`]); where `omega^2 <= 0` the frequency
 //!   is drawn as 0 and the interval is a buckling interval;
 //! - a model whose platform follows the links (coupled, nonlinear): the platform deviation
-//!   `(dx, dy, dphi)` from the commanded pose, from its snapshots.
+//!   `(dx, dy, dphi)` from the commanded pose, from its snapshots;
+//! - actuated sliders: the model's sliders, and the commanded ones (the samples' inverse
+//!   kinematics) as the reference drawn beside them.
 
 use flexprr_dynamics::{DynamicsError, FrequencyHistory, MachineSnapshot, ModalSystem, SceneModel};
 use flexprr_integrators::Solution;
@@ -190,6 +193,16 @@ pub(crate) fn viewer_data(
         .iter()
         .map(|p| p.sliders.map(|s| s.position))
         .collect();
+    // Actuated sliders: the commanded ones (the inverse kinematics) beside the actual ones.
+    let reference_sliders = snapshots[..n]
+        .first()
+        .is_some_and(|p| p.actuators.is_some())
+        .then(|| {
+            samples.states[..n]
+                .iter()
+                .map(|s| s.legs.map(|l| l.rho))
+                .collect()
+        });
     let (guides, attachments) = machine_views(scene);
     let f = &scene.formulation;
     let subtitle = format!(
@@ -210,6 +223,7 @@ pub(crate) fn viewer_data(
         pose,
         sliders,
         deviation,
+        reference_sliders,
     })
 }
 

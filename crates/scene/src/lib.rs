@@ -1,7 +1,7 @@
 //! Scene files of flexprr: the TOML schema (`docs/scenes.md`), validation with errors that
 //! give the file, line, column and key, the [`Registry`] of named parts (integrators, bases,
-//! axial force models) and the built [`Scene`] that runs, studies and benchmarks all start
-//! from.
+//! axial force models, control laws) and the built [`Scene`] that runs, studies and
+//! benchmarks all start from.
 //!
 //! ```no_run
 //! use flexprr_scene::Scene;
@@ -9,6 +9,8 @@
 //! assert_eq!(scene.name, "paper_f20");
 //! ```
 
+mod control;
+mod controllers;
 mod error;
 mod input;
 pub mod link;
@@ -23,6 +25,7 @@ pub mod setting;
 
 pub use flexprr_integrators::DynIntegrator;
 
+pub use controllers::ControllerFactory;
 pub use error::{Location, ScenarioError};
 pub use input::{
     InputKind, MAX_DATA_BYTES, MAX_INPUT_BYTES, MAX_NAME_LEN, check_input_file, read_input_file,
@@ -31,11 +34,13 @@ pub use input::{
 pub use locate::{line_column, locate};
 pub use parse::{parse_scene, parse_toml};
 pub use registry::{
-    BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount, Registry,
+    BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount,
+    Registry, TableParams,
 };
 pub use scene::{DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, Scene};
 pub use schema::{
-    BasisTable, BranchChoice, CouplingChoice, FormulationChoice, IntegratorConfig, Layout,
-    LegConfig, LinksConfig, MachineConfig, Method, ModelConfig, OutputConfig, OutputKind,
-    ProfileChoice, SceneFile, StiffnessChoice, TimeConfig, TrajectoryConfig,
+    ActuatorsConfig, BasisTable, BranchChoice, ControlTable, CouplingChoice,
+    DEFAULT_COULOMB_SMOOTHING, FormulationChoice, IntegratorConfig, Layout, LegConfig, LinksConfig,
+    MachineConfig, Method, ModelConfig, OutputConfig, OutputKind, ProfileChoice, SceneFile,
+    StiffnessChoice, TimeConfig, TrajectoryConfig,
 };

@@ -3,8 +3,8 @@
 //! coupled model everywhere.
 
 use flexprr_dynamics::{
-    AxialModel, CoupledOptions, CoupledSystem, CouplingModel, DynamicsError, ModalSystem,
-    NonlinearOptions, NonlinearSystem, SceneModel,
+    Actuation, AxialModel, CoupledOptions, CoupledSystem, CouplingModel, DynamicsError,
+    ModalSystem, NonlinearOptions, NonlinearSystem, SceneModel,
 };
 
 use crate::{ScenarioError, Scene};
@@ -12,7 +12,10 @@ use crate::{ScenarioError, Scene};
 impl Scene {
     /// Builds the dynamical system the scene integrates: the KED [`ModalSystem`] with the
     /// scene's formulation and axial force model, the [`CoupledSystem`] when
-    /// `model.coupling = "coupled"`, or the [`NonlinearSystem`] when `"nonlinear"`.
+    /// `model.coupling = "coupled"`, or the [`NonlinearSystem`] when `"nonlinear"`; with a
+    /// `[control]` table the coupled or nonlinear model has its sliders driven by the
+    /// actuators under the control law ([`Scene::actuation`]), started on the commanded path
+    /// at the first output time.
     ///
     /// # Errors
     /// A modal mass matrix that is not positive definite, inconsistent damping, or (nonlinear)
@@ -47,7 +50,60 @@ impl Scene {
         let mut system =
             NonlinearSystem::new(self.machine.clone(), self.trajectory.clone(), options)?;
         system.start_at(self.output_times[0])?;
-        Ok(system)
+        match self.actuation() {
+            Some(actuation) => system.with_actuation(actuation, self.output_times[0]),
+            None => Ok(system),
+        }
+    }
+
+    /// The sliders' actuation when the scene has a `[control]` table: the control law and
+    /// the scene's actuator on each slider.
+    pub fn actuation(&self) -> Option<Actuation> {
+        let controller = self.controller.clone()?;
+        let actuator = self.actuator.clone()?;
+        Some(Actuation {
+            controller,
+            actuators: [actuator.clone(), actuator.clone(), actuator],
+        })
+    }
+
+    /// What `flexprr check` says about the scene's model: the model, its sliders (actuated
+    /// under a control law, or prescribed with actuators to check), and its links, e.g.
+    /// `coupled model, actuated sliders (pd, force actuators), 3 modes per link: sine`.
+    pub fn model_description(&self) -> String {
+        let sliders = match (&self.file.control, &self.actuator) {
+            (Some(control), Some(actuator)) => format!(
+                ", actuated sliders ({}, {} actuators)",
+                control.kind,
+                actuator.name()
+            ),
+            (None, Some(actuator)) if actuator.ratings().is_some() => format!(
+                ", prescribed sliders ({} actuators: the motion is checked against their ratings)",
+                actuator.name()
+            ),
+            (None, Some(actuator)) => {
+                format!(", prescribed sliders ({} actuators)", actuator.name())
+            }
+            _ => String::new(),
+        };
+        let links = &self.machine.links[0];
+        match self.coupling {
+            CouplingModel::Nonlinear => format!(
+                "nonlinear model{sliders}, {} co-rotational elements per link",
+                self.large_deflection.elements
+            ),
+            coupling => format!(
+                "{} model{sliders}, {} formulation, {} modes per link: {}",
+                if coupling == CouplingModel::Ked {
+                    "KED"
+                } else {
+                    "coupled"
+                },
+                self.formulation.name(),
+                links.modes(),
+                links.basis.name()
+            ),
+        }
     }
 
     /// The scene's model with the axial force switched off, for the paper's comparison
@@ -67,13 +123,15 @@ impl Scene {
     }
 
     /// Whether a run of the scene integrates its model: for its states, or because the
-    /// model's actual forces (coupled, nonlinear) are only known along its solution.
+    /// model's actual forces (coupled, nonlinear) or its actuators' states (actuated
+    /// sliders) are only known along its solution.
     pub fn integrates_model(&self) -> bool {
         use crate::OutputKind;
         self.needs_integration()
             || (self.coupling != CouplingModel::Ked
                 && (self.outputs.contains(&OutputKind::AxialForces)
                     || self.outputs.contains(&OutputKind::DrivingForces)))
+            || (self.controller.is_some() && self.outputs.contains(&OutputKind::Actuators))
     }
 
     /// The KED modal system of the scene (also for a coupled scene: its frequencies and
@@ -107,12 +165,16 @@ impl Scene {
             collapse_deflection: Some(self.large_deflection.collapse_deflection),
             ..CoupledOptions::full()
         };
-        CoupledSystem::new(
+        let system = CoupledSystem::new(
             self.machine.clone(),
             self.trajectory.clone(),
             self.damping.clone(),
             options,
-        )
+        )?;
+        match self.actuation() {
+            Some(actuation) => system.with_actuation(actuation, self.output_times[0]),
+            None => Ok(system),
+        }
     }
 
     /// The scene with its platform held at rest in `pose` (m, m, rad) from the scene's start

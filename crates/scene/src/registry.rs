@@ -1,9 +1,11 @@
 //! The registry of named parts: the TOML names of integrators (`integrator.method`), bases
-//! (`links.basis.kind`) and axial force models (`model.axial_force`) and how to build each.
+//! (`links.basis.kind`), axial force models (`model.axial_force`) and control laws
+//! (`control.kind`) and how to build each.
 //!
 //! [`Registry::default`] holds the built-ins; a program adds its own parts with
-//! [`Registry::register_integrator`], [`Registry::register_basis`] and
-//! [`Registry::register_axial_force`] and loads scenes through it with
+//! [`Registry::register_integrator`], [`Registry::register_basis`],
+//! [`Registry::register_axial_force`] and [`Registry::register_controller`] and loads scenes
+//! through it with
 //! [`crate::Scene::load_with`] or [`crate::Scene::from_text_with`]. Nothing in the scene code
 //! matches on a name: a new part is one registration.
 
@@ -22,9 +24,11 @@ use flexprr_integrators::{
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
+use crate::controllers::{ControllerFactory, PdFactory, PidFactory};
 use crate::error::ScenarioError;
 use crate::link::EndsConfig;
 use crate::locate::{locate, locate_value};
+use flexprr_control::{ControlError, Controller};
 
 /// Builds an integrator from the scene's options.
 pub type IntegratorConstructor = Arc<dyn Fn(Options) -> Box<dyn DynIntegrator> + Send + Sync>;
@@ -126,18 +130,22 @@ pub enum ModeCount {
     FromBasisKeys,
 }
 
-/// The keys of one basis table (everything but `kind`), with what is needed to put an error
-/// at the right key, line and column.
-pub struct BasisParams<'a> {
+/// The keys of one table of a registered part (everything but `kind`: a basis table, the
+/// `[control]` table), with what is needed to put an error at the right key, line and column.
+pub struct TableParams<'a> {
     file: &'a str,
     text: &'a str,
     prefix: &'a str,
     table: &'a toml::Table,
 }
 
-impl<'a> BasisParams<'a> {
-    /// The keys `table` of the basis table at dotted key `prefix` (e.g. `links.basis`) of
-    /// the source `text` of `file`.
+/// The keys of a basis table: [`TableParams`] under the name the basis factories have
+/// always used.
+pub type BasisParams<'a> = TableParams<'a>;
+
+impl<'a> TableParams<'a> {
+    /// The keys `table` of the part's table at dotted key `prefix` (e.g. `links.basis`,
+    /// `control`) of the source `text` of `file`.
     pub fn new(file: &'a str, text: &'a str, prefix: &'a str, table: &'a toml::Table) -> Self {
         Self {
             file,
@@ -152,8 +160,8 @@ impl<'a> BasisParams<'a> {
         self.table
     }
 
-    /// Reads the keys into `T` (declare it `deny_unknown_fields` so a key of another basis
-    /// is an error); errors name the key under the basis table and its location.
+    /// Reads the keys into `T` (declare it `deny_unknown_fields` so a key of another kind
+    /// is an error); errors name the key under the part's table and its location.
     ///
     /// # Errors
     /// [`ScenarioError::Input`] for an unknown or missing key or a wrong type.
@@ -168,14 +176,30 @@ impl<'a> BasisParams<'a> {
         })
     }
 
-    /// A bad-input error at `key` (relative to the basis table; empty for the table).
+    /// The dotted key of the part's table (`links.basis`, `control`).
+    pub fn prefix(&self) -> &str {
+        self.prefix
+    }
+
+    /// A bad-input error at `key` (relative to the part's table; empty for the table).
     pub fn error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
         self.error_impl(key, message.into(), false)
     }
 
-    /// As [`BasisParams::error`], located at the value of `key` (for a bad word).
+    /// As [`TableParams::error`], located at the value of `key` (for a bad word).
     pub fn value_error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
         self.error_impl(key, message.into(), true)
+    }
+
+    /// A controller's or actuator's parameter error ([`ControlError`]) at the key it names,
+    /// with its rule and value: `control.kp: a gain must be finite and >= 0, got -1`.
+    pub fn control_error(&self, error: ControlError) -> ScenarioError {
+        match error {
+            ControlError::InvalidParameter { name, value, rule } => {
+                self.error(name, format!("{rule}, got {value}"))
+            }
+            other => self.error("", other.to_string()),
+        }
     }
 
     fn error_impl(&self, key: &str, message: String, at_value: bool) -> ScenarioError {
@@ -338,14 +362,16 @@ pub(crate) struct AxialEntry {
 }
 
 /// The named parts scenes can use. [`Registry::default`] holds the built-ins: integrators
-/// `abm`, `rk45`, `bdf`, `magnus4`, `magnus6` (linear models only) and `auto`; bases `sine`, `classical`, `hermite`; axial force models `none`,
-/// `paper`, `joint-reaction`.
+/// `abm`, `rk45`, `bdf`, `magnus4`, `magnus6` (linear models only) and `auto`; bases `sine`,
+/// `classical`, `hermite`; axial force models `none`, `paper`, `joint-reaction`; control
+/// laws `pd` and `pid`.
 #[derive(Clone)]
 pub struct Registry {
     integrators: BTreeMap<String, IntegratorConstructor>,
     method_kinds: BTreeMap<String, MethodKind>,
     bases: BTreeMap<String, Arc<dyn BasisFactory>>,
     axial: BTreeMap<String, AxialEntry>,
+    controllers: BTreeMap<String, Arc<dyn ControllerFactory>>,
 }
 
 impl fmt::Debug for Registry {
@@ -354,6 +380,7 @@ impl fmt::Debug for Registry {
             .field("integrators", &self.integrator_names())
             .field("bases", &self.basis_names())
             .field("axial_forces", &self.axial_force_names())
+            .field("controllers", &self.controller_names())
             .finish()
     }
 }
@@ -385,6 +412,8 @@ impl Default for Registry {
         r.register_basis("sine", Arc::new(SineFactory));
         r.register_basis("classical", Arc::new(ClassicalFactory));
         r.register_basis("hermite", Arc::new(HermiteFactory));
+        r.register_controller("pd", Arc::new(PdFactory));
+        r.register_controller("pid", Arc::new(PidFactory));
         for (name, preset, model) in [
             (
                 "none",
@@ -418,6 +447,7 @@ impl Registry {
             method_kinds: BTreeMap::new(),
             bases: BTreeMap::new(),
             axial: BTreeMap::new(),
+            controllers: BTreeMap::new(),
         }
     }
 
@@ -523,6 +553,44 @@ impl Registry {
                 preset: None,
             },
         );
+    }
+
+    /// Registers (or replaces) the control law `name` for `control.kind`.
+    pub fn register_controller(&mut self, name: &str, factory: Arc<dyn ControllerFactory>) {
+        self.controllers.insert(name.to_string(), factory);
+    }
+
+    /// The control law `name`.
+    pub fn controller(&self, name: &str) -> Option<&Arc<dyn ControllerFactory>> {
+        self.controllers.get(name)
+    }
+
+    /// Registered control law names, sorted.
+    pub fn controller_names(&self) -> Vec<&str> {
+        self.controllers.keys().map(String::as_str).collect()
+    }
+
+    /// Builds the control law of the table `at` (`control`): looks up `kind` and lets its
+    /// factory read its own keys.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] with the key and location of an unknown kind, or the law's
+    /// own key errors.
+    pub fn build_controller(
+        &self,
+        at: &TableParams<'_>,
+        kind: &str,
+    ) -> Result<Arc<dyn Controller>, ScenarioError> {
+        let factory = self.controller(kind).ok_or_else(|| {
+            at.value_error(
+                "kind",
+                format!(
+                    "unknown control law \"{kind}\", expected one of {}",
+                    quoted_list(&self.controller_names())
+                ),
+            )
+        })?;
+        factory.build(at)
     }
 
     /// The integrator `name`, as a handle.

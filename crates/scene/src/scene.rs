@@ -12,6 +12,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
+use flexprr_control::{Actuator, Controller};
 use flexprr_dynamics::{
     AxialForceModel, Coupling, CouplingModel, Formulation, LinkModel, Machine, ModalDamping,
 };
@@ -22,6 +23,7 @@ use flexprr_kinematics::{
 };
 use nalgebra::{Point2, Unit, Vector2};
 
+use crate::control::build_control;
 use crate::error::ScenarioError;
 use crate::input::{read_input_file, sanitize_name, unsafe_name_reason};
 use crate::link::{build_section, check_link};
@@ -68,6 +70,13 @@ pub struct Scene {
     /// The nonlinear model's settings (`model.elements`, `model.collapse_deflection`,
     /// `model.axial_damping_time`; see docs/scenes.md).
     pub large_deflection: LargeDeflection,
+    /// The actuator of every slider (`[actuators]`; the ideal force when only `[control]` is
+    /// given), when the scene names one: a motor's ratings are what the commanded motion is
+    /// checked against (docs/control.md).
+    pub actuator: Option<Arc<dyn Actuator>>,
+    /// The sliders' control law (`[control]`): when given, the sliders are degrees of
+    /// freedom driven by [`Scene::actuator`] under it.
+    pub controller: Option<Arc<dyn Controller>>,
 }
 
 /// Settings of the models that follow a collapse: the coupled one's collapse limit and the
@@ -98,9 +107,9 @@ impl std::fmt::Debug for Scene {
 }
 
 /// Checks and location context while building a scene.
-struct Checker<'a> {
-    file: &'a str,
-    text: &'a str,
+pub(crate) struct Checker<'a> {
+    pub(crate) file: &'a str,
+    pub(crate) text: &'a str,
 }
 
 impl Checker<'_> {
@@ -112,7 +121,7 @@ impl Checker<'_> {
             message: message.into(),
         }
     }
-    fn error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
+    pub(crate) fn error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
         ScenarioError::Input {
             location: locate(self.file, self.text, key),
             key: key.to_string(),
@@ -231,13 +240,19 @@ impl Scene {
         let trajectory = build_trajectory_checked(&c, &raw.trajectory, &machine, &output_times)?;
         let model = build_model_section(&c, registry, &raw.model, machine.links[0].modes())?;
         let large_deflection = build_large_deflection(&c, &raw.model, &raw.links)?;
+        let control = build_control(&c, registry, &raw, model.coupling)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
-        // `auto` becomes its choice for the model; a linear-only method needs the KED model.
+        // `auto` becomes its choice for the model; a linear-only method needs the KED model
+        // (an actuated model is never linear: it is coupled or nonlinear).
+        let model_name = match control.controller {
+            Some(_) => format!("{} with actuated sliders", model.coupling.name()),
+            None => model.coupling.name().to_string(),
+        };
         let method = registry
             .resolve_method(
                 method.name(),
                 model.coupling == CouplingModel::Ked,
-                model.coupling.name(),
+                &model_name,
             )
             .map_err(|m| c.value_error("integrator.method", m))?;
         let outputs = build_outputs(&c, &raw)?;
@@ -261,6 +276,8 @@ impl Scene {
             coupling: model.coupling,
             axial_stiffness,
             large_deflection,
+            actuator: control.actuator,
+            controller: control.controller,
         })
     }
 

@@ -38,6 +38,65 @@ pub struct SceneFile {
     /// What to compute and write.
     #[serde(default)]
     pub output: OutputConfig,
+    /// The sliders' actuators (docs/control.md): without `[control]`, what the commanded
+    /// motion is checked against (feasibility); with it, what drives the sliders.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actuators: Option<ActuatorsConfig>,
+    /// The control law of the sliders (docs/control.md): with it the sliders are degrees of
+    /// freedom driven by the actuators (coupled and nonlinear models).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub control: Option<ControlTable>,
+}
+
+/// `[actuators]`: one actuator spec for all three sliders.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ActuatorsConfig {
+    /// An ideal force: the command is the force on the slider.
+    Force {},
+    /// A servo motor driving the slider through a ball screw.
+    MotorBallscrew {
+        /// Rotor (with coupling and screw) inertia (kg m^2).
+        rotor_inertia: f64,
+        /// Screw lead (m/rev).
+        lead: f64,
+        /// Screw efficiency, in (0, 1].
+        efficiency: f64,
+        /// Peak torque (N m): the torque saturates here.
+        peak_torque: f64,
+        /// Continuous torque (N m): the RMS torque should stay below it.
+        continuous_torque: f64,
+        /// Largest motor speed (rev/s): reported, not enforced.
+        max_speed: f64,
+        /// Viscous friction at the motor shaft (N m s/rad).
+        #[serde(default)]
+        viscous_friction: f64,
+        /// Coulomb friction torque at the motor shaft (N m).
+        #[serde(default)]
+        coulomb_friction: f64,
+        /// Speed of the Coulomb friction's tanh smoothing (rev/s).
+        #[serde(default = "default_coulomb_smoothing")]
+        coulomb_smoothing: f64,
+    },
+}
+
+/// Default smoothing speed of the Coulomb friction (rev/s): 0.01 rev/s is 0.6 rpm, so the
+/// friction has its full value (within 0.1 %) above 0.04 rev/s (2.4 rpm), far below any
+/// working speed, while the right-hand side stays continuous through rest.
+pub const DEFAULT_COULOMB_SMOOTHING: f64 = 0.01;
+
+fn default_coulomb_smoothing() -> f64 {
+    DEFAULT_COULOMB_SMOOTHING
+}
+
+/// `[control]`: the registered control law `kind` and that law's own keys.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+pub struct ControlTable {
+    /// Registered control law (`pd`, `pid`, or one a program registered).
+    pub kind: String,
+    /// The law's own keys (each law reads and checks them).
+    #[serde(flatten)]
+    pub params: toml::Table,
 }
 
 /// Machine layout and rigid-body inertia.
@@ -510,11 +569,16 @@ pub enum OutputKind {
     Snapshots,
     /// `machine.svg`: geometry, reachable workspace, type-II singularity locus and path.
     Machine,
+    /// Slider and platform tracking errors (commanded minus actual).
+    Tracking,
+    /// The actuators' force commands and forces, and the motors' torque, speed and
+    /// saturation where a motor is modelled.
+    Actuators,
 }
 
 impl OutputKind {
     /// All kinds with their file-stem names.
-    pub const ALL: [(OutputKind, &'static str); 12] = [
+    pub const ALL: [(OutputKind, &'static str); 14] = [
         (OutputKind::Kinematics, "kinematics"),
         (OutputKind::DrivingForces, "driving_forces"),
         (OutputKind::JointReactions, "joint_reactions"),
@@ -527,6 +591,8 @@ impl OutputKind {
         (OutputKind::Viewer, "viewer"),
         (OutputKind::Snapshots, "snapshots"),
         (OutputKind::Machine, "machine"),
+        (OutputKind::Tracking, "tracking"),
+        (OutputKind::Actuators, "actuators"),
     ];
 
     /// The name used in scene files and output file names.
@@ -538,7 +604,8 @@ impl OutputKind {
             .unwrap_or("?")
     }
 
-    /// Whether this output needs the modal ODE integrated.
+    /// Whether this output needs the model integrated whatever the model (`actuators`
+    /// needs it only where the sliders are actuated: [`crate::Scene::integrates_model`]).
     pub fn needs_integration(self) -> bool {
         matches!(
             self,
@@ -548,6 +615,7 @@ impl OutputKind {
                 | OutputKind::ModalForces
                 | OutputKind::Viewer
                 | OutputKind::Snapshots
+                | OutputKind::Tracking
         )
     }
 }

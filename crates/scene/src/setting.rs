@@ -10,7 +10,7 @@
 
 use crate::error::ScenarioError;
 use crate::parse::parse_toml;
-use crate::registry::{BasisParams, Registry};
+use crate::registry::{BasisParams, Registry, TableParams};
 use crate::schema::SceneFile;
 
 /// Sets the dotted `key` (table keys and array indices from 0, e.g.
@@ -154,8 +154,9 @@ pub fn check_change(
 }
 
 /// The first schema error of the top-level entry `top` of `table`, put into an otherwise
-/// minimal complete scene; for the links, also the basis kind's own keys (reported only at
-/// or under `key`, since other basis errors may depend on keys set later).
+/// minimal complete scene; for the links and the control law, also the registered part's
+/// own keys (the basis kind's, the control law's; reported only at or under `key`, since
+/// other errors of the part may depend on keys set later).
 fn schema_error(
     registry: &Registry,
     table: &toml::Table,
@@ -179,12 +180,25 @@ fn schema_error(
         Ok(f) => f,
         Err(e) => return Some(e),
     };
-    if top != "links" {
-        return None;
-    }
-    let links = &parsed.links;
-    let params = BasisParams::new(file, &text, "links.basis", &links.basis.params);
-    match registry.build_basis(&params, &links.basis.kind, "links.modes", links.modes) {
+    // The registered parts read their own keys: the basis of the links, the control law.
+    let built = match top {
+        "links" => {
+            let links = &parsed.links;
+            let params = BasisParams::new(file, &text, "links.basis", &links.basis.params);
+            registry
+                .build_basis(&params, &links.basis.kind, "links.modes", links.modes)
+                .map(|_| ())
+        }
+        "control" => {
+            let control = parsed.control.as_ref()?;
+            let params = TableParams::new(file, &text, "control", &control.params);
+            registry
+                .build_controller(&params, &control.kind)
+                .map(|_| ())
+        }
+        _ => return None,
+    };
+    match built {
         Err(ScenarioError::Input {
             key: found,
             message,

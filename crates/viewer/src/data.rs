@@ -92,6 +92,11 @@ pub struct ViewerData {
     /// Coupled model only: actual minus rigid platform pose per frame (m, m, rad). The page
     /// draws the platform at `pose + a * deviation` with a user-set amplification `a`.
     pub deviation: Option<Vec<[f64; 3]>>,
+    /// Actuated sliders only: the commanded slider positions `rho_ref` per frame (m), where
+    /// `sliders` are the actual ones. The page draws each reference as a hollow block and
+    /// the actual slider at `rho_ref + a (rho - rho_ref)`, with the deviation's
+    /// amplification `a` (1 without a deviation).
+    pub reference_sliders: Option<Vec<[f64; 3]>>,
 }
 
 /// What is wrong with a [`ViewerData`]: the field, and where (frame, link, mode).
@@ -223,6 +228,10 @@ impl ViewerData {
         if let Some(deviation) = &self.deviation {
             check_len("deviation", deviation.len(), n)?;
             check_finite(|| "deviation".into(), deviation.iter().flatten())?;
+        }
+        if let Some(reference) = &self.reference_sliders {
+            check_len("reference_sliders", reference.len(), n)?;
+            check_finite(|| "reference_sliders".into(), reference.iter().flatten())?;
         }
         check_finite(|| "attachments".into(), self.attachments.iter().flatten())?;
         for (i, g) in self.guides.iter().enumerate() {

@@ -154,6 +154,9 @@ fn payload(data: &ViewerData, options: &ViewerOptions) -> Value {
             "axial": frame_axial,
             "frequency": frame_freq,
             "deviation": frame_deviation,
+            "reference_sliders": data.reference_sliders.as_ref().map(|r| {
+                pack_f32(kept.iter().flat_map(|&i| r[i]))
+            }),
         },
         "plots": {
             "xi": options.plot_xi,

@@ -45,6 +45,7 @@
 //!     pose: vec![[0.0, 0.0, 0.0]],
 //!     sliders: vec![[0.0; 3]],
 //!     deviation: None,
+//!     reference_sliders: None,
 //! };
 //! let html = viewer_html(&data).unwrap();
 //! assert!(html.starts_with("<!DOCTYPE html>") && !html.contains("__FLEXPRR_DATA__"));

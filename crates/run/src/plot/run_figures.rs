@@ -106,6 +106,7 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
             figure("Strain energy of the links").panel(panel(Axis::new("U", "J"), s)),
         ));
     }
+    out.extend(crate::control::figures(scene, result));
     out.retain(|(_, f)| f.panels.iter().any(|p| !p.series.is_empty()));
     out
 }

@@ -108,5 +108,6 @@ pub fn paper_scene(duration: f64, step: f64, with_buckling: bool) -> ViewerData 
         pose,
         sliders,
         deviation: None,
+        reference_sliders: None,
     }
 }

@@ -1,0 +1,262 @@
+//! Feasibility of the commanded motion for the scene's motors (docs/control.md,
+//! "Feasibility"): from the rigid inverse dynamics at the output times, the force each
+//! slider's actuator must deliver, `F_i = F_a_i_rigid + m_r rho_i''` (the rigid driving
+//! force, slider mass included, plus the rotor's reflected inertia), and through
+//! [`Actuator::required`] the motor torque and speed; compared with the peak torque, the
+//! continuous torque (against the RMS torque) and the largest speed.
+
+use flexprr_control::{Actuator, MotorRatings};
+use flexprr_dynamics::{DynamicsError, Machine};
+use serde_json::{Value, json};
+
+use super::stats::{Peak, first_crossing, margin, num, number, rms, sig};
+use crate::samples::Samples;
+
+/// What the actuators must deliver along the commanded rigid motion, per leg, at the
+/// samples' times.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Required {
+    /// Force on the slider (N): `F_a_rigid + m_r rho''`.
+    pub(crate) force: [Vec<f64>; 3],
+    /// Motor torque (N m) and speed (rev/s), where a motor is modelled.
+    pub(crate) motor: Option<([Vec<f64>; 3], [Vec<f64>; 3])>,
+    /// The peak torque the torque saturates at, where a motor is modelled.
+    pub(crate) peak_torque: Option<f64>,
+}
+
+/// The requirement of the commanded motion of `samples` on `actuator` (the same on every
+/// leg).
+///
+/// # Errors
+/// A singular rigid inverse dynamics at an output time.
+pub(crate) fn required(
+    actuator: &dyn Actuator,
+    samples: &mut Samples,
+    machine: &Machine,
+) -> Result<Required, DynamicsError> {
+    let reactions = samples.with_reactions(machine)?.to_vec();
+    let reflected = actuator.reflected_mass();
+    let force: [Vec<f64>; 3] = std::array::from_fn(|i| {
+        samples
+            .states
+            .iter()
+            .zip(&reactions)
+            .map(|(state, r)| r.driving_force[i] + reflected * state.legs[i].rho_ddot)
+            .collect()
+    });
+    let mut torque: [Vec<f64>; 3] = Default::default();
+    let mut speed: [Vec<f64>; 3] = Default::default();
+    let mut motor = true;
+    for i in 0..3 {
+        for (f, state) in force[i].iter().zip(&samples.states) {
+            match actuator.required(*f, state.legs[i].rho_dot) {
+                Some((tau, n)) => {
+                    torque[i].push(tau);
+                    speed[i].push(n);
+                }
+                None => motor = false,
+            }
+        }
+    }
+    Ok(Required {
+        force,
+        motor: motor.then_some((torque, speed)),
+        peak_torque: actuator.ratings().map(|r| r.peak_torque),
+    })
+}
+
+/// One leg's requirement against the ratings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LegRequirement {
+    /// Largest required torque magnitude (N m) and when.
+    pub peak_torque: Peak,
+    /// RMS of the required torque over the output times (N m).
+    pub rms_torque: f64,
+    /// Largest required motor speed magnitude (rev/s) and when.
+    pub peak_speed: Peak,
+    /// First time the required torque exceeds the peak torque (s).
+    pub over_torque: Option<f64>,
+    /// First time the required speed exceeds the largest speed (s).
+    pub over_speed: Option<f64>,
+}
+
+impl LegRequirement {
+    /// `peak_torque / max |tau|`, `continuous_torque / rms(tau)`, `max_speed / max |n|`.
+    pub fn margins(&self, r: &MotorRatings) -> [Option<f64>; 3] {
+        [
+            margin(r.peak_torque, self.peak_torque.value),
+            margin(r.continuous_torque, self.rms_torque),
+            margin(r.max_speed, self.peak_speed.value),
+        ]
+    }
+}
+
+/// The commanded motion against the motors' ratings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Feasibility {
+    /// The actuator's name (`motor_ballscrew`).
+    pub actuator: String,
+    /// Its ratings.
+    pub ratings: MotorRatings,
+    /// Each leg's requirement.
+    pub legs: [LegRequirement; 3],
+    /// Time span the requirement covers (s): the output times reached.
+    pub span: (f64, f64),
+}
+
+/// The earliest of per-leg event times, with its leg (0-based).
+fn earliest(times: impl Iterator<Item = Option<f64>>) -> Option<(f64, usize)> {
+    times
+        .enumerate()
+        .filter_map(|(i, t)| t.map(|t| (t, i)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+impl Feasibility {
+    /// The check of `required` on `actuator`, sampled at `t`; `None` when the actuator has
+    /// no ratings or no motor, or there is no sample.
+    pub(crate) fn of(actuator: &dyn Actuator, t: &[f64], required: &Required) -> Option<Self> {
+        let ratings = actuator.ratings()?;
+        let (torque, speed) = required.motor.as_ref()?;
+        let (&t0, &t1) = (t.first()?, t.last()?);
+        let legs = std::array::from_fn(|i| LegRequirement {
+            peak_torque: Peak::of(t, &torque[i]),
+            rms_torque: rms(&torque[i]),
+            peak_speed: Peak::of(t, &speed[i]),
+            over_torque: first_crossing(t, &torque[i], ratings.peak_torque),
+            over_speed: first_crossing(t, &speed[i], ratings.max_speed),
+        });
+        Some(Self {
+            actuator: actuator.name().to_string(),
+            ratings,
+            legs,
+            span: (t0, t1),
+        })
+    }
+
+    /// Whether every leg stays within every rating.
+    pub fn feasible(&self) -> bool {
+        self.legs.iter().all(|l| {
+            l.margins(&self.ratings)
+                .iter()
+                .all(|m| m.is_none_or(|m| m >= 1.0))
+        })
+    }
+
+    /// The first time and leg (0-based) at which the required speed exceeds the rating.
+    pub fn first_over_speed(&self) -> Option<(f64, usize)> {
+        earliest(self.legs.iter().map(|l| l.over_speed))
+    }
+
+    /// The first time and leg (0-based) at which the required torque exceeds the peak.
+    pub fn first_over_torque(&self) -> Option<(f64, usize)> {
+        earliest(self.legs.iter().map(|l| l.over_torque))
+    }
+
+    /// One warning per rating the motion exceeds, naming the first time and leg.
+    pub fn warnings(&self) -> Vec<String> {
+        let r = &self.ratings;
+        let mut out = Vec::new();
+        let worst = |f: &dyn Fn(&LegRequirement) -> f64| {
+            (0..3).fold(0, |best, i| {
+                if f(&self.legs[i]) > f(&self.legs[best]) {
+                    i
+                } else {
+                    best
+                }
+            })
+        };
+        if let Some((t, leg)) = self.first_over_speed() {
+            let w = worst(&|l| l.peak_speed.value);
+            let p = self.legs[w].peak_speed;
+            out.push(format!(
+                "infeasible motion: the commanded motion needs its {} motors to turn faster \
+                 than their max_speed of {} rev/s ({} rpm) from t = {} ms on leg {}, up to {} \
+                 rev/s ({} rpm) on leg {} at t = {} ms",
+                self.actuator,
+                sig(r.max_speed),
+                sig(60.0 * r.max_speed),
+                sig(1e3 * t),
+                leg + 1,
+                sig(p.value),
+                sig(60.0 * p.value),
+                w + 1,
+                sig(1e3 * p.t),
+            ));
+        }
+        if let Some((t, leg)) = self.first_over_torque() {
+            let w = worst(&|l| l.peak_torque.value);
+            let p = self.legs[w].peak_torque;
+            out.push(format!(
+                "infeasible motion: the commanded motion needs more torque than the {} motors' \
+                 peak_torque of {} N m from t = {} ms on leg {}, up to {} N m on leg {} at t = \
+                 {} ms",
+                self.actuator,
+                sig(r.peak_torque),
+                sig(1e3 * t),
+                leg + 1,
+                sig(p.value),
+                w + 1,
+                sig(1e3 * p.t),
+            ));
+        }
+        let w = worst(&|l| l.rms_torque);
+        let rms_torque = self.legs[w].rms_torque;
+        if rms_torque > r.continuous_torque {
+            out.push(format!(
+                "the commanded motion's RMS torque reaches {} N m on leg {} ({} ms to {} ms), \
+                 above the {} motors' continuous_torque of {} N m: they overheat if the \
+                 motion goes on",
+                sig(rms_torque),
+                w + 1,
+                sig(1e3 * self.span.0),
+                sig(1e3 * self.span.1),
+                self.actuator,
+                sig(r.continuous_torque)
+            ));
+        }
+        out
+    }
+
+    /// The `feasibility` section of `summary.json`.
+    pub fn to_json(&self) -> Value {
+        let r = &self.ratings;
+        let legs: Vec<Value> = self
+            .legs
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let [peak, continuous, speed] = l.margins(r);
+                json!({
+                    "leg": i + 1,
+                    "peak_torque_N_m": num(l.peak_torque.value),
+                    "t_peak_torque_s": num(l.peak_torque.t),
+                    "rms_torque_N_m": num(l.rms_torque),
+                    "peak_speed_rev_s": num(l.peak_speed.value),
+                    "t_peak_speed_s": num(l.peak_speed.t),
+                    "peak_torque_margin": number(peak),
+                    "continuous_torque_margin": number(continuous),
+                    "speed_margin": number(speed),
+                    "first_over_peak_torque_s": number(l.over_torque),
+                    "first_over_max_speed_s": number(l.over_speed),
+                })
+            })
+            .collect();
+        let event = |e: Option<(f64, usize)>| {
+            e.map_or(Value::Null, |(t, leg)| json!({ "t_s": t, "leg": leg + 1 }))
+        };
+        json!({
+            "actuator": self.actuator,
+            "source": "rigid inverse dynamics of the commanded motion at the output times",
+            "ratings": {
+                "peak_torque_N_m": num(r.peak_torque),
+                "continuous_torque_N_m": num(r.continuous_torque),
+                "max_speed_rev_s": num(r.max_speed),
+            },
+            "feasible": self.feasible(),
+            "first_over_max_speed": event(self.first_over_speed()),
+            "first_over_peak_torque": event(self.first_over_torque()),
+            "legs": legs,
+        })
+    }
+}

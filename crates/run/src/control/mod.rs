@@ -1,0 +1,138 @@
+//! The machine under control in a run (docs/control.md): the `tracking` and `actuators`
+//! tables, the feasibility of the commanded motion for the scene's motors, the servo
+//! summary of an actuated run, their warnings, `summary.json` sections and figures.
+//!
+//! Everything here reads the run's shared samples (the commanded motion, its inverse
+//! kinematics and rigid inverse dynamics) and the model's [`MachineSnapshot`]s; nothing asks
+//! which model ran. A snapshot with [`MachineSnapshot::actuators`] is an actuated model's; a
+//! snapshot without is a model whose sliders are prescribed.
+
+mod feasibility;
+mod figures;
+mod servo;
+mod stats;
+mod tables;
+
+use flexprr_dynamics::{DynamicsError, MachineSnapshot};
+use flexprr_scene::{OutputKind, Scene};
+use serde_json::Value;
+
+pub use feasibility::{Feasibility, LegRequirement};
+pub(crate) use figures::figures;
+pub use servo::{PlatformSummary, ServoSummary, SliderSummary};
+pub use stats::Peak;
+
+use crate::samples::Samples;
+use crate::table::RunResult;
+
+/// What a run found about its actuators and control: the feasibility of the commanded
+/// motion for the scene's motors, and the servo summary of an actuated run.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ControlReport {
+    /// The commanded rigid motion against the motors' ratings, when the scene names a
+    /// motor (`[actuators] kind = "motor_ballscrew"`), for every model.
+    pub feasibility: Option<Feasibility>,
+    /// Tracking errors and actuator loads of a run whose sliders are actuated.
+    pub servo: Option<ServoSummary>,
+}
+
+/// Whether a run of `scene` needs the shared samples for control outputs or checks.
+pub(crate) fn needs_samples(scene: &Scene) -> bool {
+    scene.outputs.contains(&OutputKind::Tracking)
+        || scene.outputs.contains(&OutputKind::Actuators)
+        || scene.actuator.is_some()
+}
+
+/// Whether a run of `scene` needs the model's snapshots for control outputs or checks.
+pub(crate) fn needs_snapshots(scene: &Scene) -> bool {
+    scene.outputs.contains(&OutputKind::Tracking)
+        || scene.outputs.contains(&OutputKind::Actuators)
+        || scene.controller.is_some()
+}
+
+/// The control outputs of a run into `result`: the `tracking` and `actuators` tables when
+/// requested, the feasibility check when the scene names a motor, the servo summary when
+/// the model's sliders are actuated, and their warnings. `snapshots` are the integrated
+/// model's at the samples' times, when it was integrated.
+///
+/// # Errors
+/// A singular rigid inverse dynamics at an output time (the commanded motion's).
+pub(crate) fn produce(
+    scene: &Scene,
+    samples: &mut Samples,
+    snapshots: Option<&[MachineSnapshot]>,
+    result: &mut RunResult,
+) -> Result<(), DynamicsError> {
+    let actuated = snapshots.filter(|s| s.first().is_some_and(|p| p.actuators.is_some()));
+    let motor = scene.actuator.as_deref().filter(|a| a.ratings().is_some());
+    let motor_required = motor
+        .map(|m| feasibility::required(m, samples, &scene.machine))
+        .transpose()?;
+    if scene.outputs.contains(&OutputKind::Tracking) {
+        if let Some(snapshots) = snapshots {
+            result.tables.push(tables::tracking(samples, snapshots));
+        }
+    }
+    if scene.outputs.contains(&OutputKind::Actuators) {
+        let table = match (actuated, &motor_required) {
+            (Some(snapshots), _) => tables::actuators_of_model(snapshots),
+            (None, Some(required)) => tables::actuators_required(samples, required),
+            (None, None) => {
+                let ideal = flexprr_control::IdealForce;
+                let actuator = scene.actuator.as_deref().unwrap_or(&ideal);
+                let required = feasibility::required(actuator, samples, &scene.machine)?;
+                tables::actuators_required(samples, &required)
+            }
+        };
+        result.tables.push(table);
+    }
+    if let Some(motor) = motor {
+        // The commanded motion is known over the whole span even when the run stopped
+        // early: check all of it (what was computed when the rigid dynamics fails there).
+        let whole = (samples.len() < scene.output_times.len())
+            .then(|| whole_span_requirement(scene, motor))
+            .flatten();
+        let (t, required) = match (&whole, &motor_required) {
+            (Some((t, r)), _) => (t.as_slice(), Some(r)),
+            (None, r) => (samples.t.as_slice(), r.as_ref()),
+        };
+        if let Some(f) = required.and_then(|r| Feasibility::of(motor, t, r)) {
+            result.warnings.extend(f.warnings());
+            result.control.feasibility = Some(f);
+        }
+    }
+    if let Some(snapshots) = actuated {
+        let summary = ServoSummary::of(scene, samples, snapshots);
+        result.warnings.extend(summary.warnings());
+        result.control.servo = Some(summary);
+    }
+    Ok(())
+}
+
+/// The requirement of the commanded motion on `motor` at every output time of `scene`, with
+/// the times; `None` when the rigid inverse dynamics fails somewhere.
+fn whole_span_requirement(
+    scene: &Scene,
+    motor: &dyn flexprr_control::Actuator,
+) -> Option<(Vec<f64>, feasibility::Required)> {
+    let mut samples = Samples::new(scene, &scene.output_times).ok()?;
+    let required = feasibility::required(motor, &mut samples, &scene.machine).ok()?;
+    Some((samples.t, required))
+}
+
+/// The `control` and `feasibility` sections of `summary.json` (`null` where the run has
+/// none).
+pub fn summary_sections(result: &RunResult) -> (Value, Value) {
+    (
+        result
+            .control
+            .servo
+            .as_ref()
+            .map_or(Value::Null, ServoSummary::to_json),
+        result
+            .control
+            .feasibility
+            .as_ref()
+            .map_or(Value::Null, Feasibility::to_json),
+    )
+}

@@ -1,0 +1,105 @@
+//! `[actuators]` and `[control]` (docs/control.md): the sliders' actuator and control law,
+//! and the rules that tie them to the model.
+//!
+//! * `[control]` makes the sliders degrees of freedom driven by the actuators: only the
+//!   coupled and nonlinear models have them (the KED model prescribes the platform, and so
+//!   the sliders). Without `[actuators]` the actuator is the ideal force.
+//! * `[actuators]` without `[control]` is allowed for every model: the sliders stay on their
+//!   commanded path, and a motor's ratings are what the motion is checked against
+//!   (feasibility).
+
+use std::sync::Arc;
+
+use flexprr_control::{Actuator, Controller, IdealForce, MotorBallScrew, MotorRatings};
+use flexprr_dynamics::CouplingModel;
+
+use crate::error::ScenarioError;
+use crate::registry::{Registry, TableParams};
+use crate::scene::Checker;
+use crate::schema::{ActuatorsConfig, SceneFile};
+
+/// What `[actuators]` and `[control]` build.
+pub(crate) struct ControlParts {
+    /// The actuator of every slider: `[actuators]`, or the ideal force under `[control]`.
+    pub(crate) actuator: Option<Arc<dyn Actuator>>,
+    /// The control law, when the sliders are actuated.
+    pub(crate) controller: Option<Arc<dyn Controller>>,
+}
+
+/// `[actuators]` and `[control]`, checked against the scene's model.
+pub(crate) fn build_control(
+    c: &Checker<'_>,
+    registry: &Registry,
+    raw: &SceneFile,
+    coupling: CouplingModel,
+) -> Result<ControlParts, ScenarioError> {
+    let actuator = raw
+        .actuators
+        .as_ref()
+        .map(|a| build_actuator(c, a))
+        .transpose()?;
+    let controller = match &raw.control {
+        None => None,
+        Some(table) => {
+            if coupling == CouplingModel::Ked {
+                return Err(c.error(
+                    "control",
+                    "the KED model prescribes the platform motion, and with it the sliders, so \
+                     there is nothing to control: set model.coupling = \"coupled\" or \
+                     \"nonlinear\" (the sliders then move under the actuators), or remove \
+                     [control] ([actuators] alone checks the motion against the motors)",
+                ));
+            }
+            let params = TableParams::new(c.file, c.text, "control", &table.params);
+            Some(registry.build_controller(&params, &table.kind)?)
+        }
+    };
+    let actuator = match (actuator, &controller) {
+        (None, Some(_)) => Some(Arc::new(IdealForce) as Arc<dyn Actuator>),
+        (actuator, _) => actuator,
+    };
+    Ok(ControlParts {
+        actuator,
+        controller,
+    })
+}
+
+/// One actuator from `[actuators]`, its parameters checked at their keys.
+fn build_actuator(
+    c: &Checker<'_>,
+    config: &ActuatorsConfig,
+) -> Result<Arc<dyn Actuator>, ScenarioError> {
+    match *config {
+        ActuatorsConfig::Force {} => Ok(Arc::new(IdealForce)),
+        ActuatorsConfig::MotorBallscrew {
+            rotor_inertia,
+            lead,
+            efficiency,
+            peak_torque,
+            continuous_torque,
+            max_speed,
+            viscous_friction,
+            coulomb_friction,
+            coulomb_smoothing,
+        } => {
+            let motor = MotorBallScrew {
+                rotor_inertia,
+                lead,
+                efficiency,
+                ratings: MotorRatings {
+                    peak_torque,
+                    continuous_torque,
+                    max_speed,
+                },
+                viscous_friction,
+                coulomb_friction,
+                coulomb_smoothing,
+            }
+            .validated()
+            .map_err(|e| {
+                TableParams::new(c.file, c.text, "actuators", &toml::Table::new()).control_error(e)
+            })?;
+            Ok(Arc::new(motor))
+        }
+    }
+}

@@ -1,0 +1,132 @@
+//! Control laws that a scene's `[control]` table names by `kind`: the factory trait and the
+//! built-in `pd` and `pid` (docs/control.md).
+
+use std::sync::Arc;
+
+use flexprr_control::{Controller, Pid};
+use serde::Deserialize;
+
+use crate::error::ScenarioError;
+use crate::registry::TableParams;
+
+/// A kind of control law that a scene can name in `control.kind`: it reads its own keys from
+/// the `[control]` table (everything but `kind`) and builds the law.
+///
+/// Register one with [`crate::Registry::register_controller`] and load scenes with
+/// [`crate::Scene::load_with`].
+///
+/// ```
+/// use std::sync::Arc;
+/// use flexprr_control::{ControlInput, Controller};
+/// use flexprr_scene::{ControllerFactory, Registry, ScenarioError, TableParams};
+///
+/// /// A proportional law on the position error alone, with its gain `k` (N/m).
+/// #[derive(Debug)]
+/// struct Proportional(f64);
+/// impl Controller for Proportional {
+///     fn command(&self, input: &ControlInput<'_>, _: &[f64], force: &mut [f64; 3], _: &mut [f64]) {
+///         for i in 0..3 {
+///             force[i] = self.0 * (input.reference[i].position - input.measured[i].position);
+///         }
+///     }
+/// }
+///
+/// #[derive(serde::Deserialize)]
+/// #[serde(deny_unknown_fields)]
+/// struct Keys {
+///     k: f64,
+/// }
+///
+/// struct ProportionalFactory;
+/// impl ControllerFactory for ProportionalFactory {
+///     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError> {
+///         let keys: Keys = params.parse()?;
+///         if !(keys.k.is_finite() && keys.k > 0.0) {
+///             return Err(params.error("k", format!("expected a positive gain (N/m), got {}", keys.k)));
+///         }
+///         Ok(Arc::new(Proportional(keys.k)))
+///     }
+/// }
+///
+/// let mut registry = Registry::default();
+/// registry.register_controller("p", Arc::new(ProportionalFactory));
+/// assert!(registry.controller_names().contains(&"p"));
+/// ```
+pub trait ControllerFactory: Send + Sync {
+    /// Builds the law from the keys of its table.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] naming the offending key (use [`TableParams::error`], or
+    /// [`TableParams::control_error`] for a [`flexprr_control::ControlError`]).
+    fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError>;
+}
+
+/// `feedforward`: the rigid inverse-dynamics force of the commanded motion, or none.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+enum Feedforward {
+    /// The rigid-body driving force of the commanded motion (with the actuators' reflected
+    /// inertia).
+    #[default]
+    Rigid,
+    /// No feedforward: the feedback does all the work.
+    None,
+}
+
+/// The keys of `kind = "pd"`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PdKeys {
+    kp: f64,
+    kd: f64,
+    #[serde(default)]
+    feedforward: Feedforward,
+    #[serde(default)]
+    period: f64,
+}
+
+/// The keys of `kind = "pid"`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PidKeys {
+    kp: f64,
+    kd: f64,
+    ki: f64,
+    #[serde(default)]
+    feedforward: Feedforward,
+    #[serde(default)]
+    period: f64,
+}
+
+/// The built-in `pd`: `F = F_ff + kp e + kd e'` on each slider ([`Pid::pd`]).
+pub(crate) struct PdFactory;
+
+impl ControllerFactory for PdFactory {
+    fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError> {
+        if params.table().contains_key("ki") {
+            return Err(params.error(
+                "ki",
+                "the pd law has no integral term: use kind = \"pid\" for an integral gain",
+            ));
+        }
+        let keys: PdKeys = params.parse()?;
+        let feedforward = keys.feedforward == Feedforward::Rigid;
+        let law = Pid::pd(keys.kp, keys.kd, feedforward, keys.period)
+            .map_err(|e| params.control_error(e))?;
+        Ok(Arc::new(law))
+    }
+}
+
+/// The built-in `pid`: [`PdFactory`]'s law plus `ki` times the error's integral, with
+/// conditional-integration anti-windup ([`Pid::pid`]).
+pub(crate) struct PidFactory;
+
+impl ControllerFactory for PidFactory {
+    fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError> {
+        let keys: PidKeys = params.parse()?;
+        let feedforward = keys.feedforward == Feedforward::Rigid;
+        let law = Pid::pid(keys.kp, keys.kd, keys.ki, feedforward, keys.period)
+            .map_err(|e| params.control_error(e))?;
+        Ok(Arc::new(law))
+    }
+}
