@@ -31,14 +31,14 @@ impl Pid {
     /// # Errors
     /// A negative or non-finite gain or period.
     pub fn pd(kp: f64, kd: f64, feedforward: bool, period: f64) -> Result<Self, ControlError> {
-        Self::pid(kp, kd, 0.0, feedforward, period)
+        Self::new(kp, kd, 0.0, feedforward, period)
     }
 
     /// A PID law: as [`Pid::pd`] with the integral gain `ki` (N/(m s)).
     ///
     /// # Errors
     /// A negative or non-finite gain or period.
-    pub fn pid(
+    pub fn new(
         kp: f64,
         kd: f64,
         ki: f64,
@@ -132,7 +132,7 @@ mod tests {
 
     #[test]
     fn the_law_is_feedforward_plus_kp_e_plus_kd_e_dot_plus_ki_integral() {
-        let pid = Pid::pid(2.0e5, 400.0, 1.0e6, true, 0.0).unwrap();
+        let pid = Pid::new(2.0e5, 400.0, 1.0e6, true, 0.0).unwrap();
         let (mut force, mut rates) = ([0.0; 3], [0.0; 3]);
         pid.command(&input(1e-3, -2e-2, 1e9), &[1e-5; 3], &mut force, &mut rates);
         let expected = 10.0 + 2.0e5 * 1e-3 + 400.0 * -2e-2 + 1.0e6 * 1e-5;
@@ -146,7 +146,7 @@ mod tests {
 
     #[test]
     fn the_integral_holds_while_saturated_and_winding_up() {
-        let pid = Pid::pid(1.0e5, 0.0, 1.0e6, false, 0.0).unwrap();
+        let pid = Pid::new(1.0e5, 0.0, 1.0e6, false, 0.0).unwrap();
         let (mut force, mut rates) = ([0.0; 3], [1.0; 3]);
         // Command 1e5 * 1e-2 = 1000 N beyond a 500 N limit, error of the same sign: hold.
         pid.command(&input(1e-2, 0.0, 500.0), &[0.0; 3], &mut force, &mut rates);
@@ -168,7 +168,7 @@ mod tests {
 
     #[test]
     fn bad_gains_are_refused_with_their_name() {
-        let e = Pid::pid(-1.0, 0.0, 0.0, true, 0.0).unwrap_err();
+        let e = Pid::new(-1.0, 0.0, 0.0, true, 0.0).unwrap_err();
         assert!(e.to_string().starts_with("kp = -1"), "{e}");
         let e = Pid::pd(1.0, f64::NAN, true, 0.0).unwrap_err();
         assert!(e.to_string().starts_with("kd = NaN"), "{e}");

@@ -20,6 +20,9 @@ pub struct Actuation {
     pub actuators: [Arc<dyn Actuator>; 3],
 }
 
+/// The force commands of the three sliders and what their actuators did with them.
+pub(crate) type Commands = ([f64; 3], [ActuatorOutput; 3]);
+
 /// One sample of a sampled controller: from `t` on the command `command` is held.
 #[derive(Debug, Clone)]
 struct Sample {
@@ -225,7 +228,7 @@ impl Actuated {
         measured: [SliderState; 3],
         states: &[f64],
         rates: &mut [f64],
-    ) -> Result<([f64; 3], [ActuatorOutput; 3]), DynamicsError> {
+    ) -> Result<Commands, DynamicsError> {
         let reference = Reference::of(machine, self, rigid, t)?;
         let input = self.input(t, &reference, measured);
         let command = self.command(&input, states, rates);

@@ -35,7 +35,7 @@ fn machine(youngs_modulus: f64) -> Arc<Machine> {
 fn actuation(kp: f64, kd: f64, ki: f64, period: f64) -> Actuation {
     let force: Arc<dyn Actuator> = Arc::new(IdealForce);
     Actuation {
-        controller: Arc::new(Pid::pid(kp, kd, ki, true, period).unwrap()),
+        controller: Arc::new(Pid::new(kp, kd, ki, true, period).unwrap()),
         actuators: [force.clone(), force.clone(), force],
     }
 }

@@ -33,8 +33,11 @@ impl Complex {
     pub fn scale(self, s: f64) -> Self {
         Self::new(self.re * s, self.im * s)
     }
-    /// `self / other`.
-    pub fn div(self, other: Self) -> Self {
+}
+
+impl std::ops::Div for Complex {
+    type Output = Self;
+    fn div(self, other: Self) -> Self {
         let d = other.re * other.re + other.im * other.im;
         Self::new(
             (self.re * other.re + self.im * other.im) / d,
@@ -100,7 +103,7 @@ pub fn frequency_response(
         .flat_map(|i| (0..n).map(move |j| (i, j)))
         .map(|(i, j)| lin.a[(i, j)].abs())
         .fold(0.0, f64::max);
-    if !(error <= 1e-6 * scale.max(f64::MIN_POSITIVE)) {
+    if error.is_nan() || error > 1e-6 * scale.max(f64::MIN_POSITIVE) {
         return Err(LinearError::Numerics(format!(
             "A is too close to defective for a modal frequency response (reconstruction error {error:.1e} of {scale:.1e})"
         )));

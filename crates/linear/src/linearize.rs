@@ -55,13 +55,16 @@ fn step(y: f64) -> f64 {
     RELATIVE_STEP * y.abs().max(STEP_FLOOR)
 }
 
+/// A function of the state written into a slice, or the model's failure.
+type StateFunction<'a> = dyn FnMut(&[f64], &mut [f64]) -> Result<(), LinearError> + 'a;
+
 /// `(g(y + h e_j) - g(y - h e_j)) / 2h` extrapolated from `h` and `h / 2`, for every `j` of
 /// `columns`, written column by column by `put(j, derivative)`.
 fn differentiate(
     y: &[f64],
     columns: std::ops::Range<usize>,
     width: usize,
-    g: &mut dyn FnMut(&[f64], &mut [f64]) -> Result<(), LinearError>,
+    g: &mut StateFunction<'_>,
     put: &mut dyn FnMut(usize, &[f64]),
 ) -> Result<(), LinearError> {
     let mut probe = y.to_vec();

@@ -79,5 +79,5 @@ fn normalised(c: &Mat<f64>, v: &[Complex]) -> Vec<Complex> {
     if largest.norm() <= 0.0 {
         return seen;
     }
-    seen.iter().map(|s| s.div(largest)).collect()
+    seen.iter().map(|s| *s / largest).collect()
 }

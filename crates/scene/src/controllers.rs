@@ -125,7 +125,7 @@ impl ControllerFactory for PidFactory {
     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError> {
         let keys: PidKeys = params.parse()?;
         let feedforward = keys.feedforward == Feedforward::Rigid;
-        let law = Pid::pid(keys.kp, keys.kd, keys.ki, feedforward, keys.period)
+        let law = Pid::new(keys.kp, keys.kd, keys.ki, feedforward, keys.period)
             .map_err(|e| params.control_error(e))?;
         Ok(Arc::new(law))
     }

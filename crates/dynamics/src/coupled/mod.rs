@@ -52,7 +52,7 @@ use nalgebra::Vector2;
 
 use crate::actuation::{Actuated, Actuation};
 use crate::{DynamicsError, Machine, ModalDamping};
-use flexprr_control::{ActuatorOutput, SliderState};
+use flexprr_control::SliderState;
 
 mod kinetics;
 mod links;
@@ -552,7 +552,7 @@ impl CoupledSystem {
         y: &[f64],
         rigid: &flexprr_kinematics::MachineKinematics,
         rates: &mut [f64],
-    ) -> Result<Option<([f64; 3], [ActuatorOutput; 3])>, DynamicsError> {
+    ) -> Result<Option<crate::actuation::Commands>, DynamicsError> {
         let Some(actuated) = self.actuated.as_ref() else {
             return Ok(None);
         };

@@ -306,10 +306,15 @@ struct Slider<'a> {
 impl Slider<'_> {
     /// Row of slider `i`'s equation of motion `(m_s + m_r) r_i + F_B_i . u_i = F_i` in the
     /// unknowns `(s, m, r)`; returns its right-hand side. With `F_C = T e + S n` and the
-    /// link's inertia force, `F_B . u = m r + c_b b'' + sin(a - b) k - cos(a - b) T
-    /// - sin(a - b) S + c_0` where `c_b = (m l / 2) sin(a - b) - cos(a - b) m_psi.eta`,
-    /// `c_0 = -(m l / 2) b'^2 cos(a - b) - b'^2 sin(a - b) m_psi.eta - 2 b' cos(a - b)
-    /// m_psi.eta'` and `k = m_psi . eta''` (projected like `s` and `m`).
+    /// link's inertia force,
+    ///
+    /// ```text
+    /// F_B . u = m r + c_b b'' + sin(a - b) k - cos(a - b) T - sin(a - b) S + c_0
+    /// c_b = (m l / 2) sin(a - b) - cos(a - b) m_psi.eta
+    /// c_0 = -(m l / 2) b'^2 cos(a - b) - b'^2 sin(a - b) m_psi.eta - 2 b' cos(a - b) m_psi.eta'
+    /// ```
+    ///
+    /// with `k = m_psi . eta''` (projected like `s` and `m`).
     #[allow(clippy::too_many_arguments)]
     fn row(
         &self,

@@ -37,7 +37,7 @@ use super::element::{CorotationalElement, wrap_angle};
 use crate::actuation::{Actuated, Actuation};
 use crate::model::ActuatorState;
 use crate::{DynamicsError, Machine};
-use flexprr_control::{ActuatorOutput, SliderState};
+use flexprr_control::SliderState;
 use flexprr_kinematics::MachineState;
 
 /// Model switches of a [`NonlinearSystem`].
@@ -810,7 +810,7 @@ impl NonlinearSystem {
         y: &[f64],
         frame: &Frame,
         rates: &mut [f64],
-    ) -> Result<Option<([f64; 3], [ActuatorOutput; 3])>, DynamicsError> {
+    ) -> Result<Option<crate::actuation::Commands>, DynamicsError> {
         let Some(actuated) = self.actuated.as_ref() else {
             return Ok(None);
         };
@@ -878,8 +878,7 @@ impl NonlinearSystem {
             link_strain_energy: [0.0; 3],
             slider_power: 0.0,
         };
-        for i in 0..3 {
-            let link = &self.links[i];
+        for (i, link) in self.links.iter().enumerate() {
             let f = &self.forces[i * stride..(i + 1) * stride];
             let chord = frame.c[i][0] - frame.b[i][0];
             let e = chord.normalize();

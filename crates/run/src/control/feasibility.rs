@@ -12,6 +12,9 @@ use serde_json::{Value, json};
 use super::stats::{Peak, first_crossing, margin, num, number, rms, sig};
 use crate::samples::Samples;
 
+/// Per leg, a time series.
+type PerLeg = [Vec<f64>; 3];
+
 /// What the actuators must deliver along the commanded rigid motion, per leg, at the
 /// samples' times.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,7 +22,7 @@ pub(crate) struct Required {
     /// Force on the slider (N): `F_a_rigid + m_r rho''`.
     pub(crate) force: [Vec<f64>; 3],
     /// Motor torque (N m) and speed (rev/s), where a motor is modelled.
-    pub(crate) motor: Option<([Vec<f64>; 3], [Vec<f64>; 3])>,
+    pub(crate) motor: Option<(PerLeg, PerLeg)>,
     /// The peak torque the torque saturates at, where a motor is modelled.
     pub(crate) peak_torque: Option<f64>,
 }
