@@ -14,6 +14,7 @@ pub mod control;
 mod error;
 pub mod guard;
 mod integrate;
+pub mod linear;
 mod output;
 pub mod output_dir;
 mod outputs;
