@@ -66,6 +66,11 @@ pub struct WorkPrecisionArgs {
     /// Write into a non-empty directory that flexprr did not write, next to its files.
     #[arg(long)]
     pub force: bool,
+    /// Another scene measured side by side in the same run, against its own reference
+    /// (repeatable): e.g. the actuated `configs/servo_f20.toml` beside the prescribed
+    /// `configs/coupled_f20.toml`. Its rows are labelled with its scene name.
+    #[arg(long)]
+    pub compare: Vec<PathBuf>,
 }
 
 /// Measures, merges the peers' rows and writes `work_precision.csv`, `work_precision.svg`,
@@ -88,7 +93,13 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     for path in &args.peers {
         peers.extend(read_csv(path).map_err(failure)?);
     }
-    let (mut rows, failures) = measure_printed(&scene, &reference, &config)?;
+    let (mut rows, mut failures) = measure_printed(&scene, &reference, &config)?;
+    if !args.compare.is_empty() {
+        label_with_scene(&mut rows, &scene);
+        let (more, more_failures) = measure_compared(&args, measure_name)?;
+        rows.extend(more);
+        failures.extend(more_failures);
+    }
     let measured = rows.len();
     rows.extend(peers);
     let report = Report {
@@ -97,7 +108,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         failures: &failures,
         measure_name,
         reference_line: reference_line.as_deref(),
-        side_by_side: !config.models.is_empty(),
+        side_by_side: !config.models.is_empty() || !args.compare.is_empty(),
         target_error: args.target_error,
     };
     report.write_tables(&out)?;
@@ -421,6 +432,7 @@ fn output_dir(args: &WorkPrecisionArgs, scene: &Scene) -> Result<flexprr_run::Ou
         .into_iter()
         .chain(args.reference.as_deref())
         .chain(args.peers.iter().map(PathBuf::as_path))
+        .chain(args.compare.iter().map(PathBuf::as_path))
         .collect();
     flexprr_run::OutputDir::check(
         &out,
@@ -430,4 +442,52 @@ fn output_dir(args: &WorkPrecisionArgs, scene: &Scene) -> Result<flexprr_run::Ou
         &[],
     )
     .map_err(|e| failure(e.into()))
+}
+
+/// Prefixes the model label of `rows` with the scene's name (`servo_f20: coupled`).
+fn label_with_scene(rows: &mut [WorkPrecisionRow], scene: &Scene) {
+    for row in rows {
+        row.model = if row.model.is_empty() {
+            format!("{}: {}", scene.name, ModelChoice::of(scene).label(scene))
+        } else {
+            format!("{}: {}", scene.name, row.model)
+        };
+    }
+}
+
+/// The `--compare` scenes, each measured against its own reference with the same options,
+/// labelled with its name.
+///
+/// # Errors
+/// Bad input (exit 2): `--compare` with `--models` or `--reference` (one reference per
+/// scene is computed), a scene whose error measure differs from the main one's; or a
+/// failed reference (exit 1).
+fn measure_compared(
+    args: &WorkPrecisionArgs,
+    measure_name: &str,
+) -> Result<(Vec<WorkPrecisionRow>, Vec<String>), Failure> {
+    if args.models.is_some() || args.reference.is_some() {
+        return Err(Failure::bad_input(
+            "--compare measures each scene against its own computed reference: it does not combine with --models or --reference".to_string(),
+        ));
+    }
+    let (mut rows, mut failures) = (Vec::new(), Vec::new());
+    for path in &args.compare {
+        let other = Scene::load(path).map_err(failure)?;
+        let config = config_of(args, &other)?;
+        let name = check_choices(args, &config, &other)?;
+        if name != measure_name {
+            return Err(Failure::bad_input(format!(
+                "--compare {}: its error measure is {name}, the scene's {measure_name}; set --error",
+                path.display()
+            )));
+        }
+        println!("\n{}:", other.name);
+        let (reference, _) = reference_of(args, &config, &other, measure_name)?;
+        let (mut more, more_failures) = measure_printed(&other, &reference, &config)?;
+        label_with_scene(&mut more, &other);
+        rows.extend(more);
+        failures.extend(more_failures);
+    }
+    Ok((rows, failures))
 }
