@@ -12,13 +12,18 @@
 //! * [`Actuator`]: [`IdealForce`] (`kind = "force"`) and [`MotorBallScrew`]
 //!   (`kind = "motor_ballscrew"`: reflected rotor inertia, efficiency, torque saturation,
 //!   viscous and smoothed Coulomb friction, speed limit reported).
+//! * [`VibrationController`]: the voltages of piezoelectric patches on the links from their
+//!   sensors: [`StrainRate`] (`kind = "strain_rate"`) and [`ModalVelocity`]
+//!   (`kind = "modal_velocity"`).
 
 mod actuator;
 mod controller;
 mod error;
 mod pid;
+mod vibration;
 
 pub use actuator::{Actuator, ActuatorOutput, IdealForce, MotorBallScrew, MotorRatings};
 pub use controller::{ControlInput, Controller, SliderState};
 pub use error::ControlError;
 pub use pid::Pid;
+pub use vibration::{ModalVelocity, StrainRate, VibrationController, VibrationInput};

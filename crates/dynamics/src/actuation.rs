@@ -7,6 +7,7 @@ use std::sync::Arc;
 use flexprr_control::{ActuatorOutput, ControlInput, Controller, SliderState};
 use flexprr_kinematics::{LegKinematics, MachineState};
 
+use crate::hold::Hold;
 use crate::{DynamicsError, Machine, inverse_dynamics};
 
 pub use flexprr_control::Actuator;
@@ -23,10 +24,9 @@ pub struct Actuation {
 /// The force commands of the three sliders and what their actuators did with them.
 pub(crate) type Commands = ([f64; 3], [ActuatorOutput; 3]);
 
-/// One sample of a sampled controller: from `t` on the command `command` is held.
+/// One sample of a sampled controller: the command held until the next.
 #[derive(Debug, Clone)]
 struct Sample {
-    t: f64,
     command: [f64; 3],
     /// The law's states at the sample (advanced by `rate * period` to the next one).
     states: Vec<f64>,
@@ -39,10 +39,8 @@ pub(crate) struct Actuated {
     pub(crate) spec: Actuation,
     /// Slider mass plus the actuator's reflected mass, per slider (kg).
     pub(crate) slider_mass: [f64; 3],
-    /// Time of the first sample (the start of the run).
-    start: f64,
-    /// The samples taken so far (sampled law only), in time order.
-    samples: Vec<Sample>,
+    /// The samples of a sampled law.
+    hold: Hold<Sample>,
     /// Scratch for the law's state rates (continuous law: written into `dy`).
     rates: Vec<f64>,
 }
@@ -90,11 +88,11 @@ impl Actuated {
         let slider_mass =
             std::array::from_fn(|i| machine.slider_mass[i] + spec.actuators[i].reflected_mass());
         let rates = vec![0.0; spec.controller.states()];
+        let spec_period = spec.controller.period();
         Self {
             spec,
             slider_mass,
-            start,
-            samples: Vec::new(),
+            hold: Hold::new(start, spec_period),
             rates,
         }
     }
@@ -116,16 +114,7 @@ impl Actuated {
     /// The sample times of a sampled law strictly inside `(t0, t1)`: breakpoints of the
     /// integration.
     pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        let period = self.period();
-        if period <= 0.0 {
-            return Vec::new();
-        }
-        let first = ((t0 - self.start) / period).floor().max(0.0) as usize + 1;
-        (first..)
-            .map(|k| self.start + k as f64 * period)
-            .take_while(|t| *t < t1)
-            .filter(|t| *t > t0)
-            .collect()
+        self.hold.sample_times(t0, t1)
     }
 
     /// The control input at `t` for the measured sliders `measured`.
@@ -155,7 +144,7 @@ impl Actuated {
     ) -> [f64; 3] {
         let mut force = [0.0; 3];
         if self.period() > 0.0 {
-            if let Some(sample) = self.held(input.t) {
+            if let Some(sample) = self.hold.held(input.t) {
                 force = sample.command;
             }
             return force;
@@ -166,30 +155,16 @@ impl Actuated {
         force
     }
 
-    /// The sample a sampled law holds at `t` (the last one at or before it).
-    fn held(&self, t: f64) -> Option<&Sample> {
-        let tolerance = 1e-9 * self.period();
-        let k = self.samples.partition_point(|s| s.t <= t + tolerance);
-        k.checked_sub(1).map(|k| &self.samples[k])
-    }
-
     /// A sample at `t` when `t` is one of the law's sample times (a segment starts there):
-    /// the law's command from the input, held until the next. A sample time already passed
-    /// (the model integrated again from an earlier time) drops the samples from there on.
+    /// the law's command from the input, held until the next; its states advance by
+    /// `rate * period` from the previous sample.
     pub(crate) fn sample(&mut self, input: &ControlInput<'_>) {
-        let period = self.period();
-        if period <= 0.0 {
-            return;
-        }
         let t = input.t;
-        let k = ((t - self.start) / period).round();
-        if k < 0.0 || (t - (self.start + k * period)).abs() > 1e-9 * period {
+        if !self.hold.is_sample_time(t) {
             return;
         }
-        let tolerance = 1e-9 * period;
-        let keep = self.samples.partition_point(|s| s.t < t - tolerance);
-        self.samples.truncate(keep);
-        let states = match self.samples.last() {
+        let period = self.hold.period();
+        let states = match self.hold.rewind(t) {
             Some(previous) => previous
                 .states
                 .iter()
@@ -204,12 +179,14 @@ impl Actuated {
         self.spec
             .controller
             .command(input, &states, &mut command, &mut rates);
-        self.samples.push(Sample {
+        self.hold.push(
             t,
-            command,
-            states,
-            rates: rates.clone(),
-        });
+            Sample {
+                command,
+                states,
+                rates: rates.clone(),
+            },
+        );
         self.rates = rates;
     }
 

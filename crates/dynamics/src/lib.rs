@@ -19,6 +19,7 @@ mod coupled;
 mod error;
 mod formulation;
 mod frequencies;
+mod hold;
 mod inverse;
 pub mod linear;
 mod machine;
@@ -26,6 +27,7 @@ mod modal;
 mod model;
 pub mod nonlinear;
 pub mod paper;
+mod patches;
 
 pub use actuation::Actuation;
 pub use axial::{
@@ -48,5 +50,6 @@ pub use model::{
     platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
+pub use patches::{Patch, PatchControl, PatchState};
 
 pub use flexprr_beam::{AxialLoad, Coupling};

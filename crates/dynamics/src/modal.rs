@@ -252,6 +252,8 @@ pub struct ModalSystem {
     modes: usize,
     counters: Counters,
     pub(crate) failure: Option<DynamicsError>,
+    /// Piezoelectric patches under a vibration control law (none by default).
+    patches: Option<crate::patches::PatchLoop>,
 }
 
 impl std::fmt::Debug for ModalSystem {
@@ -314,6 +316,7 @@ impl ModalSystem {
             modes,
             counters: Counters::default(),
             failure: None,
+            patches: None,
         })
     }
 
@@ -486,6 +489,42 @@ impl ModalSystem {
         Ok(out)
     }
 
+    /// The same system with piezoelectric patches on the links under a vibration control
+    /// law (docs/piezo.md), started at `t0` (the first sample of a sampled law). The
+    /// equations stay linear in the state for a linear law, but the exponential integrators'
+    /// linear form does not carry the patches: they are refused for it.
+    ///
+    /// # Errors
+    /// A bad patch.
+    pub fn with_patch_control(
+        mut self,
+        control: crate::PatchControl,
+        t0: f64,
+    ) -> Result<Self, DynamicsError> {
+        self.patches = Some(crate::patches::PatchLoop::new(
+            &self.machine,
+            self.offsets,
+            control,
+            t0,
+        )?);
+        Ok(self)
+    }
+
+    /// The patches' states at `(t, y)` (none without patches).
+    pub fn patch_states(&mut self, t: f64, y: &[f64]) -> Vec<crate::PatchState> {
+        let n = self.modes;
+        self.patches
+            .as_mut()
+            .map_or_else(Vec::new, |p| p.states(t, &y[..n], &y[n..2 * n]))
+    }
+
+    /// The sample times of a sampled vibration law strictly inside `(t0, t1)`.
+    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
+        self.patches
+            .as_ref()
+            .map_or_else(Vec::new, |p| p.sample_times(t0, t1))
+    }
+
     /// Counts one rigid inverse-dynamics solve made for this system's outputs.
     pub(crate) fn count_inverse_dynamics(&mut self) {
         self.counters.inverse_dynamics_solves += 1;
@@ -538,11 +577,29 @@ impl OdeSystem for ModalSystem {
         dy[..n].copy_from_slice(&y[n..]);
         let (_, acc) = dy.split_at_mut(n);
         self.accelerations(&state, &loads, y, acc);
+        if let Some(patches) = self.patches.as_mut() {
+            patches.accelerate(t, &y[..n], &y[n..], acc);
+        }
+    }
+
+    fn segment_start(&mut self, t: f64, y: &[f64]) {
+        let n = self.modes;
+        if let (Some(patches), true) = (self.patches.as_mut(), y.len() == 2 * n) {
+            patches.sample(t, &y[..n], &y[n..]);
+        }
     }
 
     /// `J = [[0, I], [-M^-1 K(t) (+ b'^2 I), -M^-1 C]]`, block diagonal per link.
-    fn jacobian(&mut self, t: f64, _y: &[f64], mut jac: MatMut<'_, f64>) {
+    fn jacobian(&mut self, t: f64, y: &[f64], mut jac: MatMut<'_, f64>) {
         self.counters.jacobian_evaluations += 1;
+        if self.patches.is_some() {
+            // The control law is any function of the sensors: differenced.
+            let mut f0 = vec![0.0; y.len()];
+            self.rhs(t, y, &mut f0);
+            let mut work = vec![0.0; 2 * y.len()];
+            flexprr_integrators::finite_difference_jacobian(self, t, y, &f0, jac, &mut work);
+            return;
+        }
         let n = self.modes;
         jac.fill(0.0);
         for k in 0..n {
@@ -591,11 +648,15 @@ impl OdeSystem for ModalSystem {
     }
 
     fn has_analytic_jacobian(&self) -> bool {
-        true
+        self.patches.is_none()
     }
 
-    /// The KED modal equations are linear in the state (see [`crate::linear`]).
+    /// The KED modal equations are linear in the state (see [`crate::linear`]); with
+    /// piezoelectric patches under a control law they have no such form here.
     fn linear_form(&mut self) -> Option<&mut dyn flexprr_integrators::LinearSecondOrder> {
+        if self.patches.is_some() {
+            return None;
+        }
         Some(self)
     }
 }

@@ -240,6 +240,8 @@ struct Scratch {
     acceleration: Vec<f64>,
     /// The change of `eta''` per unit slider acceleration, stacked (`n`; actuated sliders).
     slider_change: Vec<f64>,
+    /// The accelerations the piezoelectric patches give (`n`; with patches).
+    patch: Vec<f64>,
 }
 
 /// The coupled rigid-flexible 3-PRR as an [`OdeSystem`]: state
@@ -265,6 +267,8 @@ pub struct CoupledSystem {
     initial: Vec<f64>,
     /// External loads (the inputs of linear models; none in a run).
     loads: AppliedLoads,
+    /// Piezoelectric patches under a vibration control law (none by default).
+    patches: Option<crate::patches::PatchLoop>,
 }
 
 /// External loads as the equations use them.
@@ -417,12 +421,14 @@ impl CoupledSystem {
                 length_gradient: vec![0.0; modes],
                 acceleration: vec![0.0; modes],
                 slider_change: vec![0.0; modes],
+                patch: vec![0.0; modes],
             },
             counters: CoupledCounters::default(),
             failure: None,
             actuated: None,
             initial: vec![0.0; 2 * modes],
             loads: AppliedLoads::default(),
+            patches: None,
         })
     }
 
@@ -502,6 +508,35 @@ impl CoupledSystem {
         Ok(())
     }
 
+    /// The same model with piezoelectric patches on the links under a vibration control law
+    /// (docs/piezo.md), started at `t0`: the patches' moments act on the links' modal
+    /// equations only (equal and opposite, they leave the joint reactions alone).
+    ///
+    /// # Errors
+    /// A bad patch.
+    pub fn with_patch_control(
+        mut self,
+        control: crate::PatchControl,
+        t0: f64,
+    ) -> Result<Self, DynamicsError> {
+        self.patches = Some(crate::patches::PatchLoop::new(
+            &self.machine,
+            self.offsets,
+            control,
+            t0,
+        )?);
+        Ok(self)
+    }
+
+    /// The patches' states at `(t, y)` (none without patches).
+    pub fn patch_states(&mut self, t: f64, y: &[f64]) -> Vec<crate::PatchState> {
+        let (eta, eta_dot) = self.elastic_state(y);
+        let (eta, eta_dot) = (eta.to_vec(), eta_dot.to_vec());
+        self.patches
+            .as_mut()
+            .map_or_else(Vec::new, |p| p.states(t, &eta, &eta_dot))
+    }
+
     /// Slider masses (kg), with the actuators' reflected masses when actuated.
     pub fn slider_masses(&self) -> [f64; 3] {
         self.actuated
@@ -529,9 +564,16 @@ impl CoupledSystem {
     /// The sample times of a sampled controller strictly inside `(t0, t1)`: where the
     /// integration must stop for the zero-order hold.
     pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.actuated
+        let mut times = self
+            .actuated
             .as_ref()
-            .map_or_else(Vec::new, |a| a.sample_times(t0, t1))
+            .map_or_else(Vec::new, |a| a.sample_times(t0, t1));
+        if let Some(p) = &self.patches {
+            times.extend(p.sample_times(t0, t1));
+            times.sort_by(f64::total_cmp);
+            times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t1.abs().max(1.0));
+        }
+        times
     }
 
     /// The measured sliders of `y` (actuated sliders).
@@ -673,7 +715,15 @@ impl OdeSystem for CoupledSystem {
     /// A sampled controller takes its sample when a segment starts at one of its sample
     /// times (they are stop times: [`CoupledSystem::sample_times`]).
     fn segment_start(&mut self, t: f64, y: &[f64]) {
-        if self.actuated.is_none() || y.len() != self.dim() {
+        if y.len() != self.dim() {
+            return;
+        }
+        if let Some(mut patches) = self.patches.take() {
+            let (eta, eta_dot) = self.elastic_state(y);
+            patches.sample(t, eta, eta_dot);
+            self.patches = Some(patches);
+        }
+        if self.actuated.is_none() {
             return;
         }
         let measured = self.measured_sliders(y);

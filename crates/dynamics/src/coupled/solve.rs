@@ -162,11 +162,17 @@ impl CoupledSystem {
     ) -> Result<Projections, DynamicsError> {
         let unknowns = if forces.is_some() { 9 } else { 6 };
         let (eta, eta_dot) = self.elastic_state(y);
+        if let Some(patches) = self.patches.as_mut() {
+            self.scratch.patch.fill(0.0);
+            patches.accelerate(t, eta, eta_dot, &mut self.scratch.patch);
+        }
+        let with_patches = self.patches.is_some();
         let Scratch {
             inv_g0_eta,
             length_gradient,
             acceleration,
             slider_change,
+            patch,
             ..
         } = &mut self.scratch;
         let slider_mass: [f64; 3] = self
@@ -189,6 +195,11 @@ impl CoupledSystem {
             if !self.loads.modal.is_empty() {
                 for (aj, load) in a.iter_mut().zip(&self.loads.modal[off..off + r]) {
                     *aj += load;
+                }
+            }
+            if with_patches {
+                for (aj, piezo) in a.iter_mut().zip(&patch[off..off + r]) {
+                    *aj += piezo;
                 }
             }
             let (a, h) = (&*a, &*h);

@@ -68,6 +68,9 @@ impl SceneModel for CoupledSystem {
     fn platform_follows_links(&self) -> bool {
         true
     }
+    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
+        Ok(CoupledSystem::patch_states(self, t, y))
+    }
     fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
         CoupledSystem::set_loads(self, loads)
     }

@@ -244,6 +244,15 @@ pub trait SceneModel: OdeSystem + Send {
             .sum();
         Ok(derivative / model.length())
     }
+    /// The piezoelectric patches' sensors, voltages and powers at `(t, y)`; none for a
+    /// model without patches.
+    ///
+    /// # Errors
+    /// A model that needs kinematics for them may fail there.
+    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
+        let _ = (t, y);
+        Ok(Vec::new())
+    }
     /// Applies `loads` from now on in the right-hand side (the inputs of linear models);
     /// replaces the loads set before. Models without external loads refuse.
     ///
