@@ -204,3 +204,141 @@ fn zero_gain_is_the_uncontrolled_link_and_the_limit_clips() {
     let states = clipped.patch_states(0.0, &y);
     assert!(states[0].saturated && (states[0].voltage.abs() - 1.0).abs() < 1e-12);
 }
+
+/// The same patch on the coupled and the nonlinear (32 elements) models at rest: their
+/// linear models' added damping of link 1's first mode against the closed form (the
+/// nonlinear links' first mode is the sine to the mesh's accuracy).
+#[test]
+fn the_coupled_and_nonlinear_patches_add_the_closed_form_damping() {
+    use flexprr_dynamics::{CoupledOptions, CoupledSystem, NonlinearOptions, NonlinearSystem};
+    let pose = Pose::new(-0.05, 0.02, 45f64.to_radians());
+    let rest: Arc<dyn Trajectory + Send + Sync> =
+        Arc::new(Line::new(pose, Vector3::zeros(), 0.0).unwrap());
+    let control = || PatchControl {
+        patches: vec![Patch {
+            link: 0,
+            xi_start: 0.4,
+            xi_end: 0.6,
+            actuator_constant: K_A,
+            sensor_constant: K_S,
+            voltage_limit: 1e9,
+        }],
+        controller: Arc::new(StrainRate::new(GAIN, 0.0).unwrap()),
+    };
+    let coupled = CoupledSystem::new(
+        machine(),
+        rest.clone(),
+        ModalDamping::none(),
+        CoupledOptions::full(),
+    )
+    .unwrap()
+    .with_patch_control(control(), 0.0)
+    .unwrap();
+    let options = NonlinearOptions {
+        elements: 32,
+        ..NonlinearOptions::paper(paper::YOUNGS_MODULUS)
+    };
+    let mut nonlinear = NonlinearSystem::new(machine(), rest, options).unwrap();
+    nonlinear.start_at(0.0).unwrap();
+    let nonlinear = nonlinear.with_patch_control(control(), 0.0).unwrap();
+    let (zeta, omega) = closed_form(GAIN, 0);
+    let f = omega / std::f64::consts::TAU;
+    let models: Vec<(Box<dyn SceneModel>, f64)> =
+        vec![(Box::new(coupled), 0.02), (Box::new(nonlinear), 0.03)];
+    for (mut model, tolerance) in models {
+        let y0 = model.initial_state();
+        let lin = linearize(model.as_mut(), 0.0, &y0, &[], &[]).unwrap();
+        let mode = modes(&lin)
+            .unwrap()
+            .into_iter()
+            .filter(|m| (m.frequency_hz / f - 1.0).abs() < 0.01)
+            .max_by(|a, b| a.damping_ratio.total_cmp(&b.damping_ratio))
+            .unwrap();
+        println!(
+            "{}: zeta {:.4e} (closed form {zeta:.4e})",
+            model.kind(),
+            mode.damping_ratio
+        );
+        assert!(
+            (mode.damping_ratio / zeta - 1.0).abs() < tolerance,
+            "{}: {} {zeta}",
+            model.kind(),
+            mode.damping_ratio
+        );
+    }
+}
+
+/// The nonlinear model's patch: the actuator's work equals the change of the whole
+/// machine's energy (its lumped masses make the balance exact).
+#[test]
+fn the_nonlinear_patch_work_is_the_energy_change() {
+    use flexprr_dynamics::{NonlinearOptions, NonlinearSystem};
+    let rest: Arc<dyn Trajectory + Send + Sync> = Arc::new(
+        Line::new(
+            Pose::new(-0.05, 0.02, 45f64.to_radians()),
+            Vector3::zeros(),
+            0.0,
+        )
+        .unwrap(),
+    );
+    let options = NonlinearOptions {
+        elements: 8,
+        ..NonlinearOptions::paper(paper::YOUNGS_MODULUS)
+    };
+    let mut model = NonlinearSystem::new(machine(), rest, options).unwrap();
+    model.start_at(0.0).unwrap();
+    let mut model = model
+        .with_patch_control(
+            PatchControl {
+                patches: vec![Patch {
+                    link: 0,
+                    xi_start: 0.3,
+                    xi_end: 0.6,
+                    actuator_constant: K_A,
+                    sensor_constant: K_S,
+                    voltage_limit: 1e9,
+                }],
+                controller: Arc::new(StrainRate::new(GAIN, 0.0).unwrap()),
+            },
+            0.0,
+        )
+        .unwrap();
+    let mut y0 = SceneModel::initial_state(&model);
+    // Bend link 1 by a transverse velocity of its middle nodes.
+    let n = y0.len() / 2;
+    let range = SceneModel::link_range(&model, 0);
+    for j in range.clone().skip(1).step_by(3).take(7) {
+        y0[n + j] = 0.05;
+    }
+    let t: Vec<f64> = (0..=10000).map(|k| k as f64 * 1e-6).collect();
+    let solution = Rk45::new(Options::default().rtol(1e-11).atol(1e-15))
+        .solve(&mut model, 0.0, &y0, &t)
+        .unwrap();
+    let (mut power, mut energy) = (Vec::new(), Vec::new());
+    for (k, &tk) in t.iter().enumerate() {
+        let y = solution.y(k);
+        power.push(
+            model
+                .patch_states(tk, y)
+                .unwrap()
+                .iter()
+                .map(|p| p.power)
+                .sum::<f64>(),
+        );
+        let e = SceneModel::energies(&mut model, tk, y).unwrap();
+        energy.push(e.kinetic.unwrap() + e.strain.iter().sum::<f64>());
+    }
+    let h = t[1] - t[0];
+    let (mut work, mut worst) = (0.0, 0.0_f64);
+    for k in (2..t.len()).step_by(2) {
+        work += h / 3.0 * (power[k - 2] + 4.0 * power[k - 1] + power[k]);
+        worst = worst.max((work - (energy[k] - energy[0])).abs());
+    }
+    let removed = energy[0] - energy[t.len() - 1];
+    println!(
+        "nonlinear: energy removed {removed:.3e} J, balance {:.2e} of it",
+        worst / removed
+    );
+    assert!(removed > 0.0);
+    assert!(worst < 1e-4 * removed, "{worst} of {removed}");
+}

@@ -70,6 +70,9 @@ impl SceneModel for NonlinearSystem {
     fn platform_follows_links(&self) -> bool {
         true
     }
+    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
+        NonlinearSystem::patch_states(self, t, y)
+    }
     fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
         NonlinearSystem::set_loads(self, loads)
     }

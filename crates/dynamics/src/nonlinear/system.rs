@@ -166,6 +166,8 @@ struct LinkData {
 /// Prescribed and platform kinematics of one evaluation.
 #[derive(Debug, Clone, Copy)]
 struct Frame {
+    /// Time (s).
+    t: f64,
     nominal: PlatformMotion,
     /// The commanded machine (inverse kinematics of the trajectory).
     rigid: MachineState,
@@ -177,6 +179,9 @@ struct Frame {
     /// `C_i`, `C_i'`.
     c: [[Vector2<f64>; 2]; 3],
 }
+
+/// A patch's two ends: each one's element and position in it (0..1).
+type PatchEnds = [(usize, f64); 2];
 
 /// The fully nonlinear 3-PRR as an [`OdeSystem`]: state `y = (z, z')` with `z` the
 /// generalized coordinates of the module documentation (`3 + 3 (3 N - 1)` of them).
@@ -203,6 +208,9 @@ pub struct NonlinearSystem {
     /// loads (the inputs of linear models; none in a run).
     point_loads: Vec<(usize, usize, f64, f64)>,
     slider_loads: [f64; 3],
+    /// Piezoelectric patches under a vibration control law, with each end's element and
+    /// position in it.
+    patches: Option<(crate::patches::PatchLaw, Vec<PatchEnds>)>,
 }
 
 impl std::fmt::Debug for NonlinearSystem {
@@ -311,6 +319,7 @@ impl NonlinearSystem {
             slider_forces: [0.0; 3],
             point_loads: Vec::new(),
             slider_loads: [0.0; 3],
+            patches: None,
         })
     }
 
@@ -354,11 +363,19 @@ impl NonlinearSystem {
     pub fn actuation(&self) -> Option<&Actuation> {
         self.actuated.as_ref().map(|a| &a.spec)
     }
-    /// The sample times of a sampled controller strictly inside `(t0, t1)`.
+    /// The sample times of a sampled controller (slider or vibration law) strictly inside
+    /// `(t0, t1)`.
     pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.actuated
+        let mut times = self
+            .actuated
             .as_ref()
-            .map_or_else(Vec::new, |a| a.sample_times(t0, t1))
+            .map_or_else(Vec::new, |a| a.sample_times(t0, t1));
+        if let Some((law, _)) = &self.patches {
+            times.extend(law.sample_times(t0, t1));
+            times.sort_by(f64::total_cmp);
+            times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t1.abs().max(1.0));
+        }
+        times
     }
     /// Range of link `link`'s nodal coordinates (0-based link) among the generalized
     /// coordinates; the platform's three come first.
@@ -545,6 +562,7 @@ impl NonlinearSystem {
         let p = Vector2::new(y[0], y[1]);
         let v = Vector2::new(y[n], y[n + 1]);
         let mut frame = Frame {
+            t,
             nominal,
             rigid,
             rho: [[0.0; 3]; 3],
@@ -631,6 +649,7 @@ impl NonlinearSystem {
         }
         self.forces = forces;
         self.apply_point_loads(frame);
+        self.apply_patches(y, frame);
     }
 
     /// Sets external loads (the inputs of linear models): a transverse point force on a
@@ -652,6 +671,136 @@ impl NonlinearSystem {
         self.point_loads = points;
         self.slider_loads = loads.slider;
         Ok(())
+    }
+
+    /// The same model with piezoelectric patches on the links under a vibration control law
+    /// (docs/piezo.md), started at `t0`. A patch's sensor reads the rotation of the centre
+    /// line between its ends (the slope difference, exact for any deflection); its actuator
+    /// puts moments `-k_a V` and `+k_a V` at its ends, each as the consistent nodal load of
+    /// its element (forces `C h'(a) / L_e` across the element, moments `C L_e h'(a)` of the
+    /// Hermite functions' derivatives).
+    ///
+    /// # Errors
+    /// A bad patch.
+    pub fn with_patch_control(
+        mut self,
+        control: crate::PatchControl,
+        t0: f64,
+    ) -> Result<Self, DynamicsError> {
+        let law = crate::patches::PatchLaw::new(control, t0)?;
+        let ne = self.options.elements;
+        let place = |xi: f64| {
+            let s = xi * ne as f64;
+            let e = (s.floor() as usize).min(ne - 1);
+            (e, s - e as f64)
+        };
+        let places = law
+            .patches()
+            .iter()
+            .map(|p| [place(p.xi_start), place(p.xi_end)])
+            .collect();
+        self.patches = Some((law, places));
+        Ok(self)
+    }
+
+    /// The angle of link `i`'s centre line at position `a` of element `e`, and its rate.
+    fn tangent_angle(
+        &self,
+        y: &[f64],
+        frame: &Frame,
+        i: usize,
+        (e, a): (usize, f64),
+    ) -> (f64, f64) {
+        let (q1, v1) = self.node(y, frame, i, e);
+        let (q2, v2) = self.node(y, frame, i, e + 1);
+        let le = self.links[i].element.length;
+        let (d00, d10) = (6.0 * a * a - 6.0 * a, 3.0 * a * a - 4.0 * a + 1.0);
+        let (d01, d11) = (-6.0 * a * a + 6.0 * a, 3.0 * a * a - 2.0 * a);
+        let (c1, s1) = (q1[2].cos(), q1[2].sin());
+        let (c2, s2) = (q2[2].cos(), q2[2].sin());
+        let tangent = Vector2::new(q1[0], q1[1]) * d00
+            + Vector2::new(c1, s1) * (le * d10)
+            + Vector2::new(q2[0], q2[1]) * d01
+            + Vector2::new(c2, s2) * (le * d11);
+        let rate = Vector2::new(v1[0], v1[1]) * d00
+            + Vector2::new(-s1, c1) * (le * v1[2] * d10)
+            + Vector2::new(v2[0], v2[1]) * d01
+            + Vector2::new(-s2, c2) * (le * v2[2] * d11);
+        (
+            tangent.y.atan2(tangent.x),
+            cross(&tangent, &rate) / tangent.norm_squared(),
+        )
+    }
+
+    /// The patches' sensors from the state (their laws' sensor buffers).
+    fn sense_patches(&mut self, y: &[f64], frame: &Frame) {
+        let Some((mut law, places)) = self.patches.take() else {
+            return;
+        };
+        for (p, place) in places.iter().enumerate() {
+            let patch = law.patches()[p];
+            let (theta1, rate1) = self.tangent_angle(y, frame, patch.link, place[0]);
+            let (theta2, rate2) = self.tangent_angle(y, frame, patch.link, place[1]);
+            law.sensors[p] = patch.sensor_constant * wrap_angle(theta2 - theta1);
+            law.rates[p] = patch.sensor_constant * (rate2 - rate1);
+        }
+        self.patches = Some((law, places));
+    }
+
+    /// Subtracts the patches' nodal loads at `(t, y)` from the nodal force buffer (after the
+    /// law's voltages at the frame's time).
+    fn apply_patches(&mut self, y: &[f64], frame: &Frame) {
+        if self.patches.is_none() {
+            return;
+        }
+        self.sense_patches(y, frame);
+        let Some((mut law, places)) = self.patches.take() else {
+            return;
+        };
+        law.drive(frame.t);
+        let stride = 3 * (self.options.elements + 1);
+        for (p, place) in places.iter().enumerate() {
+            let patch = law.patches()[p];
+            let moment = patch.actuator_constant * law.voltage(p);
+            let i = patch.link;
+            for (&(e, a), c) in place.iter().zip([-moment, moment]) {
+                let (q1, _) = self.node(y, frame, i, e);
+                let (q2, _) = self.node(y, frame, i, e + 1);
+                let chord = Vector2::new(q2[0] - q1[0], q2[1] - q1[1]);
+                let length = chord.norm();
+                let normal = perp(&(chord / length));
+                let (d00, d10) = (6.0 * a * a - 6.0 * a, 3.0 * a * a - 4.0 * a + 1.0);
+                let (d01, d11) = (-6.0 * a * a + 6.0 * a, 3.0 * a * a - 2.0 * a);
+                let f = &mut self.forces[i * stride..(i + 1) * stride];
+                for (node, force, torque) in [(e, d00, d10), (e + 1, d01, d11)] {
+                    f[3 * node] -= c * force / length * normal.x;
+                    f[3 * node + 1] -= c * force / length * normal.y;
+                    f[3 * node + 2] -= c * torque;
+                }
+            }
+        }
+        self.patches = Some((law, places));
+    }
+
+    /// The patches' states at `(t, y)` (none without patches).
+    ///
+    /// # Errors
+    /// A wrong state length or a kinematic failure.
+    pub fn patch_states(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Vec<crate::PatchState>, DynamicsError> {
+        if self.patches.is_none() {
+            return Ok(Vec::new());
+        }
+        self.check_state(y)?;
+        let frame = self.frame(t, y)?;
+        self.sense_patches(y, &frame);
+        Ok(self.patches.as_mut().map_or_else(Vec::new, |(law, _)| {
+            law.drive(t);
+            law.states()
+        }))
     }
 
     /// Subtracts the external point loads from the nodal force buffer (it holds the internal
@@ -990,7 +1139,18 @@ impl OdeSystem for NonlinearSystem {
     /// A sampled controller takes its sample when a segment starts at one of its sample
     /// times (they are stop times: [`NonlinearSystem::sample_times`]).
     fn segment_start(&mut self, t: f64, y: &[f64]) {
-        if self.actuated.is_none() || y.len() != self.dim() {
+        if y.len() != self.dim() {
+            return;
+        }
+        if self.patches.is_some() {
+            if let Ok(frame) = self.frame(t, y) {
+                self.sense_patches(y, &frame);
+                if let Some((law, _)) = self.patches.as_mut() {
+                    law.sample(t);
+                }
+            }
+        }
+        if self.actuated.is_none() {
             return;
         }
         let measured = self.measured_sliders(y);
