@@ -50,6 +50,6 @@ pub use model::{
     platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
-pub use patches::{Patch, PatchControl, PatchState};
+pub use patches::{Patch, PatchControl, PatchState, modal_velocity_law};
 
 pub use flexprr_beam::{AxialLoad, Coupling};

@@ -325,3 +325,92 @@ impl PatchLoop {
         self.law.states()
     }
 }
+
+/// The modal velocity law (`kind = "modal_velocity"`) for `patches` on `machine`: each
+/// link carrying patches has its modes `modes` (0-based) targeted, each given the damping
+/// ratio `damping_ratios[k]` of `modes[k]` through the modal gain `g = 2 zeta m_j omega_j`
+/// (`m_j`, `omega_j` of the link's unloaded mode `j`), so the law's modal forces
+/// `f_j = -g_j eta_j'` damp the targeted modes at those ratios in the unloaded link at rest.
+/// The sensing matrix is `k_s d_p,j` and the forcing matrix `k_a d_p,j`, zero across links.
+///
+/// # Errors
+/// A bad patch, a mode the links do not have, mismatched lists, or targets the patches
+/// cannot tell apart (fewer patches than targeted modes on a link).
+pub fn modal_velocity_law(
+    machine: &Machine,
+    patches: &[Patch],
+    modes: &[usize],
+    damping_ratios: &[f64],
+    period: f64,
+) -> Result<flexprr_control::ModalVelocity, DynamicsError> {
+    if modes.len() != damping_ratios.len() || modes.is_empty() {
+        return Err(DynamicsError::Inconsistent(format!(
+            "modal velocity control needs one damping ratio per targeted mode: {} modes, {} ratios",
+            modes.len(),
+            damping_ratios.len()
+        )));
+    }
+    for patch in patches {
+        patch.validated()?;
+    }
+    let mut links: Vec<usize> = patches.iter().map(|p| p.link).collect();
+    links.sort_unstable();
+    links.dedup();
+    let mut targets = Vec::new();
+    let mut gains = Vec::new();
+    for &link in &links {
+        let model = &machine.links[link];
+        for (&j, &zeta) in modes.iter().zip(damping_ratios) {
+            if j >= model.modes() {
+                return Err(DynamicsError::Inconsistent(format!(
+                    "modal velocity control targets mode {} of link {}, which has {} modes",
+                    j + 1,
+                    link + 1,
+                    model.modes()
+                )));
+            }
+            let (m, k) = (
+                model.integrals.mass[(j, j)],
+                model.integrals.stiffness[(j, j)],
+            );
+            targets.push((link, j));
+            gains.push(2.0 * zeta * m * (k / m).sqrt());
+        }
+    }
+    let slope = |p: &Patch, j: usize| {
+        let model = &machine.links[p.link];
+        (model.basis.eval(j, p.xi_end)[1] - model.basis.eval(j, p.xi_start)[1]) / model.length()
+    };
+    let sensing: Vec<Vec<f64>> = patches
+        .iter()
+        .map(|p| {
+            targets
+                .iter()
+                .map(|&(link, j)| {
+                    if link == p.link {
+                        p.sensor_constant * slope(p, j)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let forcing: Vec<Vec<f64>> = targets
+        .iter()
+        .map(|&(link, j)| {
+            patches
+                .iter()
+                .map(|p| {
+                    if link == p.link {
+                        p.actuator_constant * slope(p, j)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    flexprr_control::ModalVelocity::new(&sensing, &forcing, &gains, period)
+        .map_err(|e| DynamicsError::Inconsistent(format!("modal velocity control: {e}")))
+}
