@@ -130,3 +130,142 @@ impl ControllerFactory for PidFactory {
         Ok(Arc::new(law))
     }
 }
+
+/// A kind of vibration control law that a scene can name in `vibration_control.kind`: it
+/// reads its own keys from the `[vibration_control]` table and builds the law for the
+/// scene's patches on its machine.
+///
+/// ```
+/// use std::sync::Arc;
+/// use flexprr_control::{VibrationController, VibrationInput};
+/// use flexprr_scene::{PatchContext, Registry, ScenarioError, TableParams, VibrationControllerFactory};
+///
+/// /// Negative position feedback `V = -k V_s` on each collocated pair.
+/// #[derive(Debug)]
+/// struct Position(f64);
+/// impl VibrationController for Position {
+///     fn voltages(&self, input: &VibrationInput<'_>, voltages: &mut [f64]) {
+///         for (v, s) in voltages.iter_mut().zip(input.sensors) {
+///             *v = -self.0 * s;
+///         }
+///     }
+/// }
+///
+/// #[derive(serde::Deserialize)]
+/// #[serde(deny_unknown_fields)]
+/// struct Keys {
+///     k: f64,
+/// }
+///
+/// struct PositionFactory;
+/// impl VibrationControllerFactory for PositionFactory {
+///     fn build(
+///         &self,
+///         params: &TableParams<'_>,
+///         _context: &PatchContext<'_>,
+///     ) -> Result<Arc<dyn VibrationController>, ScenarioError> {
+///         let keys: Keys = params.parse()?;
+///         Ok(Arc::new(Position(keys.k)))
+///     }
+/// }
+///
+/// let mut registry = Registry::default();
+/// registry.register_vibration_controller("position", Arc::new(PositionFactory));
+/// assert!(registry.vibration_controller_names().contains(&"position"));
+/// ```
+pub trait VibrationControllerFactory: Send + Sync {
+    /// Builds the law from the keys of its table for the patches of `context`.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] naming the offending key.
+    fn build(
+        &self,
+        params: &TableParams<'_>,
+        context: &crate::PatchContext<'_>,
+    ) -> Result<Arc<dyn flexprr_control::VibrationController>, ScenarioError>;
+}
+
+/// The keys of `kind = "strain_rate"`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StrainRateKeys {
+    gain: f64,
+    #[serde(default)]
+    period: f64,
+}
+
+/// The built-in `strain_rate`: `V = -gain V_s'` on each collocated pair.
+pub(crate) struct StrainRateFactory;
+
+impl VibrationControllerFactory for StrainRateFactory {
+    fn build(
+        &self,
+        params: &TableParams<'_>,
+        _context: &crate::PatchContext<'_>,
+    ) -> Result<Arc<dyn flexprr_control::VibrationController>, ScenarioError> {
+        let keys: StrainRateKeys = params.parse()?;
+        let law = flexprr_control::StrainRate::new(keys.gain, keys.period)
+            .map_err(|e| params.control_error(e))?;
+        Ok(Arc::new(law))
+    }
+}
+
+/// The keys of `kind = "modal_velocity"`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModalVelocityKeys {
+    /// Targeted modes of each link with patches (1-based).
+    modes: Vec<usize>,
+    /// The damping ratio given to each targeted mode.
+    damping_ratio: Vec<f64>,
+    #[serde(default)]
+    period: f64,
+}
+
+/// The built-in `modal_velocity`: a modal filter and modal velocity feedback giving each
+/// targeted mode of every link with patches its damping ratio
+/// ([`flexprr_dynamics::modal_velocity_law`]).
+pub(crate) struct ModalVelocityFactory;
+
+impl VibrationControllerFactory for ModalVelocityFactory {
+    fn build(
+        &self,
+        params: &TableParams<'_>,
+        context: &crate::PatchContext<'_>,
+    ) -> Result<Arc<dyn flexprr_control::VibrationController>, ScenarioError> {
+        let keys: ModalVelocityKeys = params.parse()?;
+        if keys.modes.contains(&0) {
+            return Err(params.error("modes", "modes are numbered from 1"));
+        }
+        if keys.modes.len() != keys.damping_ratio.len() {
+            return Err(params.error(
+                "damping_ratio",
+                format!(
+                    "give one damping ratio per targeted mode: {} modes, {} ratios",
+                    keys.modes.len(),
+                    keys.damping_ratio.len()
+                ),
+            ));
+        }
+        if let Some(z) = keys
+            .damping_ratio
+            .iter()
+            .find(|z| !(z.is_finite() && **z >= 0.0))
+        {
+            return Err(params.error(
+                "damping_ratio",
+                format!("a damping ratio must be finite and >= 0, got {z}"),
+            ));
+        }
+        let modes: Vec<usize> = keys.modes.iter().map(|m| m - 1).collect();
+        let law = flexprr_dynamics::modal_velocity_law(
+            context.machine,
+            context.patches,
+            &modes,
+            &keys.damping_ratio,
+            keys.period,
+        )
+        .map_err(|e| params.error("modes", e.to_string()))?;
+        Ok(Arc::new(law))
+    }
+}

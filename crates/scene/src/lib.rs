@@ -18,6 +18,7 @@ pub mod link_file;
 mod locate;
 mod model;
 mod parse;
+mod piezo;
 mod registry;
 mod scene;
 mod schema;
@@ -25,7 +26,7 @@ pub mod setting;
 
 pub use flexprr_integrators::DynIntegrator;
 
-pub use controllers::ControllerFactory;
+pub use controllers::{ControllerFactory, VibrationControllerFactory};
 pub use error::{Location, ScenarioError};
 pub use input::{
     InputKind, MAX_DATA_BYTES, MAX_INPUT_BYTES, MAX_NAME_LEN, check_input_file, read_input_file,
@@ -33,6 +34,7 @@ pub use input::{
 };
 pub use locate::{line_column, locate};
 pub use parse::{parse_scene, parse_toml};
+pub use piezo::PatchContext;
 pub use registry::{
     BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount,
     Registry, TableParams,

@@ -4,7 +4,7 @@
 
 use flexprr_dynamics::{
     Actuation, AxialModel, CoupledOptions, CoupledSystem, CouplingModel, DynamicsError,
-    ModalSystem, NonlinearOptions, NonlinearSystem, SceneModel,
+    ModalSystem, NonlinearOptions, NonlinearSystem, PatchControl, SceneModel,
 };
 
 use crate::{ScenarioError, Scene};
@@ -21,11 +21,46 @@ impl Scene {
     /// A modal mass matrix that is not positive definite, inconsistent damping, or (nonlinear)
     /// a kinematic failure at the start time.
     pub fn build_model(&self) -> Result<Box<dyn SceneModel>, DynamicsError> {
-        match self.coupling {
-            CouplingModel::Ked => Ok(Box::new(self.build_ked(false)?)),
-            CouplingModel::Coupled => Ok(Box::new(self.build_coupled()?)),
-            CouplingModel::Nonlinear => Ok(Box::new(self.build_nonlinear()?)),
+        let t0 = self.output_times[0];
+        match (self.coupling, self.patch_control()) {
+            (CouplingModel::Ked, None) => Ok(Box::new(self.build_ked(false)?)),
+            (CouplingModel::Ked, Some(p)) => {
+                Ok(Box::new(self.build_ked(false)?.with_patch_control(p, t0)?))
+            }
+            (CouplingModel::Coupled, None) => Ok(Box::new(self.build_coupled()?)),
+            (CouplingModel::Coupled, Some(p)) => {
+                Ok(Box::new(self.build_coupled()?.with_patch_control(p, t0)?))
+            }
+            (CouplingModel::Nonlinear, None) => Ok(Box::new(self.build_nonlinear()?)),
+            (CouplingModel::Nonlinear, Some(p)) => {
+                Ok(Box::new(self.build_nonlinear()?.with_patch_control(p, t0)?))
+            }
         }
+    }
+
+    /// The links' patches under their vibration control law (sensors only without one),
+    /// when the scene has patches.
+    pub fn patch_control(&self) -> Option<PatchControl> {
+        if self.patches.is_empty() {
+            return None;
+        }
+        let controller = self
+            .vibration_controller
+            .clone()
+            .unwrap_or_else(|| std::sync::Arc::new(crate::piezo::Passive));
+        Some(PatchControl {
+            patches: self.patches.clone(),
+            controller,
+        })
+    }
+
+    /// The scene without its vibration control law (the patches only sense): the
+    /// uncontrolled run a controlled one is compared with.
+    pub fn without_vibration_control(&self) -> Scene {
+        let mut scene = self.clone();
+        scene.vibration_controller = None;
+        scene.file.vibration_control = None;
+        scene
     }
 
     /// The geometrically nonlinear system of the scene: `model.elements` co-rotational

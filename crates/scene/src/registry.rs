@@ -24,7 +24,10 @@ use flexprr_integrators::{
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
-use crate::controllers::{ControllerFactory, PdFactory, PidFactory};
+use crate::controllers::{
+    ControllerFactory, ModalVelocityFactory, PdFactory, PidFactory, StrainRateFactory,
+    VibrationControllerFactory,
+};
 use crate::error::ScenarioError;
 use crate::link::EndsConfig;
 use crate::locate::{locate, locate_value};
@@ -372,6 +375,7 @@ pub struct Registry {
     bases: BTreeMap<String, Arc<dyn BasisFactory>>,
     axial: BTreeMap<String, AxialEntry>,
     controllers: BTreeMap<String, Arc<dyn ControllerFactory>>,
+    vibration_controllers: BTreeMap<String, Arc<dyn VibrationControllerFactory>>,
 }
 
 impl fmt::Debug for Registry {
@@ -381,6 +385,7 @@ impl fmt::Debug for Registry {
             .field("bases", &self.basis_names())
             .field("axial_forces", &self.axial_force_names())
             .field("controllers", &self.controller_names())
+            .field("vibration_controllers", &self.vibration_controller_names())
             .finish()
     }
 }
@@ -414,6 +419,8 @@ impl Default for Registry {
         r.register_basis("hermite", Arc::new(HermiteFactory));
         r.register_controller("pd", Arc::new(PdFactory));
         r.register_controller("pid", Arc::new(PidFactory));
+        r.register_vibration_controller("strain_rate", Arc::new(StrainRateFactory));
+        r.register_vibration_controller("modal_velocity", Arc::new(ModalVelocityFactory));
         for (name, preset, model) in [
             (
                 "none",
@@ -448,6 +455,7 @@ impl Registry {
             bases: BTreeMap::new(),
             axial: BTreeMap::new(),
             controllers: BTreeMap::new(),
+            vibration_controllers: BTreeMap::new(),
         }
     }
 
@@ -558,6 +566,48 @@ impl Registry {
     /// Registers (or replaces) the control law `name` for `control.kind`.
     pub fn register_controller(&mut self, name: &str, factory: Arc<dyn ControllerFactory>) {
         self.controllers.insert(name.to_string(), factory);
+    }
+
+    /// Registers (or replaces) the vibration control law `name` for
+    /// `vibration_control.kind`.
+    pub fn register_vibration_controller(
+        &mut self,
+        name: &str,
+        factory: Arc<dyn VibrationControllerFactory>,
+    ) {
+        self.vibration_controllers.insert(name.to_string(), factory);
+    }
+
+    /// Registered vibration control law names, sorted.
+    pub fn vibration_controller_names(&self) -> Vec<&str> {
+        self.vibration_controllers
+            .keys()
+            .map(String::as_str)
+            .collect()
+    }
+
+    /// Builds the vibration control law of the table `at` (`vibration_control`) for the
+    /// patches of `context`.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] with the key and location of an unknown kind, or the law's
+    /// own key errors.
+    pub fn build_vibration_controller(
+        &self,
+        at: &TableParams<'_>,
+        kind: &str,
+        context: &crate::PatchContext<'_>,
+    ) -> Result<Arc<dyn flexprr_control::VibrationController>, ScenarioError> {
+        let factory = self.vibration_controllers.get(kind).ok_or_else(|| {
+            at.value_error(
+                "kind",
+                format!(
+                    "unknown vibration control law \"{kind}\", expected one of {}",
+                    quoted_list(&self.vibration_controller_names())
+                ),
+            )
+        })?;
+        factory.build(at, context)
     }
 
     /// The control law `name`.

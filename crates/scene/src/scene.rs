@@ -77,6 +77,10 @@ pub struct Scene {
     /// The sliders' control law (`[control]`): when given, the sliders are degrees of
     /// freedom driven by [`Scene::actuator`] under it.
     pub controller: Option<Arc<dyn Controller>>,
+    /// The links' piezoelectric patches (`[[links.patches]]`, docs/piezo.md).
+    pub patches: Vec<flexprr_dynamics::Patch>,
+    /// Their vibration control law (`[vibration_control]`); patches without one only sense.
+    pub vibration_controller: Option<Arc<dyn flexprr_control::VibrationController>>,
 }
 
 /// Settings of the models that follow a collapse: the coupled one's collapse limit and the
@@ -241,17 +245,21 @@ impl Scene {
         let model = build_model_section(&c, registry, &raw.model, machine.links[0].modes())?;
         let large_deflection = build_large_deflection(&c, &raw.model, &raw.links)?;
         let control = build_control(&c, registry, &raw, model.coupling)?;
+        let piezo = crate::piezo::build_piezo(&c, registry, &raw, &machine)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
         // `auto` becomes its choice for the model; a linear-only method needs the KED model
         // (an actuated model is never linear: it is coupled or nonlinear).
-        let model_name = match control.controller {
+        let mut model_name = match control.controller {
             Some(_) => format!("{} with actuated sliders", model.coupling.name()),
             None => model.coupling.name().to_string(),
         };
+        if !piezo.patches.is_empty() {
+            model_name.push_str(" with piezoelectric patches");
+        }
         let method = registry
             .resolve_method(
                 method.name(),
-                model.coupling == CouplingModel::Ked,
+                model.coupling == CouplingModel::Ked && piezo.patches.is_empty(),
                 &model_name,
             )
             .map_err(|m| c.value_error("integrator.method", m))?;
@@ -278,6 +286,8 @@ impl Scene {
             large_deflection,
             actuator: control.actuator,
             controller: control.controller,
+            patches: piezo.patches,
+            vibration_controller: piezo.controller,
         })
     }
 

@@ -46,6 +46,10 @@ pub struct SceneFile {
     /// freedom driven by the actuators (coupled and nonlinear models).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub control: Option<ControlTable>,
+    /// The vibration control law of the links' piezoelectric patches (docs/piezo.md): its
+    /// registered `kind` and that law's own keys.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vibration_control: Option<ControlTable>,
 }
 
 /// `[actuators]`: one actuator spec for all three sliders.
@@ -220,6 +224,29 @@ pub struct LinksConfig {
     /// bases that size themselves (Hermite: `basis.elements`).
     #[serde(default)]
     pub modes: Option<usize>,
+    /// Piezoelectric patches (`[[links.patches]]`, docs/piezo.md).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub patches: Vec<PatchConfig>,
+}
+
+/// One `[[links.patches]]` entry: a collocated actuator and sensor pair, on the links listed
+/// (1-based; every link when left out).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PatchConfig {
+    /// The links carrying it (1, 2, 3); all three when left out.
+    #[serde(default)]
+    pub links: Option<Vec<usize>>,
+    /// Where it starts along the link (0..1).
+    pub xi_start: f64,
+    /// Where it ends (0..1, after the start).
+    pub xi_end: f64,
+    /// Actuator constant: bending moment per volt (N m/V).
+    pub actuator_constant: f64,
+    /// Sensor constant: volts per radian of slope difference over the patch (V/rad).
+    pub sensor_constant: f64,
+    /// Largest voltage magnitude (V).
+    pub voltage_limit: f64,
 }
 
 fn default_length() -> f64 {
@@ -246,6 +273,7 @@ impl Default for LinksConfig {
             section: default_section(),
             basis: BasisTable::default(),
             modes: None,
+            patches: Vec::new(),
         }
     }
 }
