@@ -295,3 +295,79 @@ fn time_linearises_the_motion_at_that_instant() {
         assert!((f / rest - 1.0).abs() < 0.3, "mode {}: {f} Hz", k + 1);
     }
 }
+
+/// The `machine_frequencies` output of a scene at rest, at its first instant, is what
+/// `flexprr modes --pose` gives at that pose: the same model, linearised about the same
+/// state (the one reached by integration, the other built at rest).
+#[test]
+fn machine_frequencies_at_rest_equal_modes_at_the_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("servo_rest.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[trajectory]
+kind = "line"
+from = [-0.08, 0.03, 40.0]
+velocity = [0.0, 0.0, 0.0]
+[model]
+formulation = "consistent"
+coupling = "coupled"
+[actuators]
+kind = "force"
+[control]
+kind = "pd"
+kp = 2e5
+kd = 400
+feedforward = "rigid"
+[time]
+end = 0.01
+output_step = 1e-3
+[output]
+requests = ["machine_frequencies"]
+plots = false
+"#,
+    )
+    .unwrap();
+    let out = dir.path().join("run");
+    let o = flexprr()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("machine_frequencies.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let first: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let value = json(&modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.08,0.03,40",
+        "--json",
+    ]));
+    let expected = frequencies(&value);
+    assert_eq!(expected.len(), 12);
+    for (k, (f, zeta)) in expected.iter().enumerate() {
+        let column = |name: String| header.iter().position(|h| *h == name).unwrap();
+        let got_f = first[column(format!("f_machine_{}_Hz", k + 1))];
+        let got_zeta = first[column(format!("zeta_machine_{}_ratio", k + 1))];
+        assert!(
+            ((got_f - f) / f).abs() < 1e-9,
+            "mode {}: {got_f} vs {f}",
+            k + 1
+        );
+        assert!(
+            (got_zeta - zeta).abs() < 1e-9,
+            "mode {}: {got_zeta} vs {zeta}",
+            k + 1
+        );
+    }
+}
