@@ -3,6 +3,7 @@
 
 pub mod beam;
 pub mod kinematics;
+pub mod map;
 pub mod modes;
 pub mod run;
 pub mod study;

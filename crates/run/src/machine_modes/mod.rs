@@ -213,6 +213,65 @@ pub fn lowest_frequency(scene: &Scene, at: OperatingPoint) -> Result<(f64, f64),
     Ok((first.frequency_hz, first.damping_ratio))
 }
 
+/// The lowest whole-machine frequency at rest at one pose, or why there is none: what a
+/// workspace map records at each of its poses.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RestFrequency {
+    /// The lowest frequency (Hz), its damping ratio and the pose's type-II measure.
+    Found {
+        /// `|lambda| / 2 pi` of the lowest mode (Hz).
+        frequency_hz: f64,
+        /// Its `-Re(lambda) / |lambda|`.
+        damping_ratio: f64,
+        /// The platform equilibrium's type-II measure there (1 far from a singularity, 0
+        /// at one).
+        type_ii_measure: f64,
+    },
+    /// The machine cannot assemble there, or a slider is out of its travel.
+    Unreachable(String),
+    /// Type-I or type-II singular, or closer to it than the geometry's threshold: the links
+    /// do not hold the platform.
+    Singular(String),
+    /// The linearisation or the eigenvalue problem failed.
+    Failed(String),
+}
+
+/// [`lowest_frequency`] of `scene` at rest at `pose`, with the pose first checked: out of
+/// reach, and singular (type I, or type II by the kinematic or the equilibrium measure), are
+/// marked as such rather than failures.
+pub fn rest_frequency(scene: &Scene, pose: Pose) -> RestFrequency {
+    use flexprr_kinematics::{KinematicsError, PlatformMotion};
+    let geometry = &scene.machine.geometry;
+    let state = match geometry.inverse_kinematics(&PlatformMotion::at_rest(pose)) {
+        Ok(state) => state,
+        Err(e @ (KinematicsError::Unreachable { .. } | KinematicsError::TravelExceeded { .. })) => {
+            return RestFrequency::Unreachable(e.to_string());
+        }
+        Err(e @ KinematicsError::Singular { .. }) => return RestFrequency::Singular(e.to_string()),
+        Err(e) => return RestFrequency::Failed(e.to_string()),
+    };
+    let measure = flexprr_dynamics::equilibrium_measure(&state);
+    if measure.is_nan() || measure < geometry.thresholds.type_ii {
+        return RestFrequency::Singular(format!(
+            "type-II measure of the platform's equilibrium {measure:.2e} below {:.1e}",
+            geometry.thresholds.type_ii
+        ));
+    }
+    match lowest_frequency(scene, OperatingPoint::Rest(pose)) {
+        Ok((frequency_hz, damping_ratio)) => RestFrequency::Found {
+            frequency_hz,
+            damping_ratio,
+            type_ii_measure: measure,
+        },
+        // The rigid inverse dynamics (a controller's feedforward) measures the same
+        // equilibrium at the pose, with its own rounding: singular too.
+        Err(
+            e @ RunError::Model(flexprr_dynamics::DynamicsError::SingularInverseDynamics { .. }),
+        ) => RestFrequency::Singular(e.to_string()),
+        Err(e) => RestFrequency::Failed(e.to_string()),
+    }
+}
+
 /// The scene's start pose: the trajectory's pose at the first output time, the default
 /// operating point of `flexprr modes`.
 pub fn start_pose(scene: &Scene) -> Pose {
