@@ -30,6 +30,9 @@ enum Command {
     Merge(cli::study::MergeArgs),
     /// Wall time against achieved error for each integrator over a ladder of tolerances.
     WorkPrecision(cli::work_precision::WorkPrecisionArgs),
+    /// The whole machine's natural frequencies, damping ratios and mode shapes at a pose or
+    /// a time of the motion.
+    Modes(cli::modes::ModesArgs),
 }
 
 /// Let a closed reader end the program quietly, as it ends `cat` or `head`.
@@ -61,6 +64,7 @@ fn main() -> ExitCode {
         Command::Study(a) => cli::study::study(a),
         Command::Merge(a) => cli::study::merge(a),
         Command::WorkPrecision(a) => cli::work_precision::run(a),
+        Command::Modes(a) => cli::modes::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

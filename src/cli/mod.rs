@@ -3,6 +3,8 @@
 
 pub mod beam;
 pub mod kinematics;
+pub mod map;
+pub mod modes;
 pub mod run;
 pub mod study;
 pub mod work_precision;

@@ -243,6 +243,9 @@ pub fn study(args: StudyArgs) -> Result<(), Failure> {
     if study.search.is_some() {
         return search(&study, &args, &options);
     }
+    if study.map.is_some() {
+        return super::map::run(&study, &args.out, &options, args.quiet, failure);
+    }
     let total = study.shard_cases(args.shard).len() as u64;
     let view = StudyProgressView::new(&study, total, args.quiet);
     let summary = run_study(&study, &args.out, &options, &|progress, record| {

@@ -106,6 +106,10 @@ pub enum Quantity {
     MotorSpeed,
     /// Whether the motor torque is saturated at its peak (1) or not (0).
     MotorSaturated,
+    /// A whole-machine natural frequency `|lambda| / 2 pi` of the linearised model (Hz).
+    MachineFrequency,
+    /// A whole-machine damping ratio `-Re(lambda) / |lambda|` (dimensionless).
+    MachineDampingRatio,
 }
 
 /// How a quantity is written: header stem, optional suffix after the indices, unit, and the
@@ -186,6 +190,8 @@ impl Quantity {
             Q::MotorTorque => sp("motor_torque", None, "N_m", "τ", "N·m"),
             Q::MotorSpeed => sp("motor_speed", None, "rev_s", "n", "rev/s"),
             Q::MotorSaturated => sp("motor_saturated", None, "flag", "sat", "1"),
+            Q::MachineFrequency => sp("f_machine", None, "Hz", "f", "Hz"),
+            Q::MachineDampingRatio => sp("zeta_machine", None, "ratio", "ζ", "1"),
         }
     }
 

@@ -15,6 +15,8 @@ mod error;
 pub mod guard;
 mod integrate;
 pub mod linear;
+pub mod machine_frequencies;
+pub mod machine_modes;
 mod output;
 pub mod output_dir;
 mod outputs;

@@ -156,6 +156,10 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         "frequencies": frequencies,
         "control": control,
         "feasibility": feasibility,
+        "machine_frequencies": result
+            .machine_frequencies
+            .as_ref()
+            .map_or(Value::Null, |n| n.to_json()),
         "peak_abs": peaks,
         "scene_file": serde_json::to_value(&scene.file).unwrap_or(Value::Null),
     })
@@ -232,6 +236,8 @@ pub const RUN_PRODUCTS: Products = Products {
         "platform_deviation.svg",
         "kinematics.svg",
         "energies.svg",
+        "machine_frequencies.csv",
+        "machine_frequencies.svg",
     ],
     patterns: &[
         ("deflections_xi", ".svg"),

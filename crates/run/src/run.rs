@@ -173,8 +173,19 @@ fn run_into(
     result: &mut RunResult,
 ) -> Result<(), RunError> {
     let mut ked = scene.build_ked(false)?;
-    let (mut integrated, failure) = if model.is_some() || scene.integrates_model() {
-        let (i, f) = integrate_all(scene, model, report, &mut result.stats)?;
+    let model = match model {
+        None if scene.integrates_model() => Some(scene.build_model()?),
+        model => model,
+    };
+    // Linearising along the motion takes the last part of the progress.
+    let share = match &model {
+        Some(m) if wants(scene, OutputKind::MachineFrequencies) => {
+            crate::machine_frequencies::integration_share(m.dim())
+        }
+        _ => 1.0,
+    };
+    let (mut integrated, failure) = if model.is_some() {
+        let (i, f) = integrate_all(scene, model, &mut |f| report(share * f), &mut result.stats)?;
         (Some(i), f)
     } else {
         (None, None)
@@ -184,7 +195,15 @@ fn run_into(
         (Some(i), Some(_)) => i.solution.t.clone(),
         _ => scene.output_times.clone(),
     };
-    let outcome = produce(scene, &times, &mut ked, integrated.as_mut(), result);
+    let mut later = |f: f64| report(share + (1.0 - share) * f);
+    let outcome = produce(
+        scene,
+        &times,
+        &mut ked,
+        integrated.as_mut(),
+        result,
+        &mut later,
+    );
     if let Some(i) = &integrated {
         let c = i.model.counters();
         result.stats.rhs_evaluations += c.rhs_evaluations;
@@ -207,13 +226,15 @@ fn run_into(
     }
 }
 
-/// Produces every requested output at `times` into `result`.
+/// Produces every requested output at `times` into `result`; `report` sees the progress of
+/// the outputs that take long (the linearisations along the motion).
 fn produce(
     scene: &Scene,
     times: &[f64],
     ked: &mut ModalSystem,
     mut integrated: Option<&mut Integrated>,
     result: &mut RunResult,
+    report: &mut dyn FnMut(f64),
 ) -> Result<(), RunError> {
     let rigid_outputs = [
         OutputKind::Kinematics,
@@ -250,7 +271,22 @@ fn produce(
     let Some(integrated) = integrated else {
         return Ok(());
     };
-    produce_integrated(scene, samples.as_ref(), ked, integrated, result)
+    produce_integrated(scene, samples.as_ref(), ked, integrated, result)?;
+    if wants(scene, OutputKind::MachineFrequencies) {
+        // Last: the linearisations evaluate the model away from its solution.
+        let out = crate::machine_frequencies::machine_frequencies(
+            integrated.model.as_mut(),
+            &integrated.solution,
+            ked,
+            report,
+        );
+        result.tables.extend(out.table);
+        result.machine_frequencies = out.note;
+        if let Some(e) = out.failure {
+            return Err(e);
+        }
+    }
+    Ok(())
 }
 
 /// The outputs of the commanded rigid motion: kinematics, driving forces (with the model's

@@ -43,6 +43,9 @@ pub struct RunResult {
     /// The feasibility of the commanded motion for the scene's motors and the servo summary
     /// of an actuated run (docs/control.md).
     pub control: crate::control::ControlReport,
+    /// What the `machine_frequencies` output did (instants, stride, modes, time), when
+    /// requested.
+    pub machine_frequencies: Option<crate::machine_frequencies::MachineFrequencyNote>,
 }
 
 impl RunResult {

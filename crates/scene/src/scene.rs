@@ -772,6 +772,18 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
             ));
         }
     }
+    if raw.model.coupling == CouplingChoice::Ked {
+        let whole = OutputKind::MachineFrequencies;
+        if let Some(k) = raw.output.requests.iter().position(|r| *r == whole) {
+            return Err(c.value_error(
+                &format!("output.requests.{k}"),
+                "\"machine_frequencies\" linearises the whole machine (sliders, links and \
+                 platform together), which the KED model does not have: it prescribes the \
+                 platform and the sliders (its per-link frequencies are the \"frequencies\" \
+                 output); set model.coupling = \"coupled\" or \"nonlinear\"",
+            ));
+        }
+    }
     if raw.model.coupling == CouplingChoice::Nonlinear {
         let modal = [
             (OutputKind::Modes, "modes"),

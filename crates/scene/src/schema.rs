@@ -602,11 +602,15 @@ pub enum OutputKind {
     /// The actuators' force commands and forces, and the motors' torque, speed and
     /// saturation where a motor is modelled.
     Actuators,
+    /// The whole machine's lowest natural frequencies and damping ratios along the motion:
+    /// the model linearised about its integrated state at (at most about 200 of) the output
+    /// times (docs/linear.md); coupled and nonlinear models only.
+    MachineFrequencies,
 }
 
 impl OutputKind {
     /// All kinds with their file-stem names.
-    pub const ALL: [(OutputKind, &'static str); 14] = [
+    pub const ALL: [(OutputKind, &'static str); 15] = [
         (OutputKind::Kinematics, "kinematics"),
         (OutputKind::DrivingForces, "driving_forces"),
         (OutputKind::JointReactions, "joint_reactions"),
@@ -621,6 +625,7 @@ impl OutputKind {
         (OutputKind::Machine, "machine"),
         (OutputKind::Tracking, "tracking"),
         (OutputKind::Actuators, "actuators"),
+        (OutputKind::MachineFrequencies, "machine_frequencies"),
     ];
 
     /// The name used in scene files and output file names.
@@ -644,6 +649,7 @@ impl OutputKind {
                 | OutputKind::Viewer
                 | OutputKind::Snapshots
                 | OutputKind::Tracking
+                | OutputKind::MachineFrequencies
         )
     }
 }

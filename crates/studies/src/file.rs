@@ -41,6 +41,10 @@ pub struct StudyFile {
     /// smallest value that collapses.
     #[serde(default)]
     pub search: Option<crate::search::SearchConfig>,
+    /// A workspace map instead of a sweep (`crate::map`): a quantity of the machine at rest
+    /// over a grid of poses.
+    #[serde(default)]
+    pub map: Option<crate::map::MapConfig>,
 }
 
 /// How sweep axes combine into cases.

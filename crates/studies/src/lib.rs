@@ -8,6 +8,8 @@
 mod error;
 mod file;
 pub mod keys;
+pub mod map;
+mod map_figure;
 mod plot;
 mod quantity;
 mod record;
@@ -17,5 +19,6 @@ pub mod study;
 mod validate;
 
 pub use study::{
-    Study, StudyError, StudyOptions, merge_studies, merge_studies_with, run_search_study, run_study,
+    Study, StudyError, StudyOptions, merge_studies, merge_studies_with, run_map_study,
+    run_search_study, run_study,
 };

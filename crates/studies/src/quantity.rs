@@ -51,6 +51,11 @@ pub enum Quantity {
     /// `collapse_deflection_m` (empty without a collapse). A collapsed case is `ok`: the
     /// collapse is its result, and the other quantities cover the run up to it.
     Collapse,
+    /// The lowest whole-machine natural frequency at rest at the case's start pose and its
+    /// damping ratio (docs/linear.md: the case's model held there, sliders locked or on its
+    /// control law, linearised): columns `f_machine_lowest_Hz`, `zeta_machine_lowest`.
+    /// Coupled and nonlinear models; computed from the case's scene, whatever it requests.
+    LowestFrequency,
 }
 
 /// What a quantity column holds.
@@ -209,6 +214,20 @@ impl Quantity {
                     OptionalNumber,
                 ),
             ],
+            Quantity::LowestFrequency => vec![
+                Column::new(
+                    "f_machine_lowest_Hz".into(),
+                    "lowest whole-machine frequency at rest".into(),
+                    "Hz",
+                    Number,
+                ),
+                Column::new(
+                    "zeta_machine_lowest".into(),
+                    "damping ratio of the lowest whole-machine mode".into(),
+                    "",
+                    Number,
+                ),
+            ],
             Quantity::Buckling { link } => vec![
                 Column::new(
                     format!("buckles_{link}"),
@@ -234,7 +253,7 @@ impl Quantity {
             | Quantity::PeakAxialForce { link }
             | Quantity::PeakDeflection { link }
             | Quantity::Buckling { link } => Some(link),
-            Quantity::Collapse => None,
+            Quantity::Collapse | Quantity::LowestFrequency => None,
         }
     }
 
@@ -280,6 +299,12 @@ impl Quantity {
             Quantity::PeakDeflection { .. } => (!has(OutputKind::Deflections))
                 .then(|| needs("deflections"))
                 .flatten(),
+            Quantity::LowestFrequency => (scene.coupling.name() == "ked").then(|| {
+                "quantity f_machine_lowest_Hz needs a model of the whole machine \
+                 (model.coupling = \"coupled\" or \"nonlinear\"): the KED model prescribes the \
+                 platform and the sliders"
+                    .into()
+            }),
             Quantity::Collapse => {
                 if scene.coupling.name() == "ked" {
                     Some(
@@ -398,6 +423,29 @@ impl Quantity {
                 })
             }
             Quantity::Collapse => Err("the collapse is derived above".into()),
+            Quantity::LowestFrequency => Err(
+                "quantity f_machine_lowest_Hz is computed from the case's scene \
+                 (Quantity::derive_from_scene), not from its run"
+                    .into(),
+            ),
+        }
+    }
+
+    /// The values of a quantity computed from the case's scene rather than its run (the
+    /// lowest whole-machine frequency at rest at the start pose); `None` for the others.
+    pub fn derive_from_scene(
+        &self,
+        scene: &flexprr_scene::Scene,
+    ) -> Option<Result<Vec<String>, String>> {
+        use flexprr_run::linear::OperatingPoint;
+        use flexprr_run::machine_modes::{lowest_frequency, start_pose};
+        match self {
+            Quantity::LowestFrequency => Some(
+                lowest_frequency(scene, OperatingPoint::Rest(start_pose(scene)))
+                    .map(|(f, zeta)| vec![format_value(f), format_value(zeta)])
+                    .map_err(|e| format!("quantity f_machine_lowest_Hz: {e}")),
+            ),
+            _ => None,
         }
     }
 }

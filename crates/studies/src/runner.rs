@@ -66,6 +66,9 @@ pub const STUDY_PRODUCTS: Products = Products {
         "cases",
         "search.json",
         "search.md",
+        "map.csv",
+        "map.json",
+        "map.svg",
     ],
     patterns: &[],
     legacy: Some(Legacy::JsonKey {
@@ -278,6 +281,9 @@ pub fn run_study(
     if study.search.is_some() {
         return run_search_study(study, out, options, &|_, _| {});
     }
+    if study.map.is_some() {
+        return run_map_study(study, out, options, &|_| {}).map(|(summary, _)| summary);
+    }
     let threads = worker_threads(options.threads)?;
     let target = output_dir(study, out, options.force, &[])?;
     // Everything already there is checked before anything is written.
@@ -393,6 +399,62 @@ pub fn run_search_study(
         results: out.join("results.csv"),
         searches,
     })
+}
+
+/// Runs a workspace-map study ([`crate::map`]): every pose of the grid in parallel on
+/// [`StudyOptions::threads`] workers, then `map.csv`, `map.json` and `map.svg` written
+/// together (staged and published); no shards and no resume (a map takes seconds to
+/// minutes). `on_pose` sees the progress after each pose. Returns the summary and the map.
+///
+/// # Errors
+/// As [`run_study`]; [`StudyError::Option`] for a shard or a resume,
+/// [`StudyError::Directory`] for a study without `[map]`.
+pub fn run_map_study(
+    study: &Study,
+    out: &Path,
+    options: &StudyOptions,
+    on_pose: &(dyn Fn(&crate::map::MapProgress) + Sync),
+) -> Result<(StudySummary, crate::map::MapOutcome), StudyError> {
+    let Some(map) = &study.map else {
+        return Err(StudyError::Directory {
+            dir: out.display().to_string(),
+            message: "the study has no [map] table: run it with run_study".into(),
+        });
+    };
+    if options.shard.is_some() || options.resume {
+        return Err(StudyError::Option {
+            option: if options.resume {
+                "--resume"
+            } else {
+                "--shard"
+            }
+            .into(),
+            message: "a workspace map is computed and written whole (seconds for the coupled \
+                      model): it cannot be sharded or resumed"
+                .into(),
+        });
+    }
+    let threads = worker_threads(options.threads)?;
+    let target = output_dir(study, out, options.force, &[])?;
+    target.check_writable()?;
+    let scene = crate::map::map_scene(study)?;
+    let outcome = crate::map::run_map(study, map, &scene, threads, on_pose)?;
+    let staging = target.stage()?;
+    crate::map::write_map_files(study, map, &scene, &outcome, staging.path())?;
+    staging.publish()?;
+    let p = outcome.progress;
+    let summary = StudySummary {
+        progress: StudyProgress {
+            total: p.total,
+            done: p.done,
+            failed: p.failed,
+            resumed: 0,
+        },
+        ran: p.done,
+        results: out.join("map.csv"),
+        searches: Vec::new(),
+    };
+    Ok((summary, outcome))
 }
 
 /// Runs `pending` cases on the worker pool, writing each record (and its full outputs when

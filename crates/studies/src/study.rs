@@ -36,7 +36,8 @@ pub use crate::record::{
 };
 pub use crate::runner::{
     MAX_THREADS_PER_CPU, MergeSummary, STUDY_PRODUCTS, Shard, StudyOptions, StudyProgress,
-    StudySummary, merge_studies, merge_studies_with, run_search_study, run_study, worker_threads,
+    StudySummary, merge_studies, merge_studies_with, run_map_study, run_search_study, run_study,
+    worker_threads,
 };
 
 use crate::record::format_parameter;
@@ -81,6 +82,8 @@ pub struct Study {
     pub fingerprint: String,
     /// The speed search, when the study is one (`[search]`) instead of a sweep.
     pub search: Option<crate::search::Search>,
+    /// The workspace map, when the study is one (`[map]`) instead of a sweep.
+    pub map: Option<crate::map::Map>,
     /// The files the study reads (the study file, when loaded from one, and the base
     /// scene file): an output directory never overwrites them.
     pub inputs: Vec<std::path::PathBuf>,
@@ -261,6 +264,16 @@ impl Study {
                 Some(search)
             }
         };
+        let map = match &raw.map {
+            None => None,
+            Some(config) => {
+                crate::validate::check_map_alone(&raw, &at)?;
+                Some(
+                    crate::map::Map::from_config(config)
+                        .map_err(|(key, message)| at.input(&key, message))?,
+                )
+            }
+        };
         let name = match &raw.name {
             Some(name) => {
                 if let Some(why) = flexprr_scene::unsafe_name_reason(name) {
@@ -286,6 +299,7 @@ impl Study {
             plots: raw.plot.clone(),
             fingerprint: String::new(),
             search,
+            map,
             inputs: source.path().into_iter().collect(),
         };
         study.check_plots(&at)?;
@@ -296,9 +310,10 @@ impl Study {
             axes: &raw.axis,
             base: &study.base,
         };
-        match &study.search {
-            Some(search) => crate::validate::check_searches(&study, search, &context)?,
-            None => {
+        match (&study.search, &study.map) {
+            (Some(search), _) => crate::validate::check_searches(&study, search, &context)?,
+            (None, Some(map)) => crate::validate::check_map(&study, map, &context)?,
+            (None, None) => {
                 crate::validate::check_cases(&study, &context)?;
                 crate::validate::check_quantities_available(&study, &context)?;
             }
@@ -378,6 +393,9 @@ impl Study {
             }
         }
         let _ = write!(canonical, "\n{combine:?}\n{}", self.columns().join(","));
+        if let Some(map) = &self.map {
+            let _ = write!(canonical, "\nmap: {map:?}");
+        }
         format!("{:016x}", fnv1a(canonical.as_bytes()))
     }
 
@@ -530,7 +548,7 @@ impl Study {
         if let Some((time, message)) = divergence(&result) {
             return Err(CaseFailure::new(FailureKind::Diverged, time, &message));
         }
-        let values = self.derive_quantities(&result, collapse.as_ref())?;
+        let values = self.derive_quantities(&scene, &result, collapse.as_ref())?;
         Ok((values, scene, result))
     }
 
@@ -538,13 +556,15 @@ impl Study {
     /// value fails the case instead of reaching the table).
     fn derive_quantities(
         &self,
+        scene: &Scene,
         result: &RunResult,
         collapse: Option<&Collapse>,
     ) -> Result<Vec<String>, CaseFailure> {
         let mut values = Vec::with_capacity(self.quantity_columns());
         for q in &self.quantities {
             let derived = q
-                .derive_outcome(result, collapse)
+                .derive_from_scene(scene)
+                .unwrap_or_else(|| q.derive_outcome(result, collapse))
                 .map_err(|m| CaseFailure::new(FailureKind::Quantity, None, &m))?;
             for (value, column) in derived.into_iter().zip(q.column_specs()) {
                 if !column.accepts(&value) {

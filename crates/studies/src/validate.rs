@@ -440,3 +440,125 @@ pub(crate) fn plot_file_problem(file: &str) -> Option<String> {
     }
     None
 }
+
+/// A map study has none of a sweep's or a search's tables: its grid is its only variable.
+///
+/// # Errors
+/// [`StudyError::Input`] at the first table or key that does not belong with `[map]`.
+pub(crate) fn check_map_alone(
+    raw: &crate::file::StudyFile,
+    at: &Locator<'_>,
+) -> Result<(), StudyError> {
+    if raw.search.is_some() {
+        return Err(at.input(
+            "search",
+            "a study is a sweep, a speed search or a workspace map: give [search] or [map], not both",
+        ));
+    }
+    if !raw.axis.is_empty() {
+        return Err(at.input(
+            "axis.0",
+            "a workspace map has no sweep axes: it varies the pose over its own grid (map.x, \
+             map.y); to map variants (another model, other gains), run one map study per \
+             variant with the change in [set]",
+        ));
+    }
+    if !raw.quantities.is_empty() {
+        return Err(at.input(
+            "quantities",
+            "a workspace map computes map.quantity at every pose; `quantities` are a sweep's \
+             columns: remove them",
+        ));
+    }
+    if !raw.plot.is_empty() {
+        return Err(at.input(
+            "plot.0",
+            "a workspace map draws map.svg itself: remove the [[plot]] tables",
+        ));
+    }
+    Ok(())
+}
+
+/// A map's base scene: a valid scene (its errors placed in the user's files), with a model
+/// of the whole machine (coupled or nonlinear: the KED model prescribes the platform), and
+/// at least one pose of the grid within reach.
+///
+/// # Errors
+/// The placed error of the base scene or `[set]`, or [`StudyError::Input`] at `map`.
+pub(crate) fn check_map(
+    study: &Study,
+    map: &crate::map::Map,
+    context: &Context<'_>,
+) -> Result<(), StudyError> {
+    check_cases(study, context)?;
+    let Some(scene) = study.cases.first().and_then(|c| study.case_scene(c).ok()) else {
+        return Ok(());
+    };
+    if scene.coupling.name() == "ked" {
+        return Err(context.at.input(
+            "map",
+            format!(
+                "{} needs a model of the whole machine, and the base scene's model.coupling is \
+                 \"ked\", which prescribes the platform and the sliders: set model.coupling = \
+                 \"coupled\" or \"nonlinear\" (in [set.model] or in the base scene)",
+                map.quantity.name()
+            ),
+        ));
+    }
+    let phi = map.phi(&scene);
+    let geometry = &scene.machine.geometry;
+    let reachable = |pose: &flexprr_kinematics::Pose| {
+        geometry
+            .inverse_kinematics(&flexprr_kinematics::PlatformMotion::at_rest(*pose))
+            .is_ok()
+    };
+    if !map.poses(phi).iter().any(reachable) {
+        return Err(context.at.input(
+            "map",
+            format!(
+                "none of the {} x {} poses of the grid (x from {} to {} m, y from {} to {} m) \
+                 is within reach at phi = {} deg: {}",
+                map.x.len(),
+                map.y.len(),
+                map.x[0],
+                map.x[map.x.len() - 1],
+                map.y[0],
+                map.y[map.y.len() - 1],
+                phi.to_degrees(),
+                reachable_box(geometry, phi)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Where the platform reaches at orientation `phi`, in words: the bounding box of the
+/// reachable nodes of a 121 x 121 section over the guides' box.
+fn reachable_box(geometry: &flexprr_kinematics::Geometry, phi: f64) -> String {
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for leg in &geometry.legs {
+        for r in [leg.guide.travel.0, leg.guide.travel.1] {
+            let p = leg.guide.slider_point(r);
+            (x0, x1, y0, y1) = (x0.min(p.x), x1.max(p.x), y0.min(p.y), y1.max(p.y));
+        }
+    }
+    let section = flexprr_viewer::workspace_section(geometry, phi, (x0, x1), (y0, y1), 121);
+    let n = section.x.len();
+    let nodes: Vec<(f64, f64)> = (0..section.reachable.len())
+        .filter(|&k| section.reachable[k])
+        .map(|k| (section.x[k % n], section.y[k / n]))
+        .collect();
+    if nodes.is_empty() {
+        return "the machine reaches no pose at this orientation".into();
+    }
+    let fold = |f: fn(f64, f64) -> f64, init: f64, pick: fn(&(f64, f64)) -> f64| {
+        nodes.iter().map(pick).fold(init, f)
+    };
+    format!(
+        "the reachable set spans about x from {:.3} to {:.3} m and y from {:.3} to {:.3} m",
+        fold(f64::min, f64::MAX, |p| p.0),
+        fold(f64::max, f64::MIN, |p| p.0),
+        fold(f64::min, f64::MAX, |p| p.1),
+        fold(f64::max, f64::MIN, |p| p.1)
+    )
+}

@@ -224,6 +224,10 @@ fn mutated_studies_load_or_give_located_one_line_errors() {
     .collect();
     seeds.push(("sweep.toml".into(), SWEEP.into()));
     seeds.push(("search.toml".into(), SEARCH.into()));
+    seeds.push((
+        "study_frequency_map.toml".into(),
+        std::fs::read_to_string(configs().join("study_frequency_map.toml")).unwrap(),
+    ));
     let mut rng = Lcg(0x5eed_57d1_0028);
     let (mut total, mut rejected) = (0usize, 0usize);
     for (name, original) in &seeds {

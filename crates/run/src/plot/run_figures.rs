@@ -106,6 +106,10 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
             figure("Strain energy of the links").panel(panel(Axis::new("U", "J"), s)),
         ));
     }
+    if let Some(t) = result.table("machine_frequencies") {
+        let f = super::machine_frequencies_figure::machine_frequencies_figure(t, &about);
+        out.push(("machine_frequencies.svg".to_string(), f));
+    }
     out.extend(crate::control::figures(scene, result));
     out.retain(|(_, f)| f.panels.iter().any(|p| !p.series.is_empty()));
     out

@@ -1,0 +1,279 @@
+//! The whole machine's modes at an operating point (docs/linear.md, `flexprr modes`): the
+//! scene's model linearised there ([`crate::linear`], `flexprr_linear::linearize`) with the
+//! shape outputs (slider positions, platform pose, each link's deflection at
+//! [`SHAPE_POINTS`] points), its eigenvalues (`flexprr_linear::modes`), each mode's shape in
+//! physical terms and a short classification of it; the files `modes.json`, `modes.csv` and
+//! `modes.svg` ([`MODES_PRODUCTS`]).
+//!
+//! The lowest frequency alone ([`lowest_frequency`]) skips the shape outputs: what a
+//! workspace map needs at each of its poses.
+
+mod figure;
+mod report;
+mod shape;
+
+use std::time::Instant;
+
+use flexprr_kinematics::Pose;
+use flexprr_linear::{Axis, Complex, Input, LinearError, Output, linearize, modes};
+use flexprr_scene::{ScenarioError, Scene};
+
+use crate::error::RunError;
+use crate::linear::{OperatingPoint, operating_point};
+use crate::output_dir::Products;
+
+pub use figure::modes_svg;
+pub use report::{modes_csv, modes_json, modes_summary_json};
+pub use shape::ModeShape;
+
+/// Points along each link (equally spaced from `xi = 0` to `1`) at which mode shapes are
+/// given.
+pub const SHAPE_POINTS: usize = 21;
+
+/// The files of `flexprr modes --out` (docs/linear.md): what the output-directory policy
+/// refuses to write over and recognises an earlier output by.
+pub const MODES_PRODUCTS: Products = Products {
+    kind: "modes",
+    names: &["modes.json", "modes.csv", "modes.svg"],
+    patterns: &[],
+    legacy: None,
+};
+
+/// One whole-machine mode with its shape.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MachineMode {
+    /// The eigenvalue `lambda` (1/s).
+    pub eigenvalue: Complex,
+    /// `|lambda| / 2 pi` (Hz), the undamped natural frequency.
+    pub frequency_hz: f64,
+    /// `-Re(lambda) / |lambda|` (MATLAB's `damp`).
+    pub damping_ratio: f64,
+    /// What moves most: `servo` (the sliders on their control loops), `platform` (the
+    /// platform on the links' axial stiffness), or `bending link 2`, `bending links 1, 3`
+    /// with the number of half-waves of the dominant link.
+    pub kind: String,
+    /// The shape: sliders, platform and links.
+    pub shape: ModeShape,
+}
+
+/// Wall-clock times of one modal analysis (s).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ModesTiming {
+    /// Building the model at the operating point (and integrating to a time).
+    pub model_s: f64,
+    /// The linearisation (`A`, and `C` for the shape outputs).
+    pub linearisation_s: f64,
+    /// Balancing, the eigenvalues and eigenvectors, the shapes.
+    pub eigen_s: f64,
+}
+
+/// The whole machine's modes at an operating point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MachineModes {
+    /// The scene's name.
+    pub scene: String,
+    /// The scene's model as `flexprr check` describes it.
+    pub model: String,
+    /// `locked` (prescribed sliders) or `held by the <law> control law`.
+    pub sliders: String,
+    /// Where the model was linearised.
+    pub operating_point: OperatingPoint,
+    /// Time of the operating point (s).
+    pub t: f64,
+    /// The platform pose of the model there (m, m, rad).
+    pub pose: Pose,
+    /// The slider positions there (m).
+    pub rho: [f64; 3],
+    /// Length of the model's state (coordinates, rates, control states).
+    pub state_dimension: usize,
+    /// Number of generalized coordinates.
+    pub coordinates: usize,
+    /// The points along each link of the shapes.
+    pub xi: Vec<f64>,
+    /// Every mode, sorted by frequency, rigid-body (zero) modes left out.
+    pub modes: Vec<MachineMode>,
+    /// Where the time went.
+    pub timing: ModesTiming,
+}
+
+/// The shape outputs: sliders, platform pose, each link's deflection at `points` points.
+fn shape_outputs(points: usize) -> (Vec<Output>, Vec<f64>) {
+    let xi: Vec<f64> = (0..points)
+        .map(|j| j as f64 / (points - 1) as f64)
+        .collect();
+    let mut outputs: Vec<Output> = (0..3).map(Output::SliderPosition).collect();
+    outputs.extend([Axis::X, Axis::Y, Axis::Phi].map(Output::Platform));
+    for link in 0..3 {
+        outputs.extend(xi.iter().map(|&xi| Output::Deflection { link, xi }));
+    }
+    (outputs, xi)
+}
+
+/// The linearisation's error as a run error: a model failure stays one, the rest is a
+/// failure of the analysis.
+fn linear_error(e: LinearError) -> RunError {
+    match e {
+        LinearError::Model(e) => RunError::Model(e),
+        other => RunError::Scene(ScenarioError::Run(other.to_string())),
+    }
+}
+
+/// The whole machine's modes of `scene` at `at`, with shapes at `points` points along each
+/// link (at least 2; [`SHAPE_POINTS`] is a good choice).
+///
+/// # Errors
+/// As [`operating_point`] (a KED scene, a pose the machine cannot hold or a singular one, a
+/// time outside the span, a run that fails before it), or the linearisation or the
+/// eigenvalue problem fails.
+pub fn machine_modes(
+    scene: &Scene,
+    at: OperatingPoint,
+    points: usize,
+) -> Result<MachineModes, RunError> {
+    let points = points.max(2);
+    let clock = Instant::now();
+    let mut point = operating_point(scene, at)?;
+    let model_s = clock.elapsed().as_secs_f64();
+    let snapshot = point.model.snapshot(point.t, &point.state)?;
+    let (outputs, xi) = shape_outputs(points);
+    let clock = Instant::now();
+    let no_inputs: [Input; 0] = [];
+    let lin = linearize(
+        point.model.as_mut(),
+        point.t,
+        &point.state,
+        &no_inputs,
+        &outputs,
+    )
+    .map_err(linear_error)?;
+    let linearisation_s = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let found = modes(&lin).map_err(linear_error)?;
+    let geometry = &scene.machine.geometry;
+    let modes = found
+        .iter()
+        .map(|m| {
+            let shape = ModeShape::from_outputs(&m.shape, points, snapshot.platform.pose, geometry);
+            MachineMode {
+                eigenvalue: m.eigenvalue,
+                frequency_hz: m.frequency_hz,
+                damping_ratio: m.damping_ratio,
+                kind: shape.kind(),
+                shape,
+            }
+        })
+        .collect();
+    let eigen_s = clock.elapsed().as_secs_f64();
+    Ok(MachineModes {
+        scene: scene.name.clone(),
+        model: scene.model_description(),
+        sliders: sliders_description(scene),
+        operating_point: at,
+        t: point.t,
+        pose: snapshot.platform.pose,
+        rho: snapshot.sliders.map(|s| s.position),
+        state_dimension: lin.a.nrows(),
+        coordinates: lin.coordinates,
+        xi,
+        modes,
+        timing: ModesTiming {
+            model_s,
+            linearisation_s,
+            eigen_s,
+        },
+    })
+}
+
+/// How the sliders are held in a scene's linear models.
+pub fn sliders_description(scene: &Scene) -> String {
+    match &scene.file.control {
+        Some(control) => format!(
+            "held by the {} control law (its gains act along the guides)",
+            control.kind
+        ),
+        None => "locked".to_string(),
+    }
+}
+
+/// The lowest whole-machine frequency (Hz) and its damping ratio at `at`, without mode
+/// shapes (no outputs are linearised): what a workspace map computes at each pose.
+///
+/// # Errors
+/// As [`machine_modes`]; a model without any non-rigid mode is a failure of the analysis.
+pub fn lowest_frequency(scene: &Scene, at: OperatingPoint) -> Result<(f64, f64), RunError> {
+    let mut point = operating_point(scene, at)?;
+    let lin =
+        linearize(point.model.as_mut(), point.t, &point.state, &[], &[]).map_err(linear_error)?;
+    let found = modes(&lin).map_err(linear_error)?;
+    let first = found.first().ok_or_else(|| {
+        RunError::Scene(ScenarioError::Run(
+            "the linear model has no mode of non-zero frequency".into(),
+        ))
+    })?;
+    Ok((first.frequency_hz, first.damping_ratio))
+}
+
+/// The lowest whole-machine frequency at rest at one pose, or why there is none: what a
+/// workspace map records at each of its poses.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RestFrequency {
+    /// The lowest frequency (Hz), its damping ratio and the pose's type-II measure.
+    Found {
+        /// `|lambda| / 2 pi` of the lowest mode (Hz).
+        frequency_hz: f64,
+        /// Its `-Re(lambda) / |lambda|`.
+        damping_ratio: f64,
+        /// The platform equilibrium's type-II measure there (1 far from a singularity, 0
+        /// at one).
+        type_ii_measure: f64,
+    },
+    /// The machine cannot assemble there, or a slider is out of its travel.
+    Unreachable(String),
+    /// Type-I or type-II singular, or closer to it than the geometry's threshold: the links
+    /// do not hold the platform.
+    Singular(String),
+    /// The linearisation or the eigenvalue problem failed.
+    Failed(String),
+}
+
+/// [`lowest_frequency`] of `scene` at rest at `pose`, with the pose first checked: out of
+/// reach, and singular (type I, or type II by the kinematic or the equilibrium measure), are
+/// marked as such rather than failures.
+pub fn rest_frequency(scene: &Scene, pose: Pose) -> RestFrequency {
+    use flexprr_kinematics::{KinematicsError, PlatformMotion};
+    let geometry = &scene.machine.geometry;
+    let state = match geometry.inverse_kinematics(&PlatformMotion::at_rest(pose)) {
+        Ok(state) => state,
+        Err(e @ (KinematicsError::Unreachable { .. } | KinematicsError::TravelExceeded { .. })) => {
+            return RestFrequency::Unreachable(e.to_string());
+        }
+        Err(e @ KinematicsError::Singular { .. }) => return RestFrequency::Singular(e.to_string()),
+        Err(e) => return RestFrequency::Failed(e.to_string()),
+    };
+    let measure = flexprr_dynamics::equilibrium_measure(&state);
+    if measure.is_nan() || measure < geometry.thresholds.type_ii {
+        return RestFrequency::Singular(format!(
+            "type-II measure of the platform's equilibrium {measure:.2e} below {:.1e}",
+            geometry.thresholds.type_ii
+        ));
+    }
+    match lowest_frequency(scene, OperatingPoint::Rest(pose)) {
+        Ok((frequency_hz, damping_ratio)) => RestFrequency::Found {
+            frequency_hz,
+            damping_ratio,
+            type_ii_measure: measure,
+        },
+        // The rigid inverse dynamics (a controller's feedforward) measures the same
+        // equilibrium at the pose, with its own rounding: singular too.
+        Err(
+            e @ RunError::Model(flexprr_dynamics::DynamicsError::SingularInverseDynamics { .. }),
+        ) => RestFrequency::Singular(e.to_string()),
+        Err(e) => RestFrequency::Failed(e.to_string()),
+    }
+}
+
+/// The scene's start pose: the trajectory's pose at the first output time, the default
+/// operating point of `flexprr modes`.
+pub fn start_pose(scene: &Scene) -> Pose {
+    scene.trajectory.motion(scene.output_times[0]).pose
+}

@@ -1,0 +1,373 @@
+//! `flexprr modes` (docs/linear.md): the locked machine at rest against the pinned-pinned
+//! closed form, the JSON's shape and order, the files of `--out`, and every refusal (exit
+//! code 2, one line naming the option or the scene key and the rule).
+
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn flexprr() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_flexprr"))
+}
+
+fn config(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name)
+}
+
+fn modes(args: &[&str]) -> Output {
+    flexprr().arg("modes").args(args).output().expect("runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The whole standard output as JSON (nothing else may be printed there).
+fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not one JSON document ({e}): {}",
+            String::from_utf8_lossy(&o.stdout)
+        )
+    })
+}
+
+/// `(frequency_hz, damping_ratio)` of each mode of `{"modes": [...]}`.
+fn frequencies(value: &serde_json::Value) -> Vec<(f64, f64)> {
+    value["modes"]
+        .as_array()
+        .expect("modes")
+        .iter()
+        .map(|m| {
+            (
+                m["frequency_hz"].as_f64().expect("frequency_hz"),
+                m["damping_ratio"].as_f64().expect("damping_ratio"),
+            )
+        })
+        .collect()
+}
+
+/// A refusal: exit code 2 and one line on stderr holding every word of `needles`.
+fn refused(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{n:?} not in {err}");
+    }
+    assert!(o.stdout.is_empty(), "nothing on stdout when refused");
+}
+
+/// With the sliders locked and the platform at rest, the coupled model's chords are rigid,
+/// so the platform cannot move and each link is a pinned-pinned Euler-Bernoulli beam without
+/// axial load: `f_n = (n^2 pi / 2 l^2) sqrt(EI / rho A)` (116.39, 465.57, 1047.52 Hz for the
+/// paper's link, Blevins, *Formulas for natural frequency and mode shape*, table 8-1), each
+/// three times, at any pose. The sine basis holds these shapes exactly, so the only error is
+/// the linearisation's.
+#[test]
+fn locked_machine_at_rest_has_the_pinned_pinned_frequencies() {
+    let (e, rho, t, l): (f64, f64, f64, f64) = (7.3e10, 2770.0, 0.002, 0.2);
+    let c = t * (e / (12.0 * rho)).sqrt();
+    for pose in ["0,0,45", "-0.05,0.02,30", "0.03,-0.04,60"] {
+        let value = json(&modes(&[
+            config("coupled_f20.toml").to_str().unwrap(),
+            "--pose",
+            pose,
+            "--json",
+        ]));
+        let found = frequencies(&value);
+        assert_eq!(found.len(), 9, "{pose}: 3 links x 3 modes");
+        for (k, (f, zeta)) in found.iter().enumerate() {
+            let n = (k / 3 + 1) as f64;
+            let exact = n * n * PI / (2.0 * l * l) * c;
+            assert!(
+                ((f - exact) / exact).abs() < 1e-6,
+                "{pose}, mode {}: {f} Hz against {exact} Hz",
+                k + 1
+            );
+            assert!(zeta.abs() < 1e-6, "{pose}: undamped, got {zeta}");
+        }
+    }
+}
+
+/// `--json` prints `{"modes": [...]}` and nothing else: each mode with `frequency_hz` and
+/// `damping_ratio`, sorted by frequency, no zero-frequency mode, and the two numbers agree
+/// with the eigenvalue printed beside them (`|lambda| / 2 pi`, `-Re lambda / |lambda|`).
+#[test]
+fn json_is_the_modes_sorted_with_matlab_damp_definitions() {
+    let value = json(&modes(&[
+        config("servo_f20.toml").to_str().unwrap(),
+        "--pose",
+        "-0.1,0,45",
+        "--json",
+        "--count",
+        "50",
+    ]));
+    let object = value.as_object().expect("an object");
+    assert_eq!(object.keys().collect::<Vec<_>>(), ["modes"]);
+    let list = value["modes"].as_array().unwrap();
+    assert_eq!(list.len(), 12, "9 bending and 3 servo modes (state of 24)");
+    let mut last = 0.0;
+    for m in list {
+        let f = m["frequency_hz"].as_f64().unwrap();
+        let zeta = m["damping_ratio"].as_f64().unwrap();
+        let (re, im) = (
+            m["eigenvalue"][0].as_f64().unwrap(),
+            m["eigenvalue"][1].as_f64().unwrap(),
+        );
+        let modulus = re.hypot(im);
+        assert!(
+            f > 1.0 && f >= last,
+            "sorted, no rigid mode: {f} after {last}"
+        );
+        assert!((f - modulus / (2.0 * PI)).abs() <= 1e-12 * f);
+        assert!((zeta + re / modulus).abs() <= 1e-12);
+        assert!(m["kind"].is_string());
+        last = f;
+    }
+    // The PD servo (kd = 400 N s/m) damps the three lowest modes, which move the sliders.
+    for m in &list[..3] {
+        assert_eq!(m["kind"], "servo", "{m}");
+        assert!(m["damping_ratio"].as_f64().unwrap() > 0.1);
+    }
+    let three = json(&modes(&[
+        config("servo_f20.toml").to_str().unwrap(),
+        "--pose",
+        "-0.1,0,45",
+        "--json",
+        "--count",
+        "3",
+    ]));
+    assert_eq!(frequencies(&three), frequencies(&value)[..3]);
+}
+
+#[test]
+fn the_default_operating_point_is_the_start_pose_at_rest() {
+    // coupled_f20's circle starts at (0, 0) with phi = 45 deg.
+    let default = json(&modes(&[
+        config("servo_f20.toml").to_str().unwrap(),
+        "--json",
+    ]));
+    let explicit = json(&modes(&[
+        config("servo_f20.toml").to_str().unwrap(),
+        "--pose",
+        "0,0,45",
+        "--json",
+    ]));
+    assert_eq!(frequencies(&default), frequencies(&explicit));
+}
+
+#[test]
+fn out_writes_json_csv_and_svg_through_the_output_policy() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("modes");
+    let scene = config("servo_f20.toml");
+    let o = modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.05,0,45",
+        "--out",
+        out.to_str().unwrap(),
+        "--count",
+        "7",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            ".flexprr-output.json",
+            "modes.csv",
+            "modes.json",
+            "modes.svg"
+        ]
+    );
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("modes.json")).unwrap()).unwrap();
+    let printed = json(&modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.05,0,45",
+        "--json",
+        "--count",
+        "7",
+    ]));
+    assert_eq!(frequencies(&file), frequencies(&printed));
+    assert_eq!(file["operating_point"]["kind"], "rest");
+    assert_eq!(file["operating_point"]["pose"]["x_m"], -0.05);
+    let xi = file["xi"].as_array().unwrap();
+    assert_eq!(xi.len(), 21);
+    for m in file["modes"].as_array().unwrap() {
+        let links = m["shape"]["links"].as_array().unwrap();
+        assert_eq!(links.len(), 3);
+        for w in links {
+            let w = w.as_array().unwrap();
+            assert_eq!(w.len(), 21);
+            // Pinned at both ends: no deflection from the chord at xi = 0 and 1.
+            assert!(w[0].as_f64().unwrap().abs() < 1e-9 && w[20].as_f64().unwrap().abs() < 1e-9);
+        }
+    }
+    let csv = std::fs::read_to_string(out.join("modes.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 7);
+    assert!(csv.starts_with("mode,frequency_Hz,damping_ratio,"));
+    let svg = std::fs::read_to_string(out.join("modes.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("(f) ") && !svg.contains("(g) "));
+    // Run again into its own output: replaced. A foreign directory is refused.
+    assert!(
+        modes(&[scene.to_str().unwrap(), "--out", out.to_str().unwrap()])
+            .status
+            .success()
+    );
+    let foreign = dir.path().join("foreign");
+    std::fs::create_dir(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
+    let o = modes(&[scene.to_str().unwrap(), "--out", foreign.to_str().unwrap()]);
+    refused(&o, &["--force"]);
+    assert_eq!(
+        std::fs::read_to_string(foreign.join("notes.txt")).unwrap(),
+        "mine"
+    );
+}
+
+#[test]
+fn bad_options_are_refused_naming_the_option() {
+    let scene = config("coupled_f20.toml");
+    let s = scene.to_str().unwrap();
+    refused(
+        &modes(&[s, "--pose", "0,0,45", "--time", "0.01"]),
+        &["--pose", "--time", "exclusive"],
+    );
+    refused(
+        &modes(&[s, "--pose", "0,0"]),
+        &["--pose", "X_M,Y_M,PHI_DEG"],
+    );
+    refused(&modes(&[s, "--pose", "0,nan,45"]), &["--pose"]);
+    refused(&modes(&[s, "--time", "soon"]), &["--time", "seconds"]);
+    refused(
+        &modes(&[s, "--time", "5"]),
+        &["--time", "outside the scene's time span"],
+    );
+    refused(&modes(&[s, "--count", "0"]), &["--count", "at least 1"]);
+    // Out of reach, and the radial layout's home pose, which is type-II singular.
+    refused(
+        &modes(&[s, "--pose", "0.5,0,45"]),
+        &["--pose 0.5,0,45", "cannot hold"],
+    );
+    refused(
+        &modes(&[s, "--pose", "0,0,0"]),
+        &["--pose 0,0,0", "type-II", "singularity"],
+    );
+}
+
+#[test]
+fn a_ked_scene_is_refused_at_its_coupling() {
+    let o = modes(&[config("paper_f20.toml").to_str().unwrap(), "--json"]);
+    refused(
+        &o,
+        &["paper_f20.toml:", "model.coupling", "KED", "\"coupled\""],
+    );
+}
+
+/// Along the motion: the state at a time, integrated from the start, with the motion's
+/// loads; inside the span it gives the same nine bending families near the rest values.
+#[test]
+fn time_linearises_the_motion_at_that_instant() {
+    let value = json(&modes(&[
+        config("coupled_f20.toml").to_str().unwrap(),
+        "--time",
+        "0.0125",
+        "--json",
+    ]));
+    let found = frequencies(&value);
+    assert_eq!(found.len(), 9);
+    // The axial loads of the 20 Hz circle shift the first family by up to about 20 %
+    // (docs/paper-reproduction.md), but not beyond the family's neighbours.
+    for (k, (f, _)) in found.iter().enumerate() {
+        let n = (k / 3 + 1) as f64;
+        let rest = n * n * 116.39;
+        assert!((f / rest - 1.0).abs() < 0.3, "mode {}: {f} Hz", k + 1);
+    }
+}
+
+/// The `machine_frequencies` output of a scene at rest, at its first instant, is what
+/// `flexprr modes --pose` gives at that pose: the same model, linearised about the same
+/// state (the one reached by integration, the other built at rest).
+#[test]
+fn machine_frequencies_at_rest_equal_modes_at_the_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("servo_rest.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[trajectory]
+kind = "line"
+from = [-0.08, 0.03, 40.0]
+velocity = [0.0, 0.0, 0.0]
+[model]
+formulation = "consistent"
+coupling = "coupled"
+[actuators]
+kind = "force"
+[control]
+kind = "pd"
+kp = 2e5
+kd = 400
+feedforward = "rigid"
+[time]
+end = 0.01
+output_step = 1e-3
+[output]
+requests = ["machine_frequencies"]
+plots = false
+"#,
+    )
+    .unwrap();
+    let out = dir.path().join("run");
+    let o = flexprr()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("machine_frequencies.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let first: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let value = json(&modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.08,0.03,40",
+        "--json",
+    ]));
+    let expected = frequencies(&value);
+    assert_eq!(expected.len(), 12);
+    for (k, (f, zeta)) in expected.iter().enumerate() {
+        let column = |name: String| header.iter().position(|h| *h == name).unwrap();
+        let got_f = first[column(format!("f_machine_{}_Hz", k + 1))];
+        let got_zeta = first[column(format!("zeta_machine_{}_ratio", k + 1))];
+        assert!(
+            ((got_f - f) / f).abs() < 1e-9,
+            "mode {}: {got_f} vs {f}",
+            k + 1
+        );
+        assert!(
+            (got_zeta - zeta).abs() < 1e-9,
+            "mode {}: {got_zeta} vs {zeta}",
+            k + 1
+        );
+    }
+}
