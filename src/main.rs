@@ -30,6 +30,10 @@ enum Command {
     Merge(cli::study::MergeArgs),
     /// Wall time against achieved error for each integrator over a ladder of tolerances.
     WorkPrecision(cli::work_precision::WorkPrecisionArgs),
+    /// Frequency responses of a scene's linear model (CSV, JSON, Bode SVG; mode shapes from a modal test).
+    Frf(cli::frf::FrfArgs),
+    /// Export a scene's linear model as state space (NumPy .npz and JSON).
+    Statespace(cli::statespace::StateSpaceArgs),
 }
 
 /// Let a closed reader end the program quietly, as it ends `cat` or `head`.
@@ -61,6 +65,8 @@ fn main() -> ExitCode {
         Command::Study(a) => cli::study::study(a),
         Command::Merge(a) => cli::study::merge(a),
         Command::WorkPrecision(a) => cli::work_precision::run(a),
+        Command::Frf(a) => cli::frf::run(a),
+        Command::Statespace(a) => cli::statespace::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

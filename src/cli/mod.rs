@@ -2,8 +2,10 @@
 //! one-line reason and exits with its code.
 
 pub mod beam;
+pub mod frf;
 pub mod kinematics;
 pub mod run;
+pub mod statespace;
 pub mod study;
 pub mod work_precision;
 
