@@ -2,7 +2,8 @@
 //! Laub's Hessenberg method (A. J. Laub, "Efficient multivariable frequency response
 //! computations", *IEEE Trans. Automatic Control* 26(2), 1981, pp. 407-408):
 //!
-//! 1. once, the orthogonal reduction `A = Q H Q^T` to upper Hessenberg form by Householder
+//! 1. once, after balancing (`D^-1 A D` with powers of two, Parlett & Reinsch 1969, as for
+//!    the eigenvalues), the orthogonal reduction `A = Q H Q^T` to upper Hessenberg form by Householder
 //!    reflections (Golub & Van Loan, *Matrix Computations*, 4th ed., 2013, algorithm
 //!    7.4.2), with `Q^T B` and `C Q` formed alongside;
 //! 2. at each frequency, `(i omega I - H) X = Q^T B` by Gaussian elimination with partial
@@ -190,7 +191,12 @@ pub fn frequency_response_direct(
     }
     let n = lin.a.nrows();
     let (p, m) = (lin.c.nrows(), lin.b.ncols());
-    let reduced = reduce(&lin.a, &lin.b, &lin.c);
+    // Balanced first (`D^-1 A D`, `D^-1 B`, `C D`, powers of two: exact), as for the
+    // eigenvalues: positions and rates, stiff and slow modes differ by orders of magnitude.
+    let (balanced, scaling) = crate::balance::balance(&lin.a);
+    let b = faer::Mat::<f64>::from_fn(n, lin.b.ncols(), |i, j| lin.b[(i, j)] / scaling[i]);
+    let c = faer::Mat::<f64>::from_fn(lin.c.nrows(), n, |i, j| lin.c[(i, j)] * scaling[j]);
+    let reduced = reduce(&balanced, &b, &c);
     let mut w = vec![c64::new(0.0, 0.0); n * n];
     let mut x = vec![c64::new(0.0, 0.0); n * m];
     let mut out = Vec::with_capacity(frequencies_hz.len());
