@@ -33,6 +33,10 @@ enum Command {
     /// The whole machine's natural frequencies, damping ratios and mode shapes at a pose or
     /// a time of the motion.
     Modes(cli::modes::ModesArgs),
+    /// Frequency responses of a scene's linear model (CSV, JSON, Bode SVG; mode shapes from a modal test).
+    Frf(cli::frf::FrfArgs),
+    /// Export a scene's linear model as state space (NumPy .npz and JSON).
+    Statespace(cli::statespace::StateSpaceArgs),
 }
 
 /// Let a closed reader end the program quietly, as it ends `cat` or `head`.
@@ -65,6 +69,8 @@ fn main() -> ExitCode {
         Command::Merge(a) => cli::study::merge(a),
         Command::WorkPrecision(a) => cli::work_precision::run(a),
         Command::Modes(a) => cli::modes::run(a),
+        Command::Frf(a) => cli::frf::run(a),
+        Command::Statespace(a) => cli::statespace::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

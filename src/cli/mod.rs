@@ -2,10 +2,12 @@
 //! one-line reason and exits with its code.
 
 pub mod beam;
+pub mod frf;
 pub mod kinematics;
 pub mod map;
 pub mod modes;
 pub mod run;
+pub mod statespace;
 pub mod study;
 pub mod work_precision;
 

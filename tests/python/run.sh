@@ -17,7 +17,7 @@ if ! "$python" -m venv "$work/venv" >/dev/null 2>&1; then
 fi
 venv_python="$work/venv/bin/python"
 "$venv_python" -m pip install --quiet --upgrade pip
-"$venv_python" -m pip install --quiet maturin numpy scipy pytest "dask[distributed]"
+"$venv_python" -m pip install --quiet maturin numpy scipy pytest "dask[distributed]" control
 cargo build --release --bin flexprr
 "$work/venv/bin/maturin" build --release --manifest-path crates/python/Cargo.toml -o "$work/wheels"
 "$venv_python" -m pip install --quiet "$work"/wheels/flexprr-*.whl

@@ -8,12 +8,14 @@
 
 mod balance;
 mod channel;
+mod direct;
 mod error;
 mod frf;
 mod linearize;
 mod modes;
 
 pub use channel::{Axis, Input, Output};
+pub use direct::frequency_response_direct;
 pub use error::LinearError;
 pub use frf::{Complex, frequency_response};
 pub use linearize::{Linearization, linearize};

@@ -222,7 +222,15 @@ fn series_pixels(
     edge: &mut Vec<((f64, f64), usize)>,
 ) -> Drawn {
     let buckets = (BUCKETS_PER_PX * area.width) as usize;
-    let (dx, dy) = if s.style.marker.is_none() {
+    // Buckets a pixel wide on the axis as drawn: in log10(x) on a log axis.
+    let (dx, dy) = if s.style.marker.is_none() && fx.log {
+        let lx: Vec<f64> =
+            s.x.iter()
+                .map(|&x| fx.coordinate(x).unwrap_or(f64::NAN))
+                .collect();
+        let (lx, dy) = decimate(&lx, &s.y, buckets);
+        (lx.into_iter().map(|c| 10f64.powf(c)).collect(), dy)
+    } else if s.style.marker.is_none() {
         decimate(&s.x, &s.y, buckets)
     } else {
         (s.x.clone(), s.y.clone())

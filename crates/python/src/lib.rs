@@ -13,6 +13,7 @@ mod beam;
 mod convert;
 mod errors;
 mod kinematics;
+mod linear;
 mod progress;
 mod run;
 mod scene;
@@ -36,6 +37,7 @@ fn flexprr_native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(kinematics::singularity, m)?)?;
     m.add_function(wrap_pyfunction!(beam::link_frequencies, m)?)?;
     m.add_function(wrap_pyfunction!(study::run_study, m)?)?;
+    m.add_function(wrap_pyfunction!(linear::linearize, m)?)?;
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add("RunError", py.get_type::<errors::RunError>())?;
     m.add("KinematicsError", py.get_type::<errors::KinematicsError>())?;

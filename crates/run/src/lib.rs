@@ -12,17 +12,22 @@
 pub mod column;
 pub mod control;
 mod error;
+pub mod frf;
+pub mod frf_plan;
 pub mod guard;
 mod integrate;
 pub mod linear;
 pub mod machine_frequencies;
 pub mod machine_modes;
+pub mod modal_test;
+pub mod npz;
 mod output;
 pub mod output_dir;
 mod outputs;
 pub mod plot;
 mod run;
 mod samples;
+pub mod statespace;
 mod table;
 mod viewer;
 

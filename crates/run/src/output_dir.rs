@@ -192,6 +192,28 @@ pub const WORK_PRECISION: Products = Products {
     }),
 };
 
+/// The products of `flexprr frf` (`crate::frf`; the mode shapes with `--identify`).
+pub const FRF: Products = Products {
+    kind: "frf",
+    names: &[
+        "frf.csv",
+        "frf.json",
+        "bode.svg",
+        "mode_shapes.csv",
+        "mode_shapes.svg",
+    ],
+    patterns: &[],
+    legacy: None,
+};
+
+/// The products of `flexprr statespace` (`crate::statespace`).
+pub const STATESPACE: Products = Products {
+    kind: "statespace",
+    names: &["statespace.npz", "statespace.json"],
+    patterns: &[],
+    legacy: None,
+};
+
 /// What an existing target holds.
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Contents {

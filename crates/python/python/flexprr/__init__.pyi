@@ -2,7 +2,7 @@
 
 from concurrent.futures import Executor
 from os import PathLike
-from typing import Any, Callable, Dict, Iterable, List, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -121,3 +121,39 @@ def run_study(
     case_outputs: bool = False,
     progress: Optional[_Progress] = None,
 ) -> Dict[str, Any]: ...
+
+class Modes(NamedTuple):
+    """Modes of a LinearModel: frequencies (Hz), damping ratios, eigenvalues (1/s)."""
+
+    frequency_hz: npt.NDArray[np.float64]
+    damping_ratio: npt.NDArray[np.float64]
+    eigenvalue: npt.NDArray[np.complex128]
+
+class LinearModel:
+    """x' = A x + B u, y = C x + D u about an operating point; pickles."""
+
+    A: npt.NDArray[np.float64]
+    B: npt.NDArray[np.float64]
+    C: npt.NDArray[np.float64]
+    D: npt.NDArray[np.float64]
+    x0: npt.NDArray[np.float64]
+    y0: npt.NDArray[np.float64]
+    inputs: List[str]
+    outputs: List[str]
+    states: List[str]
+    input_units: List[str]
+    output_units: List[str]
+    operating_point: Dict[str, Any]
+    t: float
+    model: str
+    scene: str
+    def modes(self) -> Modes: ...
+    def frequency_response(self, frequencies_hz: npt.ArrayLike) -> npt.NDArray[np.complex128]: ...
+
+def linearize(
+    scene: Union[Scene, _Path],
+    pose: Optional[Tuple[float, float, float]] = None,
+    t: Optional[float] = None,
+    inputs: Sequence[str] = (),
+    outputs: Sequence[str] = (),
+) -> LinearModel: ...
