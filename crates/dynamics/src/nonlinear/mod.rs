@@ -13,6 +13,6 @@ mod element;
 mod statics;
 mod system;
 
-pub use element::{CorotationalElement, ElementState};
+pub use element::{CorotationalElement, ElementState, LocalStrain};
 pub use statics::{PlanarBeam, StaticSolution};
 pub use system::{NonlinearCounters, NonlinearOptions, NonlinearOutput, NonlinearSystem};

@@ -33,7 +33,7 @@ use flexprr_integrators::OdeSystem;
 use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
-use super::element::{CorotationalElement, wrap_angle};
+use super::element::{CorotationalElement, LocalStrain, wrap_angle};
 use crate::actuation::{Actuated, Actuation};
 use crate::model::ActuatorState;
 use crate::{DynamicsError, Machine};
@@ -61,6 +61,8 @@ pub struct NonlinearOptions {
     /// Stop with [`DynamicsError::Collapse`] when a mid-point deflection exceeds this
     /// fraction of its link's length (`None`: no limit).
     pub collapse_deflection: Option<f64>,
+    /// The elements' local strain energy ([`LocalStrain`]).
+    pub strain: LocalStrain,
 }
 
 impl NonlinearOptions {
@@ -75,6 +77,7 @@ impl NonlinearOptions {
             bending_damping_time: 0.0,
             stop_at_type_ii: true,
             collapse_deflection: None,
+            strain: LocalStrain::default(),
         }
     }
 
@@ -299,6 +302,7 @@ impl NonlinearSystem {
                     length: le,
                     axial_stiffness: options.axial_stiffness[i],
                     bending_stiffness: options.bending_stiffness[i],
+                    strain: options.strain,
                 },
                 node_mass: me,
                 node_inertia: 2.0 * me * le * le / 78.0,
@@ -1059,10 +1063,7 @@ impl NonlinearSystem {
                 if k < ne {
                     let (q2, _) = self.node(y, &frame, i, k + 1);
                     let st = el.state(&[q[0], q[1], q[2], q2[0], q2[1], q2[2]]);
-                    let [t1, t2] = st.rotations;
-                    out.link_strain_energy[i] += 0.5 * el.axial_stiffness * st.stretch * st.stretch
-                        / el.length
-                        + 2.0 * el.bending_stiffness / el.length * (t1 * t1 + t1 * t2 + t2 * t2);
+                    out.link_strain_energy[i] += el.strain_energy(&st);
                 }
             }
         }
