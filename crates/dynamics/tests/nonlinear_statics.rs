@@ -8,9 +8,12 @@
 //! * a pinned-pinned strut past buckling follows the elastica's post-buckling curve
 //!   `P / P_cr = (2 K(k) / pi)^2`, `w_mid / L = k / K(k)`, `chord / L = 2 E(k) / K(k) - 1`
 //!   (Timoshenko & Gere, section 2.7);
-//! * both converge at second order in the element length.
+//! * both converge at second order in the element length with the chord element
+//!   ([`LocalStrain::Chord`]) and at fourth order with the shallow-arch local strain
+//!   ([`LocalStrain::ShallowArch`]), down to the floor the axial stretch sets (the elastica is
+//!   inextensible; the stretch is removed by raising `EA`).
 
-use flexprr_dynamics::nonlinear::{CorotationalElement, PlanarBeam};
+use flexprr_dynamics::nonlinear::{CorotationalElement, LocalStrain, PlanarBeam};
 use std::f64::consts::PI;
 
 const L: f64 = 0.2;
@@ -88,24 +91,38 @@ fn elliptic_integrals_match_known_values() {
     assert!((ellf(0.7, 0.0) - 0.7).abs() < 1e-14 && (elle(0.7, 0.0) - 0.7).abs() < 1e-14);
 }
 
-fn element() -> CorotationalElement {
+fn element(strain: LocalStrain) -> CorotationalElement {
     CorotationalElement {
         length: 0.025,
         axial_stiffness: EA,
         bending_stiffness: EI,
+        strain,
     }
 }
 
+/// The strain energy written out from the module's formulas (independently of the
+/// element's own `strain_energy`).
 fn energy(el: &CorotationalElement, q: &[f64; 6]) -> f64 {
     let st = el.state(q);
     let [t1, t2] = st.rotations;
-    0.5 * el.axial_stiffness * st.stretch * st.stretch / el.length
-        + 2.0 * el.bending_stiffness / el.length * (t1 * t1 + t1 * t2 + t2 * t2)
+    let bending = 2.0 * el.bending_stiffness / el.length * (t1 * t1 + t1 * t2 + t2 * t2);
+    let eps = match el.strain {
+        LocalStrain::Chord => st.stretch / el.length,
+        LocalStrain::ShallowArch => {
+            st.stretch / el.length + (2.0 * t1 * t1 - t1 * t2 + 2.0 * t2 * t2) / 30.0
+        }
+    };
+    0.5 * el.axial_stiffness * el.length * eps * eps + bending
 }
 
 #[test]
 fn element_force_is_energy_gradient_and_tangent_its_derivative() {
-    let el = element();
+    for strain in [LocalStrain::Chord, LocalStrain::ShallowArch] {
+        element_checks(element(strain));
+    }
+}
+
+fn element_checks(el: CorotationalElement) {
     // A strongly rotated (2.3 rad), stretched and bent element; nodal angles wound by 2 pi.
     let b = 2.3_f64;
     let q = [
@@ -124,6 +141,7 @@ fn element_force_is_energy_gradient_and_tangent_its_derivative() {
         qp[j] += h;
         qm[j] -= h;
         let grad = (energy(&el, &qp) - energy(&el, &qm)) / (2.0 * h);
+        assert!((el.strain_energy(&el.state(&qp)) - energy(&el, &qp)).abs() < 1e-12);
         assert!(
             (grad - f[j]).abs() <= 1e-6 * f.iter().map(|v| v.abs()).fold(0.0, f64::max),
             "force {j}: {} vs energy gradient {grad}",
@@ -156,8 +174,10 @@ fn element_force_is_energy_gradient_and_tangent_its_derivative() {
 
 /// Cantilever along x clamped at the origin, tip load `p` in -y. Returns the tip
 /// `(x, -y, -psi)` of the FE model with `ne` elements.
-fn fe_cantilever(ne: usize, p: f64) -> (f64, f64, f64) {
-    let beam = PlanarBeam::straight(L, EA, EI, ne).unwrap();
+fn fe_cantilever(ne: usize, p: f64, strain: LocalStrain, ea: f64) -> (f64, f64, f64) {
+    let beam = PlanarBeam::straight(L, ea, EI, ne)
+        .unwrap()
+        .with_strain(strain);
     let tip = 3 * ne;
     let sol = beam
         .solve_static(
@@ -185,33 +205,68 @@ fn elastica_cantilever(theta0: f64) -> (f64, f64, f64) {
     (p, x, delta)
 }
 
+/// Max error over tip x, tip deflection (per length) and tip angle of the FE cantilever at
+/// the elastica's tip angles, for 2, 4, 8, 16 and 32 elements.
+fn cantilever_errors(theta0_deg: f64, strain: LocalStrain, ea: f64) -> Vec<f64> {
+    let theta0 = theta0_deg.to_radians();
+    let (p, x, delta) = elastica_cantilever(theta0);
+    assert!(delta / L > 0.2, "large deflection: {}", delta / L);
+    [2, 4, 8, 16, 32]
+        .iter()
+        .map(|&ne| {
+            let (xf, df, tf) = fe_cantilever(ne, p, strain, ea);
+            ((xf - x).abs().max((df - delta).abs()) / L).max((tf - theta0).abs())
+        })
+        .collect()
+}
+
+/// `errors` falls by at least `factor` per halving of the element length until it is below
+/// `floor` (a model difference that does not converge away: the axial stretch).
+fn assert_order(what: &str, errors: &[f64], factor: f64, floor: f64) {
+    println!(
+        "{what}: errors (2, 4, 8, 16, 32 elements) {}",
+        errors
+            .iter()
+            .map(|e| format!("{e:.2e}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    for w in errors.windows(2) {
+        if w[0].is_finite() {
+            assert!(w[1] < w[0] / factor || w[1] < floor, "{what}: {errors:?}");
+        }
+    }
+}
+
 #[test]
 fn cantilever_matches_the_elastica_at_large_deflection() {
     for theta0_deg in [20.0_f64, 50.0, 75.0] {
-        let theta0 = theta0_deg.to_radians();
-        let (p, x, delta) = elastica_cantilever(theta0);
-        let mut errors = Vec::new();
-        for ne in [4, 8, 16, 32] {
-            let (xf, df, tf) = fe_cantilever(ne, p);
-            println!(
-                "cantilever {theta0_deg} deg, {ne} elements: tip x {xf:.6} ({x:.6}), deflection {df:.6} ({delta:.6}), angle {tf:.6}"
-            );
-            // Axial stretch P sin(theta) / EA is below 1e-4 of L here: compare to 2e-4 L.
-            let err = ((xf - x).abs().max((df - delta).abs()) / L).max((tf - theta0).abs());
-            errors.push(err);
-        }
-        // Second order in the element length until the stretch floor.
-        for w in errors.windows(2) {
-            assert!(
-                w[1] < w[0] / 3.0 || w[1] < 3e-4,
-                "{theta0_deg} deg: {errors:?}"
-            );
-        }
-        assert!(
-            errors[3] < 3e-4,
-            "{theta0_deg} deg, 32 elements: {errors:?}"
+        // The chord element: second order (4 per halving; 3 allowed). The stretch P sin(theta)
+        // / EA is below 1e-4 of L: compare to 3e-4.
+        let chord = cantilever_errors(theta0_deg, LocalStrain::Chord, EA);
+        assert_order(&format!("chord, {theta0_deg} deg"), &chord, 3.0, 3e-4);
+        assert!(chord[4] < 3e-4, "{theta0_deg} deg, 32 elements: {chord:?}");
+        // The shallow-arch element: fourth order (16 per halving; 10 allowed) with the axial
+        // stretch removed (EA x 1e4: floor below 1e-8 of L); with the links' EA it reaches the
+        // stretch floor (4e-5 at 75 degrees) with 8 elements.
+        let stiff = cantilever_errors(theta0_deg, LocalStrain::ShallowArch, 1e4 * EA);
+        assert_order(
+            &format!("shallow arch (EA x 1e4), {theta0_deg} deg"),
+            &stiff,
+            10.0,
+            1e-8,
         );
-        assert!(delta / L > 0.2, "large deflection: {}", delta / L);
+        let shallow = cantilever_errors(theta0_deg, LocalStrain::ShallowArch, EA);
+        assert_order(
+            &format!("shallow arch, {theta0_deg} deg"),
+            &shallow,
+            10.0,
+            5e-5,
+        );
+        assert!(
+            shallow[2] < 5e-5,
+            "{theta0_deg} deg, 8 elements: {shallow:?}"
+        );
     }
 }
 
@@ -224,75 +279,124 @@ fn elastica_strut(theta0: f64) -> (f64, f64, f64) {
 }
 
 /// Pinned-pinned strut with `ne` elements, the chord prescribed: follows the post-buckling
-/// path by continuation in the end slope (every 5 degrees, each solution the next guess) and
+/// path by continuation in the end slope (every 2.5 degrees, each solution the next guess) and
 /// returns `(P, w_mid)` at each of `checkpoints` (degrees, increasing).
-fn fe_strut(ne: usize, checkpoints: &[f64]) -> Vec<(f64, f64)> {
+fn fe_strut(ne: usize, checkpoints: &[f64], strain: LocalStrain, ea: f64) -> Vec<(f64, f64)> {
     let p_cr = PI * PI * EI / (L * L);
-    let beam = PlanarBeam::straight(L, EA, EI, ne).unwrap();
+    let beam = PlanarBeam::straight(L, ea, EI, ne)
+        .unwrap()
+        .with_strain(strain);
     let tip = 3 * ne;
-    // First guess: the buckling mode, a half sine of the 5-degree amplitude.
-    let (_, w0, _) = elastica_strut(5f64.to_radians());
+    // First guess: the buckling mode, a half sine of the 5-degree amplitude on the
+    // 5-degree chord.
+    let (_, w0, chord0) = elastica_strut(5f64.to_radians());
     let mut guess = beam.reference.clone();
     for k in 0..=ne {
         let s = k as f64 / ne as f64;
-        guess[3 * k] = s * L;
+        guess[3 * k] = s * L * chord0;
         guess[3 * k + 1] = w0 * L * (PI * s).sin();
         guess[3 * k + 2] = (w0 * PI * (PI * s).cos()).atan();
     }
     let mut out = Vec::new();
     let last = checkpoints.last().copied().unwrap_or(0.0);
     let mut deg = 5.0;
+    let mut previous: Option<Vec<f64>> = None;
     while deg <= last + 1e-9 {
         let (load, _, chord) = elastica_strut(f64::to_radians(deg));
         // The strut is axially elastic: its length is L (1 - P / EA); the chord scales with it.
-        let chord = chord * L * (1.0 - load * p_cr / EA);
+        let chord = chord * L * (1.0 - load * p_cr / ea);
         let sol = beam
             .solve_static(
                 &guess,
                 &[(0, 0.0), (1, 0.0), (tip, chord), (tip + 1, 0.0)],
                 &[],
-                4,
+                1,
             )
             .unwrap();
         if checkpoints.iter().any(|c| (c - deg).abs() < 1e-9) {
             // The support's reaction is -(f_int - f_ext) there: it pushes with P.
             out.push((-sol.residual[tip], sol.coordinates[3 * (ne / 2) + 1]));
         }
-        guess = sol.coordinates;
-        deg += 5.0;
+        // Secant predictor: the next guess extrapolates the last two solutions.
+        let next: Vec<f64> = match &previous {
+            Some(p) => sol
+                .coordinates
+                .iter()
+                .zip(p)
+                .map(|(a, b): (&f64, &f64)| 2.0 * a - b)
+                .collect(),
+            None => sol.coordinates.clone(),
+        };
+        previous = Some(sol.coordinates);
+        guess = next;
+        deg += 2.5;
     }
     out
 }
 
+/// Max relative error of `P` and `w_mid` against the elastica at each checkpoint (degrees),
+/// for 2, 4, 8, 16 and 32 elements (2 and 4 only up to 40 degrees: their elements turn by
+/// more than half a radian beyond).
+fn strut_errors(checkpoints: &[f64], strain: LocalStrain, ea: f64) -> Vec<Vec<f64>> {
+    let p_cr = PI * PI * EI / (L * L);
+    let coarse = checkpoints.iter().filter(|c| **c <= 40.0).count();
+    let runs: Vec<Vec<(f64, f64)>> = [2, 4, 8, 16, 32]
+        .iter()
+        .map(|&ne| {
+            let upto = if ne < 8 { coarse } else { checkpoints.len() };
+            fe_strut(ne, &checkpoints[..upto], strain, ea)
+        })
+        .collect();
+    checkpoints
+        .iter()
+        .enumerate()
+        .map(|(c, theta0_deg)| {
+            let (load, w, _) = elastica_strut(theta0_deg.to_radians());
+            runs.iter()
+                .map(|run| {
+                    run.get(c).map_or(f64::NAN, |(p, wm)| {
+                        ((p / p_cr - load).abs() / load).max((wm.abs() / L - w).abs() / w)
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
 #[test]
 fn pinned_strut_follows_the_post_buckling_elastica() {
-    let p_cr = PI * PI * EI / (L * L);
     let checkpoints = [10.0, 40.0, 90.0, 120.0];
-    let runs: Vec<Vec<(f64, f64)>> = [4, 8, 16, 32]
+    // The chord element: second order; 32 elements within 0.1 %.
+    for (errors, deg) in strut_errors(&checkpoints, LocalStrain::Chord, EA)
         .iter()
-        .map(|ne| fe_strut(*ne, &checkpoints))
-        .collect();
-    for (c, theta0_deg) in checkpoints.iter().enumerate() {
-        let (load, w, _) = elastica_strut(theta0_deg.to_radians());
-        let errors: Vec<f64> = runs
-            .iter()
-            .map(|run| {
-                let (p, wm) = run[c];
-                ((p / p_cr - load).abs() / load).max((wm.abs() / L - w).abs() / w)
-            })
-            .collect();
-        for e in errors.windows(2) {
-            assert!(
-                e[1] < e[0] / 3.0 || e[1] < 2e-4,
-                "{theta0_deg} deg: {errors:?}"
-            );
-        }
-        assert!(
-            errors[3] < 2e-3,
-            "{theta0_deg} deg, 32 elements: {errors:?}"
+        .zip(checkpoints)
+    {
+        assert_order(&format!("strut, chord, {deg} deg"), errors, 3.0, 2e-4);
+        assert!(errors[4] < 2e-3, "{deg} deg, 32 elements: {errors:?}");
+    }
+    // The shallow-arch element: fourth order to the extensibility floor (about 1e-6 with EA x
+    // 100; 8e-5 with the links' EA, which the chord element approaches too).
+    for (errors, deg) in strut_errors(&checkpoints, LocalStrain::ShallowArch, 1e2 * EA)
+        .iter()
+        .zip(checkpoints)
+    {
+        assert_order(
+            &format!("strut, shallow arch (EA x 100), {deg} deg"),
+            errors,
+            8.0,
+            2e-6,
         );
-        println!(
-            "strut {theta0_deg} deg: P/Pcr {load:.5}, w/L {w:.4}, errors (4, 8, 16, 32 elements) {errors:?}"
+        assert!(errors[2] < 1.5e-4, "{deg} deg, 8 elements: {errors:?}");
+    }
+    for (errors, deg) in strut_errors(&checkpoints, LocalStrain::ShallowArch, EA)
+        .iter()
+        .zip(checkpoints)
+    {
+        assert_order(
+            &format!("strut, shallow arch, {deg} deg"),
+            errors,
+            8.0,
+            1.5e-4,
         );
     }
 }

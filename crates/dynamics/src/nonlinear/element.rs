@@ -11,23 +11,59 @@
 //! Nodal coordinates of an element: `q = (x1, y1, psi1, x2, y2, psi2)` with `psi` the
 //! absolute angle of the beam's tangent at the node (the reference, straight element has
 //! `psi1 = psi2 = beta0`, its chord angle). With the current chord `l`, `beta`,
-//! `(c, s) = (cos beta, sin beta)`:
+//! `(c, s) = (cos beta, sin beta)`, the local deformations are the chord stretch and the end
+//! rotations relative to the chord,
 //!
 //! ```text
-//! local strains   u = l - L0 = (l^2 - L0^2) / (l + L0),   th1 = psi1 - beta,   th2 = psi2 - beta
-//! local forces    N = EA u / L0,   M1 = (2 EI / L0)(2 th1 + th2),   M2 = (2 EI / L0)(th1 + 2 th2)
+//! u = l - L0 = (l^2 - L0^2) / (l + L0),   th1 = psi1 - beta,   th2 = psi2 - beta
+//! ```
+//!
+//! and the element is defined by its strain energy `U(u, th1, th2)` ([`LocalStrain`]):
+//!
+//! ```text
+//! Chord:        U = EA u^2 / (2 L0) + (2 EI / L0)(th1^2 + th1 th2 + th2^2)
+//! ShallowArch:  U = EA L0 eps^2 / 2  + (2 EI / L0)(th1^2 + th1 th2 + th2^2),
+//!               eps = u / L0 + (2 th1^2 - th1 th2 + 2 th2^2) / 30
+//! ```
+//!
+//! `Chord` is Crisfield's "simplest" element (1991, vol. 1, section 7.3: a linear
+//! Euler-Bernoulli beam in the chord frame). `ShallowArch` takes the mean axial strain of the
+//! element from the shallow-arch (von Karman) strain `u' + w'^2 / 2` of the cubic transverse
+//! displacement `w = L0 (H10 th1 + H11 th2)` in the chord frame (Crisfield 1991, vol. 1,
+//! section 7.1 for the shallow arch, chapter 7 for its use as the local strain of a
+//! co-rotational element): the axial force then enters the local bending stiffness as the
+//! consistent geometric stiffness `N L0 / 30 [4 -1; -1 4]`, which the `Chord` element lacks
+//! (it has only the chord's string stiffness `N / l`). With it the Euler load of a pinned
+//! strut of `n` elements converges at fourth order (`Chord`: second order); the measured
+//! orders are in `tests/nonlinear_statics.rs`.
+//!
+//! With `N = dU/du`, `M1 = dU/dth1`, `M2 = dU/dth2`, the forces and the tangent are, for both,
+//!
+//! ```text
 //! global forces   f = N r - (M1 + M2) z / l + M1 e3 + M2 e6
 //!                 r = (-c, -s, 0, c, s, 0) = dl/dq,   z = (s, -c, 0, -s, c, 0) = l dbeta/dq
 //! tangent         K = B^T D B + N z z^T / l + (M1 + M2)(r z^T + z r^T) / l^2   (Crisfield 7.3)
 //! ```
 //!
-//! with `B = d(u, th1, th2)/dq` and `D = diag(EA/L0, [4 2; 2 4] EI/L0)`. The angle
+//! with `B = d(u, th1, th2)/dq` and `D` the Hessian of `U` in `(u, th1, th2)`. The angle
 //! differences `psi - beta` are wrapped into `(-pi, pi]`, so nodal angles may wind freely.
 
 use std::f64::consts::PI;
 
-/// One planar co-rotational Euler-Bernoulli element: reference length and section
-/// stiffnesses.
+/// The local strain energy of a [`CorotationalElement`] (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LocalStrain {
+    /// Axial strain from the chord stretch alone (Crisfield's simplest element): Euler loads
+    /// and large deflections converge at second order in the element length.
+    Chord,
+    /// The chord stretch plus the mean shallow-arch strain of the element's bending: the
+    /// consistent geometric stiffness, fourth-order Euler loads (the default).
+    #[default]
+    ShallowArch,
+}
+
+/// One planar co-rotational Euler-Bernoulli element: reference length, section stiffnesses
+/// and local strain.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CorotationalElement {
     /// Reference (unstretched) length `L0` (m).
@@ -36,6 +72,8 @@ pub struct CorotationalElement {
     pub axial_stiffness: f64,
     /// Bending stiffness `EI` (N m^2).
     pub bending_stiffness: f64,
+    /// The local strain energy.
+    pub strain: LocalStrain,
 }
 
 /// The element's deformation and local forces at one configuration.
@@ -75,14 +113,79 @@ impl CorotationalElement {
         let th1 = wrap_angle(q[2] - beta);
         let th2 = wrap_angle(q[5] - beta);
         let k = 2.0 * self.bending_stiffness / l0;
+        let mut moments = [k * (2.0 * th1 + th2), k * (th1 + 2.0 * th2)];
+        let axial_force = match self.strain {
+            LocalStrain::Chord => self.axial_stiffness * stretch / l0,
+            LocalStrain::ShallowArch => {
+                // N = EA eps; dU/dth adds N L0 deps/dth = N L0 / 30 (4 th1 - th2, 4 th2 - th1).
+                let n = self.axial_stiffness * self.strain_of(stretch, th1, th2);
+                moments[0] += n * l0 / 30.0 * (4.0 * th1 - th2);
+                moments[1] += n * l0 / 30.0 * (4.0 * th2 - th1);
+                n
+            }
+        };
         ElementState {
             chord_length: l,
             direction: [c, s],
             stretch,
             rotations: [th1, th2],
-            axial_force: self.axial_stiffness * stretch / l0,
-            moments: [k * (2.0 * th1 + th2), k * (th1 + 2.0 * th2)],
+            axial_force,
+            moments,
         }
+    }
+
+    /// The mean axial strain `eps` of the element for a stretch and end rotations (the chord
+    /// strain `u / L0` for [`LocalStrain::Chord`]).
+    #[inline]
+    pub fn strain_of(&self, stretch: f64, th1: f64, th2: f64) -> f64 {
+        let chord = stretch / self.length;
+        match self.strain {
+            LocalStrain::Chord => chord,
+            LocalStrain::ShallowArch => {
+                chord + (2.0 * th1 * th1 - th1 * th2 + 2.0 * th2 * th2) / 30.0
+            }
+        }
+    }
+
+    /// Strain energy `U` (J) of a state (module documentation).
+    #[inline]
+    pub fn strain_energy(&self, st: &ElementState) -> f64 {
+        let [t1, t2] = st.rotations;
+        let eps = self.strain_of(st.stretch, t1, t2);
+        0.5 * self.axial_stiffness * self.length * eps * eps
+            + 2.0 * self.bending_stiffness / self.length * (t1 * t1 + t1 * t2 + t2 * t2)
+    }
+
+    /// The Hessian `D` of the strain energy in `(u, th1, th2)` at a state.
+    fn local_stiffness(&self, st: &ElementState) -> [[f64; 3]; 3] {
+        let l0 = self.length;
+        let ea = self.axial_stiffness / l0;
+        let ei = self.bending_stiffness / l0;
+        let mut d = [
+            [ea, 0.0, 0.0],
+            [0.0, 4.0 * ei, 2.0 * ei],
+            [0.0, 2.0 * ei, 4.0 * ei],
+        ];
+        if self.strain == LocalStrain::ShallowArch {
+            // U = EA L0 eps^2 / 2 + bending: D = EA L0 g g^T + N L0 d2eps, with
+            // g = d eps / d(u, th1, th2) = (1 / L0, (4 th1 - th2) / 30, (4 th2 - th1) / 30).
+            let [t1, t2] = st.rotations;
+            let g = [1.0 / l0, (4.0 * t1 - t2) / 30.0, (4.0 * t2 - t1) / 30.0];
+            let ea_l = self.axial_stiffness * l0;
+            let n_l = st.axial_force * l0 / 30.0;
+            let h = [[0.0, 0.0, 0.0], [0.0, 4.0, -1.0], [0.0, -1.0, 4.0]];
+            for a in 0..3 {
+                for b in 0..3 {
+                    let axial = if a == 0 && b == 0 {
+                        0.0
+                    } else {
+                        ea_l * g[a] * g[b]
+                    };
+                    d[a][b] += axial + n_l * h[a][b];
+                }
+            }
+        }
+        d
     }
 
     /// Global internal force vector `f = B^T (N, M1, M2)` (the gradient of the strain
@@ -117,7 +220,6 @@ impl CorotationalElement {
         let st = self.state(q);
         let [c, s] = st.direction;
         let l = st.chord_length;
-        let l0 = self.length;
         let r = [-c, -s, 0.0, c, s, 0.0];
         let z = [s, -c, 0.0, -s, c, 0.0];
         // B rows: du/dq = r (exactly, since d l / d q = r), dth_k/dq = e_k - z / l.
@@ -129,13 +231,7 @@ impl CorotationalElement {
         }
         b[1][2] += 1.0;
         b[2][5] += 1.0;
-        let ea = self.axial_stiffness / l0;
-        let ei = self.bending_stiffness / l0;
-        let d = [
-            [ea, 0.0, 0.0],
-            [0.0, 4.0 * ei, 2.0 * ei],
-            [0.0, 2.0 * ei, 4.0 * ei],
-        ];
+        let d = self.local_stiffness(&st);
         let n = st.axial_force;
         let msum = st.moments[0] + st.moments[1];
         let mut k = [[0.0; 6]; 6];

@@ -9,10 +9,16 @@
 //! * [`NonlinearSystem`]: the machine with co-rotational links, prescribed sliders and a free
 //!   rigid platform, as an [`flexprr_integrators::OdeSystem`].
 
+mod banded;
 mod element;
+mod equations;
+mod inertia;
 mod statics;
 mod system;
 
-pub use element::{CorotationalElement, ElementState};
+pub use element::{CorotationalElement, ElementState, LocalStrain};
+pub use inertia::{ElementInertia, InertiaDerivatives, NodalMass};
 pub use statics::{PlanarBeam, StaticSolution};
-pub use system::{NonlinearCounters, NonlinearOptions, NonlinearOutput, NonlinearSystem};
+pub use system::{
+    DEFAULT_ELEMENTS, NonlinearCounters, NonlinearOptions, NonlinearOutput, NonlinearSystem,
+};

@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::element::CorotationalElement;
+use super::element::{CorotationalElement, LocalStrain};
 use crate::DynamicsError;
 
 /// Newton iterations allowed per increment.
@@ -68,6 +68,7 @@ impl PlanarBeam {
             length: le,
             axial_stiffness,
             bending_stiffness,
+            strain: LocalStrain::default(),
         };
         let reference = (0..=elements)
             .flat_map(|k| [k as f64 * le, 0.0, 0.0])
@@ -76,6 +77,15 @@ impl PlanarBeam {
             elements: vec![element; elements],
             reference,
         })
+    }
+
+    /// The same beam with every element's local strain set to `strain`.
+    #[must_use]
+    pub fn with_strain(mut self, strain: LocalStrain) -> Self {
+        for e in &mut self.elements {
+            e.strain = strain;
+        }
+        self
     }
 
     /// Number of nodes.

@@ -33,12 +33,24 @@ use flexprr_integrators::OdeSystem;
 use flexprr_kinematics::{PlatformMotion, Pose, Trajectory};
 use nalgebra::{Matrix3, Vector2, Vector3};
 
-use super::element::{CorotationalElement, wrap_angle};
+use super::banded::BorderedBanded;
+use super::element::{CorotationalElement, LocalStrain, wrap_angle};
+use super::inertia::NodalMass;
 use crate::actuation::{Actuated, Actuation};
 use crate::model::ActuatorState;
 use crate::{DynamicsError, Machine};
 use flexprr_control::SliderState;
 use flexprr_kinematics::MachineState;
+
+/// Half-bandwidth of a link's block of the generalized mass: an element couples the six
+/// consecutive coordinates of its two nodes.
+const MASS_BANDWIDTH: usize = 5;
+
+/// Elements per link of [`NonlinearOptions::paper`]: with the default element
+/// ([`LocalStrain::ShallowArch`], [`NodalMass::Consistent`]) within 0.25 % of the converged
+/// external model through the 30 Hz collapse (0-64 ms) and within 0.4 % of its whole-machine
+/// frequencies.
+pub const DEFAULT_ELEMENTS: usize = 8;
 
 /// Model switches of a [`NonlinearSystem`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,6 +73,10 @@ pub struct NonlinearOptions {
     /// Stop with [`DynamicsError::Collapse`] when a mid-point deflection exceeds this
     /// fraction of its link's length (`None`: no limit).
     pub collapse_deflection: Option<f64>,
+    /// The elements' local strain energy ([`LocalStrain`]).
+    pub strain: LocalStrain,
+    /// The elements' mass ([`NodalMass`]).
+    pub mass: NodalMass,
 }
 
 impl NonlinearOptions {
@@ -75,17 +91,20 @@ impl NonlinearOptions {
             bending_damping_time: 0.0,
             stop_at_type_ii: true,
             collapse_deflection: None,
+            strain: LocalStrain::default(),
+            mass: NodalMass::default(),
         }
     }
 
     /// The paper's links ([`crate::paper`]: `EA = E t h`, `EI = E h t^3 / 12`) with Young's
-    /// modulus `youngs_modulus`, 32 elements per link (the lumped-mass error is second order
-    /// in the element length: 16 elements put the 20 Hz mid-point deflections 1.6 % from the
-    /// external ANCF model, 32 elements 0.46 %; docs/coupled.md).
+    /// modulus `youngs_modulus`, [`DEFAULT_ELEMENTS`] elements per link (shallow-arch
+    /// elements with consistent masses converge at fourth order: 8 elements put the 30 Hz
+    /// collapse's mid-point deflections over 0-64 ms 0.23 % from the converged external ANCF
+    /// model; docs/coupled.md).
     pub fn paper(youngs_modulus: f64) -> Self {
         use crate::paper::{HEIGHT, THICKNESS};
         Self::uniform(
-            32,
+            DEFAULT_ELEMENTS,
             youngs_modulus * THICKNESS * HEIGHT,
             youngs_modulus * HEIGHT * THICKNESS.powi(3) / 12.0,
         )
@@ -155,29 +174,27 @@ impl NonlinearOutput {
 
 /// Per-link constants.
 #[derive(Debug, Clone, Copy)]
-struct LinkData {
-    element: CorotationalElement,
-    /// Translational mass of an interior node (kg); the end nodes carry half.
-    node_mass: f64,
-    /// Rotary inertia of an interior node (kg m^2); the end nodes carry half.
-    node_inertia: f64,
+pub(super) struct LinkData {
+    pub(super) element: CorotationalElement,
+    /// Mass of one element, `rhoA L_e` (kg).
+    pub(super) element_mass: f64,
 }
 
 /// Prescribed and platform kinematics of one evaluation.
 #[derive(Debug, Clone, Copy)]
-struct Frame {
+pub(super) struct Frame {
     /// Time (s).
-    t: f64,
-    nominal: PlatformMotion,
+    pub(super) t: f64,
+    pub(super) nominal: PlatformMotion,
     /// The commanded machine (inverse kinematics of the trajectory).
-    rigid: MachineState,
-    rho: [[f64; 3]; 3],
-    /// `B_i`, `B_i'`, `B_i''`.
-    b: [[Vector2<f64>; 3]; 3],
+    pub(super) rigid: MachineState,
+    pub(super) rho: [[f64; 3]; 3],
+    /// `B_i`, `B_i'`, `B_i''` (for actuated sliders `B''` is unknown and set to zero).
+    pub(super) b: [[Vector2<f64>; 3]; 3],
     /// `r_i = R(phi) c_i`.
-    r: [Vector2<f64>; 3],
+    pub(super) r: [Vector2<f64>; 3],
     /// `C_i`, `C_i'`.
-    c: [[Vector2<f64>; 2]; 3],
+    pub(super) c: [[Vector2<f64>; 2]; 3],
 }
 
 /// A patch's two ends: each one's element and position in it (0..1).
@@ -186,28 +203,30 @@ type PatchEnds = [(usize, f64); 2];
 /// The fully nonlinear 3-PRR as an [`OdeSystem`]: state `y = (z, z')` with `z` the
 /// generalized coordinates of the module documentation (`3 + 3 (3 N - 1)` of them).
 pub struct NonlinearSystem {
-    machine: Arc<Machine>,
+    pub(super) machine: Arc<Machine>,
     trajectory: Arc<dyn Trajectory + Send + Sync>,
-    options: NonlinearOptions,
-    links: [LinkData; 3],
+    pub(super) options: NonlinearOptions,
+    pub(super) links: [LinkData; 3],
     /// Coordinates per link, `3 N - 1`.
-    per_link: usize,
+    pub(super) per_link: usize,
     /// Nodal force buffer of each link, `3 (N + 1)` entries per link (internal + damping).
-    forces: Vec<f64>,
-    /// Platform acceleration of the last evaluation.
-    platform_acceleration: Vector3<f64>,
+    pub(super) forces: Vec<f64>,
+    /// The generalized mass of the last evaluation (factorized after a solve).
+    pub(super) mass: BorderedBanded,
+    /// The generalized forces `F` of the last evaluation, one per coordinate.
+    pub(super) generalized: Vec<f64>,
     counters: NonlinearCounters,
     failure: Option<DynamicsError>,
     /// The initial state set by [`NonlinearSystem::start_at`].
     initial: Vec<f64>,
     /// The sliders' actuators and controller, when the sliders are degrees of freedom.
-    actuated: Option<Actuated>,
+    pub(super) actuated: Option<Actuated>,
     /// The actuator forces of the last evaluation (actuated sliders).
-    slider_forces: [f64; 3],
+    pub(super) slider_forces: [f64; 3],
     /// External point forces `(link, element, position in the element, force)` and slider
     /// loads (the inputs of linear models; none in a run).
     point_loads: Vec<(usize, usize, f64, f64)>,
-    slider_loads: [f64; 3],
+    pub(super) slider_loads: [f64; 3],
     /// Piezoelectric patches under a vibration control law, with each end's element and
     /// position in it.
     patches: Option<(crate::patches::PatchLaw, Vec<PatchEnds>)>,
@@ -228,7 +247,7 @@ fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
 }
 
 #[inline]
-fn perp(a: &Vector2<f64>) -> Vector2<f64> {
+pub(super) fn perp(a: &Vector2<f64>) -> Vector2<f64> {
     Vector2::new(-a.y, a.x)
 }
 
@@ -293,25 +312,26 @@ impl NonlinearSystem {
         let links = std::array::from_fn(|i| {
             let link = &machine.links[i];
             let le = link.length() / ne as f64;
-            let me = link.mass_per_length() * le;
             LinkData {
                 element: CorotationalElement {
                     length: le,
                     axial_stiffness: options.axial_stiffness[i],
                     bending_stiffness: options.bending_stiffness[i],
+                    strain: options.strain,
                 },
-                node_mass: me,
-                node_inertia: 2.0 * me * le * le / 78.0,
+                element_mass: link.mass_per_length() * le,
             }
         });
+        let per_link = 3 * ne - 1;
         Ok(Self {
             machine,
             trajectory,
             options,
             links,
-            per_link: 3 * ne - 1,
+            per_link,
             forces: vec![0.0; 9 * (ne + 1)],
-            platform_acceleration: Vector3::zeros(),
+            mass: BorderedBanded::new(3, per_link, MASS_BANDWIDTH, 3),
+            generalized: vec![0.0; 3 + 3 * per_link],
             counters: NonlinearCounters::default(),
             failure: None,
             initial: Vec::new(),
@@ -341,7 +361,7 @@ impl NonlinearSystem {
         3 + 3 * self.per_link + if self.actuated.is_some() { 3 } else { 0 }
     }
     /// Index of slider `i`'s coordinate (actuated sliders).
-    fn slider_index(&self, i: usize) -> usize {
+    pub(super) fn slider_index(&self, i: usize) -> usize {
         3 + 3 * self.per_link + i
     }
     /// The measured sliders of `y` (actuated sliders).
@@ -456,6 +476,8 @@ impl NonlinearSystem {
     /// The commanded motion's inverse kinematics fails at `t0`.
     pub fn with_actuation(mut self, actuation: Actuation, t0: f64) -> Result<Self, DynamicsError> {
         self.actuated = Some(Actuated::new(actuation, &self.machine, t0));
+        self.mass = BorderedBanded::new(3, self.per_link, MASS_BANDWIDTH, 6);
+        self.generalized = vec![0.0; self.coordinates()];
         self.start_at(t0)?;
         Ok(self)
     }
@@ -591,7 +613,13 @@ impl NonlinearSystem {
 
     /// Coordinates and rates `(x, y, psi)` of node `k` of link `i`.
     #[inline]
-    fn node(&self, y: &[f64], frame: &Frame, i: usize, k: usize) -> ([f64; 3], [f64; 3]) {
+    pub(super) fn node(
+        &self,
+        y: &[f64],
+        frame: &Frame,
+        i: usize,
+        k: usize,
+    ) -> ([f64; 3], [f64; 3]) {
         let n = self.coordinates();
         let ne = self.options.elements;
         let off = 3 + i * self.per_link;
@@ -886,8 +914,8 @@ impl NonlinearSystem {
         Ok(())
     }
 
-    /// Accelerations into `dz_dot` (the second half of `dy`) and the platform's into
-    /// `self.platform_acceleration`; `self.forces` must be assembled.
+    /// Accelerations `z''` into `acc` (the second block of `dy`): assembles and solves
+    /// `M z'' = F` (`self.forces` and the actuators' forces must be assembled).
     fn accelerations(
         &mut self,
         t: f64,
@@ -895,60 +923,8 @@ impl NonlinearSystem {
         frame: &Frame,
         acc: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        let n = self.coordinates();
-        let ne = self.options.elements;
-        let stride = 3 * (ne + 1);
-        let omega = y[n + 2];
-        let mut a = Matrix3::from_diagonal(&Vector3::new(
-            self.machine.platform_mass,
-            self.machine.platform_mass,
-            self.machine.platform_inertia,
-        ));
-        let mut rhs = Vector3::zeros();
-        for i in 0..3 {
-            let link = &self.links[i];
-            let f = &self.forces[i * stride..(i + 1) * stride];
-            let off = 3 + i * self.per_link;
-            let (m, j) = (link.node_mass, link.node_inertia);
-            acc[off] = -2.0 * f[2] / j;
-            for k in 1..ne {
-                let d = off + 3 * k - 2;
-                acc[d] = -f[3 * k] / m;
-                acc[d + 1] = -f[3 * k + 1] / m;
-                acc[d + 2] = -f[3 * k + 2] / j;
-            }
-            acc[off + 3 * ne - 2] = -2.0 * f[3 * ne + 2] / j;
-            // The end node (half mass) moves with the platform.
-            let half = 0.5 * m;
-            let r = frame.r[i];
-            let rp = perp(&r);
-            let g = nalgebra::Matrix2x3::new(1.0, 0.0, rp.x, 0.0, 1.0, rp.y);
-            a += half * g.transpose() * g;
-            let fend = Vector2::new(f[3 * ne], f[3 * ne + 1]) - half * omega * omega * r;
-            rhs -= g.transpose() * fend;
-        }
-        let qdd = a
-            .cholesky()
-            .ok_or_else(|| {
-                DynamicsError::Inconsistent(format!(
-                    "at t = {t} s the platform mass matrix is not positive definite"
-                ))
-            })?
-            .solve(&rhs);
-        acc[..3].copy_from_slice(qdd.as_slice());
-        self.platform_acceleration = qdd;
-        if self.actuated.is_some() {
-            let masses = self.slider_masses();
-            for i in 0..3 {
-                let f = &self.forces[i * stride..(i + 1) * stride];
-                let u = self.machine.geometry.legs[i].guide.direction.into_inner();
-                let half = 0.5 * self.links[i].node_mass;
-                acc[self.slider_index(i)] = (self.slider_forces[i] + self.slider_loads[i]
-                    - (f[0] * u.x + f[1] * u.y))
-                    / (masses[i] + half);
-            }
-        }
-        Ok(())
+        self.assemble_equations(y, frame);
+        self.solve_equations(t, acc)
     }
 
     /// The actuators' commands and outputs at `(t, y)` for the frame's commanded state
@@ -997,7 +973,7 @@ impl NonlinearSystem {
         let ne = self.options.elements;
         let stride = 3 * (ne + 1);
         let omega = y[n + 2];
-        let qdd = self.platform_acceleration;
+        let qdd = Vector3::new(acc[0], acc[1], acc[2]);
         let mut out = NonlinearOutput {
             t,
             nominal: frame.nominal,
@@ -1033,12 +1009,11 @@ impl NonlinearSystem {
             let e = chord.normalize();
             out.chord_length[i] = chord.norm();
             out.chord_angle[i] = wrap_angle(e.y.atan2(e.x));
-            let half = 0.5 * link.node_mass;
-            // Node 0: half * B'' = F_B - f_0; node N: half * C'' = F_C - f_N.
-            let f_b = half * frame.b[i][2] + Vector2::new(f[0], f[1]);
-            let r = frame.r[i];
-            let c_ddot = Vector2::new(qdd.x, qdd.y) + qdd.z * perp(&r) - omega * omega * r;
-            let f_c = half * c_ddot + Vector2::new(f[3 * ne], f[3 * ne + 1]);
+            // Node 0: F_B = (its inertia) + f_0; node N: F_C = (its inertia) + f_N.
+            let first = self.element_inertia_force(&frame, y, &acc, i, 0);
+            let last = self.element_inertia_force(&frame, y, &acc, i, ne - 1);
+            let f_b = Vector2::new(first[0] + f[0], first[1] + f[1]);
+            let f_c = Vector2::new(last[3] + f[3 * ne], last[4] + f[3 * ne + 1]);
             out.axial_force_b[i] = -f_b.dot(&e);
             out.axial_force_c[i] = f_c.dot(&e);
             let u = self.machine.geometry.legs[i].guide.direction.into_inner();
@@ -1048,22 +1023,12 @@ impl NonlinearSystem {
                 out.kinetic_energy += 0.5 * slider_mass[i] * frame.rho[i][1] * frame.rho[i][1];
             }
             out.slider_power += f_b.dot(&frame.b[i][1]);
+            out.kinetic_energy += self.link_kinetic_energy(y, &frame, i);
             let el = link.element;
-            for k in 0..=ne {
-                let (q, v) = self.node(y, &frame, i, k);
-                let w = if k == 0 || k == ne { 0.5 } else { 1.0 };
-                out.kinetic_energy += 0.5
-                    * w
-                    * (link.node_mass * (v[0] * v[0] + v[1] * v[1])
-                        + link.node_inertia * v[2] * v[2]);
-                if k < ne {
-                    let (q2, _) = self.node(y, &frame, i, k + 1);
-                    let st = el.state(&[q[0], q[1], q[2], q2[0], q2[1], q2[2]]);
-                    let [t1, t2] = st.rotations;
-                    out.link_strain_energy[i] += 0.5 * el.axial_stiffness * st.stretch * st.stretch
-                        / el.length
-                        + 2.0 * el.bending_stiffness / el.length * (t1 * t1 + t1 * t2 + t2 * t2);
-                }
+            for k in 0..ne {
+                let (q, v) = self.element_state(y, &frame, i, k);
+                let _ = v;
+                out.link_strain_energy[i] += el.strain_energy(&el.state(&q));
             }
         }
         out.strain_energy = out.link_strain_energy.iter().sum();

@@ -1,0 +1,290 @@
+//! The equations of motion of [`NonlinearSystem`] in its generalized coordinates `z`:
+//!
+//! ```text
+//! M(z) z'' = F(t, z, z'),   M = M_own + sum_e A_e^T M_e A_e,
+//! F = f_own - sum_e A_e^T (f_e + M_e abar_e + h_e)
+//! ```
+//!
+//! Each element's coordinates `x_e = (x1, y1, psi1, x2, y2, psi2)` move with the generalized
+//! ones as `x_e'' = A_e z'' + abar_e`: a free node's coordinates are generalized coordinates;
+//! the first node's position is the slider's, prescribed (`abar = B''(t)`) or an actuated
+//! slider's coordinate `rho` (`A = u`); the last node's position is the platform point
+//! `p + R(phi) c` (`A = [I | perp(r)]`, `abar = -phi'^2 r`). `M_e` and `h_e` are the element's
+//! inertia ([`NodalMass`]), `f_e` its internal, damping and external nodal forces; `M_own`
+//! holds the platform's mass and inertia and the sliders' masses, `f_own` the actuator
+//! forces. `M` is banded per link with a border of the platform's (and the sliders')
+//! coordinates ([`BorderedBanded`]).
+
+// Index loops below mirror the formulas (rows and columns of small matrices).
+#![allow(clippy::needless_range_loop)]
+
+use super::banded::BorderedBanded;
+use super::inertia::NodalMass;
+use super::system::{Frame, NonlinearSystem, perp};
+use crate::DynamicsError;
+
+/// How one element coordinate moves with the generalized coordinates: up to two
+/// `(coordinate, coefficient)` pairs (`usize::MAX` for none).
+pub(super) type CoordinateMap = [(usize, f64); 2];
+
+/// No generalized coordinate.
+pub(super) const NONE: usize = usize::MAX;
+
+impl NonlinearSystem {
+    /// Generalized index of link `i`'s local coordinate `j`.
+    #[inline]
+    pub(super) fn link_index(&self, i: usize, j: usize) -> usize {
+        3 + i * self.per_link + j
+    }
+
+    /// The map `A_e` of element `e` of link `i` (rows: the element's six coordinates) and the
+    /// known part `abar_e` of its acceleration.
+    pub(super) fn element_map(
+        &self,
+        frame: &Frame,
+        y: &[f64],
+        i: usize,
+        e: usize,
+    ) -> ([CoordinateMap; 6], [f64; 6]) {
+        let ne = self.options.elements;
+        let n = self.coordinates();
+        let mut map = [[(NONE, 0.0); 2]; 6];
+        let mut known = [0.0; 6];
+        for (slot, node) in [(0usize, e), (3, e + 1)] {
+            if node == 0 {
+                map[slot + 2][0] = (self.link_index(i, 0), 1.0);
+                if self.actuated.is_some() {
+                    let u = self.machine.geometry.legs[i].guide.direction.into_inner();
+                    let s = self.slider_index(i);
+                    map[slot][0] = (s, u.x);
+                    map[slot + 1][0] = (s, u.y);
+                } else {
+                    known[slot] = frame.b[i][2].x;
+                    known[slot + 1] = frame.b[i][2].y;
+                }
+            } else if node == ne {
+                let r = frame.r[i];
+                let rp = perp(&r);
+                map[slot] = [(0, 1.0), (2, rp.x)];
+                map[slot + 1] = [(1, 1.0), (2, rp.y)];
+                map[slot + 2][0] = (self.link_index(i, 3 * ne - 2), 1.0);
+                let omega = y[n + 2];
+                known[slot] = -omega * omega * r.x;
+                known[slot + 1] = -omega * omega * r.y;
+            } else {
+                for c in 0..3 {
+                    map[slot + c][0] = (self.link_index(i, 3 * node - 2 + c), 1.0);
+                }
+            }
+        }
+        (map, known)
+    }
+
+    /// Where generalized coordinate `g` sits in the mass matrix: `Ok((block, row))` for a
+    /// link's coordinate, `Err(border index)` for the platform's and the sliders'.
+    #[inline]
+    pub(super) fn mass_position(&self, g: usize) -> Result<(usize, usize), usize> {
+        if g < 3 {
+            Err(g)
+        } else if g < 3 + 3 * self.per_link {
+            let j = g - 3;
+            Ok((j / self.per_link, j % self.per_link))
+        } else {
+            Err(3 + (g - 3 - 3 * self.per_link))
+        }
+    }
+
+    /// Adds `v` at `(g1, g2)` of the symmetric generalized matrix `mass` (every ordered pair is
+    /// offered by the caller; each stored entry is taken once).
+    #[inline]
+    fn add_mass(&self, mass: &mut BorderedBanded, g1: usize, g2: usize, v: f64) {
+        match (self.mass_position(g1), self.mass_position(g2)) {
+            (Ok((b1, j1)), Ok((b2, j2))) => {
+                debug_assert_eq!(b1, b2, "links are not coupled directly");
+                if j1 >= j2 {
+                    mass.add_block(b1, j1, j2, v);
+                }
+            }
+            (Ok((b, j)), Err(c)) => mass.add_coupling(b, j, c, v),
+            (Err(_), Ok(_)) => {}
+            (Err(c1), Err(c2)) => mass.add_border(c1, c2, v),
+        }
+    }
+
+    /// The element's coordinates and rates `(x_e, x_e')`.
+    #[inline]
+    pub(super) fn element_state(
+        &self,
+        y: &[f64],
+        frame: &Frame,
+        i: usize,
+        e: usize,
+    ) -> ([f64; 6], [f64; 6]) {
+        let (q1, v1) = self.node(y, frame, i, e);
+        let (q2, v2) = self.node(y, frame, i, e + 1);
+        (
+            [q1[0], q1[1], q1[2], q2[0], q2[1], q2[2]],
+            [v1[0], v1[1], v1[2], v2[0], v2[1], v2[2]],
+        )
+    }
+
+    /// Assembles `M` into `self.mass` and `F` into `self.generalized` (`self.forces` must hold
+    /// the nodal internal, damping and external forces; `self.slider_forces` the actuators').
+    pub(super) fn assemble_equations(&mut self, y: &[f64], frame: &Frame) {
+        let ne = self.options.elements;
+        let stride = 3 * (ne + 1);
+        let mut mass = std::mem::take(&mut self.mass);
+        let mut rhs = std::mem::take(&mut self.generalized);
+        mass.clear();
+        rhs.fill(0.0);
+        let model = self.options.mass;
+        for i in 0..3 {
+            let link = self.links[i];
+            for e in 0..ne {
+                let (q, v) = self.element_state(y, frame, i, e);
+                let (map, known) = self.element_map(frame, y, i, e);
+                let inertia = model.inertia(link.element_mass, link.element.length, &q, &v);
+                // Known force: the nodal forces of the element's nodes are added once per node
+                // (by the element that owns the node's slot: its first element, or the last
+                // element for node N), the inertia of the known accelerations per element.
+                let mut known_force = inertia.velocity_terms;
+                for (a, row) in inertia.mass.iter().enumerate() {
+                    known_force[a] += row.iter().zip(&known).map(|(m, k)| m * k).sum::<f64>();
+                }
+                let f = &self.forces[i * stride..(i + 1) * stride];
+                for c in 0..6 {
+                    let node = e + c / 3;
+                    let owns = if c < 3 { e == 0 } else { true };
+                    if owns {
+                        known_force[c] += f[3 * node + c % 3];
+                    }
+                }
+                for (c, m) in map.iter().enumerate() {
+                    for &(g, coef) in m.iter().filter(|(g, _)| *g != NONE) {
+                        rhs[g] -= coef * known_force[c];
+                    }
+                }
+                for (c1, m1) in map.iter().enumerate() {
+                    for (c2, m2) in map.iter().enumerate() {
+                        let v = inertia.mass[c1][c2];
+                        if v == 0.0 {
+                            continue;
+                        }
+                        for &(g1, a1) in m1.iter().filter(|(g, _)| *g != NONE) {
+                            for &(g2, a2) in m2.iter().filter(|(g, _)| *g != NONE) {
+                                self.add_mass(&mut mass, g1, g2, a1 * a2 * v);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // The platform's own mass and the sliders'.
+        let (mp, ip) = (self.machine.platform_mass, self.machine.platform_inertia);
+        for (c, v) in [(0, mp), (1, mp), (2, ip)] {
+            mass.add_border(c, c, v);
+        }
+        if self.actuated.is_some() {
+            let masses = self.slider_masses();
+            for i in 0..3 {
+                let g = self.slider_index(i);
+                mass.add_border(3 + i, 3 + i, masses[i]);
+                rhs[g] += self.slider_forces[i] + self.slider_loads[i];
+            }
+        }
+        self.mass = mass;
+        self.generalized = rhs;
+    }
+
+    /// Solves `M z'' = F` (after [`NonlinearSystem::assemble_equations`]) into `acc`.
+    ///
+    /// # Errors
+    /// A mass matrix that is not positive definite (a bug or a non-finite state).
+    pub(super) fn solve_equations(&mut self, t: f64, acc: &mut [f64]) -> Result<(), DynamicsError> {
+        self.mass.factor().map_err(|_| {
+            DynamicsError::Inconsistent(format!(
+                "at t = {t} s the generalized mass matrix is not positive definite"
+            ))
+        })?;
+        let links = 3 * self.per_link;
+        acc.copy_from_slice(&self.generalized[..acc.len()]);
+        let k = self.mass.border_size();
+        let mut border = [0.0; 6];
+        border[..3].copy_from_slice(&acc[..3]);
+        if k > 3 {
+            border[3..k].copy_from_slice(&acc[3 + links..3 + links + 3]);
+        }
+        self.mass.solve(&mut acc[3..3 + links], &mut border[..k]);
+        acc[..3].copy_from_slice(&border[..3]);
+        if k > 3 {
+            acc[3 + links..3 + links + 3].copy_from_slice(&border[3..k]);
+        }
+        Ok(())
+    }
+
+    /// The accelerations `x_e''` of element `e` of link `i` from the generalized `acc`.
+    pub(super) fn element_acceleration(
+        &self,
+        frame: &Frame,
+        y: &[f64],
+        acc: &[f64],
+        i: usize,
+        e: usize,
+    ) -> [f64; 6] {
+        let (map, mut a) = self.element_map(frame, y, i, e);
+        for (c, m) in map.iter().enumerate() {
+            for &(g, coef) in m.iter().filter(|(g, _)| *g != NONE) {
+                a[c] += coef * acc[g];
+            }
+        }
+        a
+    }
+
+    /// Inertia force `M_e x_e'' + h_e` of element `e` of link `i` at the accelerations `acc`.
+    pub(super) fn element_inertia_force(
+        &self,
+        frame: &Frame,
+        y: &[f64],
+        acc: &[f64],
+        i: usize,
+        e: usize,
+    ) -> [f64; 6] {
+        let link = self.links[i];
+        let (q, v) = self.element_state(y, frame, i, e);
+        let a = self.element_acceleration(frame, y, acc, i, e);
+        let inertia = self
+            .options
+            .mass
+            .inertia(link.element_mass, link.element.length, &q, &v);
+        let mut f = inertia.velocity_terms;
+        for (k, row) in inertia.mass.iter().enumerate() {
+            f[k] += row.iter().zip(&a).map(|(m, x)| m * x).sum::<f64>();
+        }
+        f
+    }
+
+    /// Kinetic energy of link `i`'s elements, `sum_e x_e'^T M_e x_e' / 2`.
+    pub(super) fn link_kinetic_energy(&self, y: &[f64], frame: &Frame, i: usize) -> f64 {
+        let link = self.links[i];
+        (0..self.options.elements)
+            .map(|e| {
+                let (q, v) = self.element_state(y, frame, i, e);
+                let m = NodalMass::inertia(
+                    self.options.mass,
+                    link.element_mass,
+                    link.element.length,
+                    &q,
+                    &v,
+                )
+                .mass;
+                let mut t = 0.0;
+                for a in 0..6 {
+                    for b in 0..6 {
+                        t += 0.5 * v[a] * m[a][b] * v[b];
+                    }
+                }
+                t
+            })
+            .sum()
+    }
+}
