@@ -371,3 +371,48 @@ plots = false
         );
     }
 }
+
+/// The external model's variants are the shipped coupled scene with `model.coupling` set to
+/// `nonlinear` and `elements = 16`, its `[output]` untouched: `modes` analyses it although
+/// the scene requests the modal `modes` output, which a run of the nonlinear model refuses.
+/// At rest with the sliders locked, each link's first bending modes are close to the
+/// pinned-pinned ones (the platform is held by the links' axial stiffness, 1.9 kHz and up).
+#[test]
+fn a_nonlinear_variant_of_the_coupled_scene_is_analysed_whatever_it_requests() {
+    let text = std::fs::read_to_string(config("coupled_f20.toml")).unwrap();
+    assert!(
+        text.contains("\"modes\""),
+        "the shipped scene requests modes"
+    );
+    let text = text.replacen(
+        "coupling = \"coupled\"",
+        "coupling = \"nonlinear\"\nelements = 16",
+        1,
+    );
+    assert!(text.contains("elements = 16"));
+    let dir = std::env::temp_dir().join(format!("flexprr_modes_variant_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("coupled_nonlinear16.toml");
+    std::fs::write(&scene, text).unwrap();
+    let run = flexprr()
+        .args(["check", scene.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2), "a run refuses the modal output");
+    let value = json(&modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.05,0,45",
+        "--json",
+    ]));
+    let found = frequencies(&value);
+    let (e, rho, t, l): (f64, f64, f64, f64) = (7.3e10, 2770.0, 0.002, 0.2);
+    let first = PI / (2.0 * l * l) * t * (e / (12.0 * rho)).sqrt();
+    for (f, _) in &found[..3] {
+        assert!(
+            ((f - first) / first).abs() < 2e-3,
+            "{f} Hz against {first} Hz"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

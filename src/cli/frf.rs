@@ -153,7 +153,7 @@ fn scene_and_plan(args: &FrfArgs) -> Result<(Scene, Option<FrfPlan>, Vec<PathBuf
             files.push(path.clone());
             match &plan {
                 Some(plan) => plan.scene_with_set(path).map_err(failure)?,
-                None => Scene::load(path).map_err(failure)?,
+                None => Scene::load_for_analysis(path).map_err(failure)?,
             }
         }
         (None, Some(scene)) => scene,

@@ -47,7 +47,7 @@ pub struct StateSpaceArgs {
 
 /// Runs the command.
 pub fn run(args: StateSpaceArgs) -> Result<(), Failure> {
-    let scene = Scene::load(&args.scene).map_err(failure)?;
+    let scene = Scene::load_for_analysis(&args.scene).map_err(failure)?;
     let inputs: Vec<Input> = channels(&args.inputs)?;
     let outputs: Vec<Output> = channels(&args.outputs)?;
     let pose = args.pose.as_deref().map(parse_pose).transpose()?;

@@ -179,7 +179,7 @@ impl FrfPlan {
     /// As [`Scene::load`]; an override the scene refuses, named after the plan.
     pub fn scene_with_set(&self, path: &Path) -> Result<Scene, ScenarioError> {
         if self.set.is_empty() {
-            return Scene::load(path);
+            return Scene::load_for_analysis(path);
         }
         let shown = path.display().to_string();
         let text = read_input_file(path)?;
@@ -190,7 +190,7 @@ impl FrfPlan {
             .file_stem()
             .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         let generated = toml::to_string(&table).map_err(|e| ScenarioError::Run(e.to_string()))?;
-        Scene::from_text(&origin, &stem, &generated).map_err(|e| unlocated(&origin, e))
+        Scene::from_text_for_analysis(&origin, &stem, &generated).map_err(|e| unlocated(&origin, e))
     }
 
     /// The plan's scene, if it names one.
@@ -231,7 +231,9 @@ impl FrfPlan {
             .file_stem()
             .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         match base_text {
-            Some(text) if raw.set.is_empty() => Scene::from_text(&origin, &stem, &text).map(Some),
+            Some(text) if raw.set.is_empty() => {
+                Scene::from_text_for_analysis(&origin, &stem, &text).map(Some)
+            }
             _ => {
                 merge_into(&mut table, &raw.set);
                 let origin = if raw.set.is_empty() {
@@ -240,7 +242,7 @@ impl FrfPlan {
                     format!("{origin} with the [set] of {shown}")
                 };
                 let text = toml::to_string(&table).map_err(|e| at("set", e.to_string()))?;
-                Scene::from_text(&origin, &stem, &text)
+                Scene::from_text_for_analysis(&origin, &stem, &text)
                     .map(Some)
                     .map_err(|e| unlocated(&origin, e))
             }

@@ -187,6 +187,35 @@ impl Scene {
         Self::from_text_with(registry, &path.display().to_string(), name, &text)
     }
 
+    /// As [`Scene::load`], for commands that build the scene's model and never write its run
+    /// outputs (`flexprr modes`, `frf`, `statespace`): the `[output]` requests are left out
+    /// instead of being checked against the model kind, so that a coupled scene switched to
+    /// `model.coupling = "nonlinear"` still analyses although it requests the modal `modes`
+    /// output. A request that is not an output at all is still an error.
+    ///
+    /// # Errors
+    /// As [`Scene::load`].
+    pub fn load_for_analysis(path: &Path) -> Result<Self, ScenarioError> {
+        let text = read_input_file(path)?;
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+        Self::from_text_for_analysis(&path.display().to_string(), name, &text)
+    }
+
+    /// As [`Scene::from_text`], with the `[output]` requests left out as in
+    /// [`Scene::load_for_analysis`].
+    ///
+    /// # Errors
+    /// As [`Scene::from_text`].
+    pub fn from_text_for_analysis(
+        file: &str,
+        default_name: &str,
+        text: &str,
+    ) -> Result<Self, ScenarioError> {
+        let mut raw = parse_scene(file, text)?;
+        raw.output.requests.clear();
+        Self::from_file_with(&Registry::default(), file, text, raw, default_name)
+    }
+
     /// Parses and validates scene text; `file` names it in messages, `default_name` is used
     /// (made safe, see [`crate::sanitize_name`]) when the scene has no `name`.
     ///
