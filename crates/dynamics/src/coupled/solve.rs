@@ -259,13 +259,27 @@ impl CoupledSystem {
                 );
             }
         }
+        let z = self.solve_projections(t, &mut w, &mut c, unknowns)?;
+        self.reconstruct(kin, &z, unknowns == 9);
+        Ok(z)
+    }
+
+    /// Solves the reduced system `w z = c` (6 unknowns `(s, m)`, or 9 with the sliders'
+    /// accelerations `r`) in place.
+    fn solve_projections(
+        &mut self,
+        t: f64,
+        w: &mut [f64; 81],
+        c: &mut [f64; 9],
+        unknowns: usize,
+    ) -> Result<Projections, DynamicsError> {
         self.counters.acceleration_solves += 1;
         solve_in_place(&mut w[..unknowns * unknowns], &mut c[..unknowns]).map_err(|column| {
             DynamicsError::Inconsistent(format!(
                 "at t = {t} s the coupled mass matrix is singular (zero pivot in column {column})"
             ))
         })?;
-        let z = Projections {
+        Ok(Projections {
             s: Vector3::new(c[0], c[1], c[2]),
             m: Vector3::new(c[3], c[4], c[5]),
             r: if unknowns == 9 {
@@ -273,9 +287,7 @@ impl CoupledSystem {
             } else {
                 Vector3::zeros()
             },
-        };
-        self.reconstruct(kin, &z, unknowns == 9);
-        Ok(z)
+        })
     }
 
     /// `eta_i'' = a_i + h_i r_i - l p_i (Bs s + Br r)_i - q_i (Ts s + Tm m + Tr r)_i` in
