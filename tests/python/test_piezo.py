@@ -83,9 +83,9 @@ def test_the_example_damping_follows_the_closed_form_and_the_choice_the_limit(ro
     gain = 1e-3
     zeta = gain * K_A * K_S * d**2 / (2 * RHO * area * L / 2 * omega)
     got = example.first_mode_damping(gain)
-    # The coupled machine's first mode at rest is the links' first mode, slightly loaded
-    # by the platform; first order in G.
-    assert got == pytest.approx(zeta, rel=0.03)
+    # At rest the coupled machine's first mode is the links' first mode (no axial load);
+    # P3 is first order in G (measured: 1.4e-5 apart at G = 1 ms).
+    assert got == pytest.approx(zeta, rel=1e-3)
     gains = [0.0, 1e-3, 2e-3, 3e-3, 4e-3, 6e-3]
     out = example.choose(120.0, gains)
     volts = out["max_command_V"]
