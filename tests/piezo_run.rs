@@ -196,3 +196,45 @@ fn piezo_without_patches_is_refused_at_its_request() {
         "{err}"
     );
 }
+
+#[test]
+fn the_study_quantities_are_the_runs_reduction_and_voltage() {
+    use flexprr_studies::study::Quantity;
+    let scene = scene(3e-3, 100.0, r#"["deflections"]"#);
+    let result = run(&scene, &mut |_| {}).unwrap();
+    let summary = summary_json(&scene, &result, None);
+    let section = &summary["vibration_control"];
+    for link in 1..=3 {
+        let q = Quantity::DeflectionReduction { link };
+        assert!(q.unavailable(&scene).is_none());
+        let values = q.derive(&result).unwrap();
+        let l = &section["links"][link - 1];
+        for (value, key) in values
+            .iter()
+            .zip(["peak_reduction_percent", "rms_reduction_percent"])
+        {
+            let expect = l[key].as_f64().unwrap();
+            assert!((value.parse::<f64>().unwrap() - expect).abs() <= 1e-9 * expect.abs().max(1.0));
+        }
+    }
+    let values = Quantity::PatchVoltage.derive(&result).unwrap();
+    // At a 100 V limit the 3 ms gain saturates link 1's patch (its command reaches 161 V).
+    assert_eq!(values[0].parse::<f64>().unwrap(), 100.0);
+    assert_eq!(values[1], "yes");
+    let fraction = section["max_saturated_fraction"].as_f64().unwrap();
+    // Written to ten significant digits.
+    assert!(
+        (values[2].parse::<f64>().unwrap() - fraction).abs() <= 1e-9 * fraction && fraction > 0.0
+    );
+    // Without the law there is no reduction to report; without patches no voltage.
+    let free = scene.without_vibration_control();
+    assert!(
+        Quantity::DeflectionReduction { link: 1 }
+            .unavailable(&free)
+            .is_some()
+    );
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/paper_f20.toml");
+    let paper = Scene::load(&path).unwrap();
+    let why = Quantity::PatchVoltage.unavailable(&paper).unwrap();
+    assert!(why.contains("[[links.patches]]"), "{why}");
+}
