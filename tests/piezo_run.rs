@@ -127,10 +127,14 @@ fn a_tight_limit_clips_and_the_summary_says_so() {
     let applied = column(&result, "piezo", "V_applied_1_1_V");
     let flag = column(&result, "piezo", "patch_saturated_1_1_flag");
     for k in 0..command.len() {
-        assert_eq!(applied[k], command[k].clamp(-limit, limit));
-        assert_eq!(flag[k] == 1.0, command[k].abs() > limit);
+        // Exactly the clipped command: compare the bits.
+        assert_eq!(
+            applied[k].to_bits(),
+            command[k].clamp(-limit, limit).to_bits()
+        );
+        assert_eq!(flag[k] > 0.5, command[k].abs() > limit);
     }
-    let clipped = flag.iter().filter(|&&f| f == 1.0).count() as f64 / flag.len() as f64;
+    let clipped = flag.iter().filter(|&&f| f > 0.5).count() as f64 / flag.len() as f64;
     let summary = summary_json(&scene, &result, None);
     let section = &summary["vibration_control"];
     assert_eq!(section["any_saturated"], Value::Bool(true));
@@ -219,7 +223,7 @@ fn the_study_quantities_are_the_runs_reduction_and_voltage() {
     }
     let values = Quantity::PatchVoltage.derive(&result).unwrap();
     // At a 100 V limit the 3 ms gain saturates link 1's patch (its command reaches 161 V).
-    assert_eq!(values[0].parse::<f64>().unwrap(), 100.0);
+    assert_eq!(values[0], "100");
     assert_eq!(values[1], "yes");
     let fraction = section["max_saturated_fraction"].as_f64().unwrap();
     // Written to ten significant digits.

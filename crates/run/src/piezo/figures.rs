@@ -76,7 +76,7 @@ pub(crate) fn figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)
     };
     let figure = Figure::new(Axis::new("t", "s"))
         .title(title)
-        .description(&format!("flexprr run of scene {}", scene.name))
+        .description(format!("flexprr run of scene {}", scene.name))
         .panel(Panel {
             y: Axis::new("V", "V"),
             series: voltage,

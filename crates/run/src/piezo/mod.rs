@@ -92,7 +92,7 @@ pub(crate) fn produce(
     uncontrolled: Option<&Uncontrolled>,
     result: &mut RunResult,
 ) -> Result<(), DynamicsError> {
-    if scene.patches.is_empty() || solution.len() == 0 {
+    if scene.patches.is_empty() || solution.is_empty() {
         return Ok(());
     }
     let states = (0..solution.len())
