@@ -132,6 +132,13 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
     let target = OutputDir::check(&out, RUN_PRODUCTS, args.force, &[&args.scene], &[])
         .map_err(|e| failure(e.into()))?;
     target.check_writable().map_err(|e| failure(e.into()))?;
+    if flexprr_run::piezo::needs_uncontrolled(&scene) && !args.quiet {
+        eprintln!(
+            "{}: the scene is also run without its vibration control law, for the reduction \
+             of the deflection (a second integration, the second half of the progress)",
+            scene.name
+        );
+    }
     let mut progress = RunProgress::new(&scene.name, args.quiet);
     let outcome = run_scene(&scene, &mut |f| progress.update(f));
     progress.finish();
@@ -179,6 +186,9 @@ fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path
             s.rhs_evaluations
         );
     }
+    if let Some(piezo) = &result.piezo {
+        print_piezo(piezo);
+    }
     if let Some(table) = table_one_markdown(result) {
         println!("\nTable I (link 1 frequencies over the motion):\n{table}");
     }
@@ -198,6 +208,74 @@ fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path
             );
         }
     }
+}
+
+/// The patches' largest voltages and the reduction of the mid-point deflection.
+fn print_piezo(piezo: &flexprr_run::piezo::PiezoReport) {
+    for p in &piezo.patches {
+        println!(
+            "  patch {} of link {}: max |V| {:.1} V of {} V{}",
+            p.index + 1,
+            p.link + 1,
+            p.max_abs_voltage,
+            p.voltage_limit,
+            if p.saturated_fraction > 0.0 {
+                format!(
+                    ", saturated {:.1} % of the time",
+                    100.0 * p.saturated_fraction
+                )
+            } else {
+                String::new()
+            }
+        );
+    }
+    for l in piezo.reduction.iter().flatten() {
+        let percent = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.1} %"));
+        println!(
+            "  link {} mid-point deflection with/without {}: peak {:.3e}/{:.3e} m ({} lower), RMS {:.3e}/{:.3e} m ({} lower)",
+            l.link + 1,
+            piezo.law,
+            l.peak_controlled,
+            l.peak_uncontrolled,
+            percent(l.peak_reduction_percent()),
+            l.rms_controlled,
+            l.rms_uncontrolled,
+            percent(l.rms_reduction_percent()),
+        );
+    }
+}
+
+/// The scene's patches and their law, for `flexprr check` (empty without patches).
+fn patch_description(scene: &Scene) -> String {
+    let Some(control) = scene.patch_control() else {
+        return String::new();
+    };
+    let patches: Vec<String> = control
+        .patches
+        .iter()
+        .map(|p| {
+            format!(
+                "link {} xi {}-{} (k_a {} N m/V, k_s {} V/rad, {} V)",
+                p.link + 1,
+                p.xi_start,
+                p.xi_end,
+                p.actuator_constant,
+                p.sensor_constant,
+                p.voltage_limit
+            )
+        })
+        .collect();
+    let law = &control.controller;
+    let timing = if law.period() > 0.0 {
+        format!("sampled every {} s", law.period())
+    } else {
+        "continuous".to_string()
+    };
+    format!(
+        "\n  piezoelectric patches: {}\n  vibration control: {} ({timing})",
+        patches.join("; "),
+        law.name()
+    )
 }
 
 /// Validates a scene without running it. A study or link file is named as such, with the
@@ -224,11 +302,12 @@ pub fn check(args: CheckArgs) -> Result<(), Failure> {
     let requests: Vec<&str> = scene.outputs.iter().map(|k| k.name()).collect();
     let model = scene.model_description();
     println!(
-        "{}: ok ({model}, {} integrator, {} output times, outputs: {})",
+        "{}: ok ({model}, {} integrator, {} output times, outputs: {}){}",
         args.scene.display(),
         scene.method.name(),
         scene.output_times.len(),
-        requests.join(", ")
+        requests.join(", "),
+        patch_description(&scene)
     );
     Ok(())
 }

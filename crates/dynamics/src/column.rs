@@ -110,6 +110,19 @@ pub enum Quantity {
     MachineFrequency,
     /// A whole-machine damping ratio `-Re(lambda) / |lambda|` (dimensionless).
     MachineDampingRatio,
+    /// Transverse deflection w at xi of the same scene without its vibration control (m).
+    DeflectionUncontrolled,
+    /// A piezoelectric patch's sensor voltage `V_s` (V); link and the patch's index on it.
+    PatchSensorVoltage,
+    /// A patch's voltage command from the vibration control law (V).
+    PatchCommandVoltage,
+    /// A patch's applied voltage: the command clipped at its limit (V).
+    PatchVoltage,
+    /// Whether a patch's command was clipped at its limit (1) or not (0).
+    PatchSaturated,
+    /// Mechanical power a patch's actuator delivers to its link (W; negative when it
+    /// removes energy).
+    PatchPower,
 }
 
 /// How a quantity is written: header stem, optional suffix after the indices, unit, and the
@@ -192,6 +205,12 @@ impl Quantity {
             Q::MotorSaturated => sp("motor_saturated", None, "flag", "sat", "1"),
             Q::MachineFrequency => sp("f_machine", None, "Hz", "f", "Hz"),
             Q::MachineDampingRatio => sp("zeta_machine", None, "ratio", "ζ", "1"),
+            Q::DeflectionUncontrolled => sp("w", Some("uncontrolled"), "m", "w", "m"),
+            Q::PatchSensorVoltage => sp("V_sensor", None, "V", "V_s", "V"),
+            Q::PatchCommandVoltage => sp("V_command", None, "V", "V_c", "V"),
+            Q::PatchVoltage => sp("V_applied", None, "V", "V", "V"),
+            Q::PatchSaturated => sp("patch_saturated", None, "flag", "sat", "1"),
+            Q::PatchPower => sp("P_patch", None, "W", "P", "W"),
         }
     }
 

@@ -24,6 +24,7 @@ pub mod npz;
 mod output;
 pub mod output_dir;
 mod outputs;
+pub mod piezo;
 pub mod plot;
 mod run;
 mod samples;

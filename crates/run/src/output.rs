@@ -156,6 +156,10 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         "frequencies": frequencies,
         "control": control,
         "feasibility": feasibility,
+        "vibration_control": result
+            .piezo
+            .as_ref()
+            .map_or(Value::Null, crate::piezo::PiezoReport::to_json),
         "machine_frequencies": result
             .machine_frequencies
             .as_ref()
@@ -238,6 +242,8 @@ pub const RUN_PRODUCTS: Products = Products {
         "energies.svg",
         "machine_frequencies.csv",
         "machine_frequencies.svg",
+        "piezo.csv",
+        "piezo.svg",
     ],
     patterns: &[
         ("deflections_xi", ".svg"),

@@ -173,8 +173,9 @@ pub(crate) fn modes(model: &dyn SceneModel, solution: &Solution) -> Table {
     table
 }
 
-/// Deflections at the requested `xi`, and without axial force when that run was made
-/// (`deflections.csv`, the paper's figures 6-8).
+/// Deflections at the requested `xi`, without axial force when that run was made
+/// (`deflections.csv`, the paper's figures 6-8), and without vibration control when that
+/// run was made (docs/piezo.md).
 ///
 /// # Errors
 /// A deflection the model cannot compute at an output time (a kinematic failure).
@@ -183,6 +184,7 @@ pub(crate) fn deflections(
     model: &dyn SceneModel,
     solution: &Solution,
     without_axial: Option<(&dyn SceneModel, &Solution)>,
+    uncontrolled: Option<(&dyn SceneModel, &Solution)>,
 ) -> Result<Table, DynamicsError> {
     let mut table = Table::new("deflections", &solution.t);
     let deflection = |model: &dyn SceneModel, states: &Solution, i: usize, xi: f64| {
@@ -200,6 +202,12 @@ pub(crate) fn deflections(
                 table.push(
                     Column::at(Q::DeflectionWithoutAxialForce, i, xi),
                     deflection(plain, states, i, xi)?,
+                );
+            }
+            if let Some((free, states)) = uncontrolled {
+                table.push(
+                    Column::at(Q::DeflectionUncontrolled, i, xi),
+                    deflection(free, states, i, xi)?,
                 );
             }
         }

@@ -47,6 +47,9 @@ struct Integrated {
     model: Box<dyn SceneModel>,
     solution: Solution,
     without_axial: Option<(Box<dyn SceneModel>, Solution)>,
+    /// The same scene without its vibration control law, when it was run for the
+    /// comparison (or why it could not be).
+    uncontrolled: Option<crate::piezo::Uncontrolled>,
     /// The model's [`MachineSnapshot`] at every output time reached, once an output needs
     /// them.
     snapshots: Option<Vec<MachineSnapshot>>,
@@ -114,8 +117,10 @@ fn wants(scene: &Scene, kind: OutputKind) -> bool {
 }
 
 /// Integrates `model` (the scene's own when `None`) and, when the scene compares with a run
-/// without axial force and its model has that switch, that model too; on failure, the error
-/// with the partial states.
+/// without axial force and its model has that switch, that model too; when the scene's
+/// patches are under a vibration control law and the deflections or the piezo output are
+/// requested, the same scene without the law (the second half of the progress); on failure,
+/// the error with the partial states.
 fn integrate_all(
     scene: &Scene,
     model: Option<Box<dyn SceneModel>>,
@@ -126,11 +131,13 @@ fn integrate_all(
         Some(model) => model,
         None => scene.build_model()?,
     };
+    let second = crate::piezo::needs_uncontrolled(scene);
+    let main_share = if second { 0.5 } else { 1.0 };
     let main = integrate_model(
         scene,
         scene_integrator(scene).as_ref(),
         model.as_mut(),
-        report,
+        &mut |f| report(main_share * f),
     );
     stats.integrated = true;
     stats.integrator = Some(main.stats().clone());
@@ -142,11 +149,34 @@ fn integrate_all(
         model,
         solution,
         without_axial: None,
+        uncontrolled: None,
         snapshots: None,
     };
-    if failure.is_some() || !scene.file.output.compare_without_axial_force {
+    if failure.is_some() {
         return Ok((integrated, failure));
     }
+    if scene.file.output.compare_without_axial_force {
+        if let Some(e) = integrate_without_axial(scene, stats, &mut integrated)? {
+            return Ok((integrated, Some(e)));
+        }
+    }
+    if second {
+        integrated.uncontrolled = Some(crate::piezo::integrate_uncontrolled(
+            scene,
+            &mut |f| report(0.5 + 0.5 * f),
+            stats,
+        ));
+    }
+    Ok((integrated, None))
+}
+
+/// The scene's model without axial force, when it has that switch, into `integrated`; its
+/// failure, if it failed.
+fn integrate_without_axial(
+    scene: &Scene,
+    stats: &mut RunStats,
+    integrated: &mut Integrated,
+) -> Result<Option<RunError>, RunError> {
     if let Some(mut plain) = scene.build_model_without_axial_force()? {
         let integ = integrate_model(
             scene,
@@ -158,11 +188,11 @@ fn integrate_all(
         stats.rhs_evaluations += counters.rhs_evaluations;
         stats.inverse_dynamics_solves += counters.inverse_dynamics_solves;
         if let Some(e) = integ.failure {
-            return Ok((integrated, Some(e)));
+            return Ok(Some(e));
         }
         integrated.without_axial = Some((plain, integ.solution));
     }
-    Ok((integrated, failure))
+    Ok(None)
 }
 
 /// The body of [`run`]: fills `result` as far as it gets.
@@ -342,8 +372,26 @@ fn produce_integrated(
             .without_axial
             .as_ref()
             .map(|(m, s)| (m.as_ref(), s));
-        tables.push(outputs::deflections(scene, model, solution, plain)?);
+        let uncontrolled = integrated
+            .uncontrolled
+            .as_ref()
+            .and_then(crate::piezo::Uncontrolled::solved);
+        tables.push(outputs::deflections(
+            scene,
+            model,
+            solution,
+            plain,
+            uncontrolled,
+        )?);
     }
+    crate::piezo::produce(
+        scene,
+        model,
+        solution,
+        integrated.uncontrolled.as_ref(),
+        result,
+    )?;
+    let tables = &mut result.tables;
     let Some(s) = samples else {
         return Ok(());
     };

@@ -46,6 +46,9 @@ pub struct RunResult {
     /// What the `machine_frequencies` output did (instants, stride, modes, time), when
     /// requested.
     pub machine_frequencies: Option<crate::machine_frequencies::MachineFrequencyNote>,
+    /// The piezoelectric patches over the run and the reduction against the same scene
+    /// without vibration control, when the scene has patches (docs/piezo.md).
+    pub piezo: Option<crate::piezo::PiezoReport>,
 }
 
 impl RunResult {

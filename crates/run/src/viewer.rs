@@ -177,6 +177,12 @@ pub(crate) fn viewer_data(
             axial_force,
             first_frequency,
             buckling,
+            patches: scene
+                .patches
+                .iter()
+                .filter(|p| p.link == i)
+                .map(|p| (p.xi_start, p.xi_end))
+                .collect(),
         });
     }
     let links: [LinkView; 3] = links

@@ -813,6 +813,20 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
             ));
         }
     }
+    if raw.links.patches.is_empty() {
+        if let Some(k) = raw
+            .output
+            .requests
+            .iter()
+            .position(|r| *r == OutputKind::Piezo)
+        {
+            return Err(c.value_error(
+                &format!("output.requests.{k}"),
+                "\"piezo\" reports the piezoelectric patches' voltages and power, and the \
+                 scene has none: add [[links.patches]] (docs/piezo.md) or remove the request",
+            ));
+        }
+    }
     if raw.model.coupling == CouplingChoice::Nonlinear {
         let modal = [
             (OutputKind::Modes, "modes"),

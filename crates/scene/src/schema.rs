@@ -606,11 +606,14 @@ pub enum OutputKind {
     /// the model linearised about its integrated state at (at most about 200 of) the output
     /// times (docs/linear.md); coupled and nonlinear models only.
     MachineFrequencies,
+    /// The piezoelectric patches' sensor, commanded and applied voltages, saturation and
+    /// actuator power (`piezo.csv`, docs/piezo.md); scenes with `[[links.patches]]` only.
+    Piezo,
 }
 
 impl OutputKind {
     /// All kinds with their file-stem names.
-    pub const ALL: [(OutputKind, &'static str); 15] = [
+    pub const ALL: [(OutputKind, &'static str); 16] = [
         (OutputKind::Kinematics, "kinematics"),
         (OutputKind::DrivingForces, "driving_forces"),
         (OutputKind::JointReactions, "joint_reactions"),
@@ -626,6 +629,7 @@ impl OutputKind {
         (OutputKind::Tracking, "tracking"),
         (OutputKind::Actuators, "actuators"),
         (OutputKind::MachineFrequencies, "machine_frequencies"),
+        (OutputKind::Piezo, "piezo"),
     ];
 
     /// The name used in scene files and output file names.
@@ -650,6 +654,7 @@ impl OutputKind {
                 | OutputKind::Snapshots
                 | OutputKind::Tracking
                 | OutputKind::MachineFrequencies
+                | OutputKind::Piezo
         )
     }
 }

@@ -56,6 +56,20 @@ pub enum Quantity {
     /// control law, linearised): columns `f_machine_lowest_Hz`, `zeta_machine_lowest`.
     /// Coupled and nonlinear models; computed from the case's scene, whatever it requests.
     LowestFrequency,
+    /// How much lower the peak and RMS mid-point deflection of a link are under the scene's
+    /// vibration control than in the same scene without it (docs/piezo.md; the run does the
+    /// uncontrolled run itself): columns `w_peak_reduction_<link>_percent`,
+    /// `w_rms_reduction_<link>_percent`. Scenes with patches under a law, with the output
+    /// `deflections` or `piezo`.
+    DeflectionReduction {
+        /// Link (1-3).
+        link: usize,
+    },
+    /// The voltage the vibration control costs: the largest applied voltage of any patch,
+    /// whether any patch saturated and the largest fraction of the output samples a patch
+    /// spent saturated (docs/piezo.md): columns `V_patch_max_V`, `patch_saturated`
+    /// (`yes`/`no`), `patch_saturated_fraction`. Scenes with patches.
+    PatchVoltage,
 }
 
 /// What a quantity column holds.
@@ -228,6 +242,40 @@ impl Quantity {
                     Number,
                 ),
             ],
+            Quantity::DeflectionReduction { link } => vec![
+                Column::new(
+                    format!("w_peak_reduction_{link}_percent"),
+                    format!("peak reduction, link {link}"),
+                    "%",
+                    Number,
+                ),
+                Column::new(
+                    format!("w_rms_reduction_{link}_percent"),
+                    format!("RMS reduction, link {link}"),
+                    "%",
+                    Number,
+                ),
+            ],
+            Quantity::PatchVoltage => vec![
+                Column::new(
+                    "V_patch_max_V".into(),
+                    "largest patch voltage".into(),
+                    "V",
+                    Number,
+                ),
+                Column::new(
+                    "patch_saturated".into(),
+                    "a patch saturates".into(),
+                    "",
+                    Flag,
+                ),
+                Column::new(
+                    "patch_saturated_fraction".into(),
+                    "time saturated (fraction)".into(),
+                    "",
+                    Number,
+                ),
+            ],
             Quantity::Buckling { link } => vec![
                 Column::new(
                     format!("buckles_{link}"),
@@ -252,8 +300,9 @@ impl Quantity {
             | Quantity::StiffnessRatio { link, .. }
             | Quantity::PeakAxialForce { link }
             | Quantity::PeakDeflection { link }
+            | Quantity::DeflectionReduction { link }
             | Quantity::Buckling { link } => Some(link),
-            Quantity::Collapse | Quantity::LowestFrequency => None,
+            Quantity::Collapse | Quantity::LowestFrequency | Quantity::PatchVoltage => None,
         }
     }
 
@@ -299,6 +348,24 @@ impl Quantity {
             Quantity::PeakDeflection { .. } => (!has(OutputKind::Deflections))
                 .then(|| needs("deflections"))
                 .flatten(),
+            Quantity::DeflectionReduction { .. } => {
+                if scene.patches.is_empty() || scene.vibration_controller.is_none() {
+                    Some(format!(
+                        "quantity {name} needs piezoelectric patches under a vibration control \
+                         law ([[links.patches]] and [vibration_control], docs/piezo.md)"
+                    ))
+                } else if !has(OutputKind::Deflections) && !has(OutputKind::Piezo) {
+                    needs("deflections")
+                } else {
+                    None
+                }
+            }
+            Quantity::PatchVoltage => scene.patches.is_empty().then(|| {
+                format!(
+                    "quantity {name} needs piezoelectric patches ([[links.patches]], \
+                     docs/piezo.md)"
+                )
+            }),
             Quantity::LowestFrequency => (scene.coupling.name() == "ked").then(|| {
                 "quantity f_machine_lowest_Hz needs a model of the whole machine \
                  (model.coupling = \"coupled\" or \"nonlinear\"): the KED model prescribes the \
@@ -421,6 +488,41 @@ impl Quantity {
                     Some(t) => vec!["yes".into(), format_value(t)],
                     None => vec!["no".into(), String::new()],
                 })
+            }
+            Quantity::DeflectionReduction { .. } => {
+                let reduction = result
+                    .piezo
+                    .as_ref()
+                    .and_then(|p| p.reduction.as_ref())
+                    .and_then(|r| r.get(i))
+                    .ok_or_else(|| needs("deflections"))?;
+                let percent = |r: Option<f64>| {
+                    r.map(format_value).ok_or_else(|| {
+                        format!(
+                            "quantity {}: link {} does not deflect without control",
+                            self.columns()[0],
+                            i + 1
+                        )
+                    })
+                };
+                Ok(vec![
+                    percent(reduction.peak_reduction_percent())?,
+                    percent(reduction.rms_reduction_percent())?,
+                ])
+            }
+            Quantity::PatchVoltage => {
+                let piezo = result
+                    .piezo
+                    .as_ref()
+                    .ok_or_else(|| "quantity V_patch_max_V: the run has no patches".to_string())?;
+                let max = |f: fn(&flexprr_run::piezo::PatchSummary) -> f64| {
+                    piezo.patches.iter().map(f).fold(0.0_f64, f64::max)
+                };
+                Ok(vec![
+                    format_value(max(|p| p.max_abs_voltage)),
+                    if piezo.any_saturated() { "yes" } else { "no" }.into(),
+                    format_value(max(|p| p.saturated_fraction)),
+                ])
             }
             Quantity::Collapse => Err("the collapse is derived above".into()),
             Quantity::LowestFrequency => Err(

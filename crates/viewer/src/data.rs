@@ -40,6 +40,9 @@ pub struct LinkView {
     pub first_frequency: Vec<f64>,
     /// Time intervals `(start, end)` (s) in which the link buckles.
     pub buckling: Vec<(f64, f64)>,
+    /// The spans `(xi_start, xi_end)` of the piezoelectric patches bonded to the link
+    /// (docs/piezo.md), drawn as a thicker coloured band; empty without patches.
+    pub patches: Vec<(f64, f64)>,
 }
 
 impl LinkView {
@@ -206,7 +209,8 @@ impl ViewerData {
 
     /// Checks every length, that every number is finite, times and `xi` strictly
     /// increasing, `xi` in `[0, 1]`, guide directions of unit length, travel `min < max`,
-    /// link lengths positive and buckling intervals ordered.
+    /// link lengths positive, buckling intervals ordered and patch spans inside `[0, 1]`
+    /// with their start before their end.
     ///
     /// # Errors
     /// The first problem found, naming the field and the index.
@@ -325,6 +329,16 @@ impl ViewerData {
                         index,
                         value: b,
                         reason: "interval end before its start",
+                    });
+                }
+            }
+            for (index, &(a, b)) in link.patches.iter().enumerate() {
+                if !(a >= 0.0 && a < b && b <= 1.0) {
+                    return Err(ViewerError::Invalid {
+                        field: name("patches"),
+                        index,
+                        value: if a.is_finite() && a >= 0.0 { b } else { a },
+                        reason: "a patch must span 0 <= xi_start < xi_end <= 1",
                     });
                 }
             }

@@ -187,6 +187,8 @@ const LOCUS_REFERENCE: Color = Color(235, 150, 150);
 const PATH: Color = Color(31, 95, 191);
 const PLATFORM: Color = Color(250, 220, 120);
 const PLATFORM_EDGE: Color = Color(107, 82, 0);
+/// The piezoelectric patches' band on the links.
+const PATCH: Color = Color(142, 68, 173);
 const LINK_COLORS: [Color; 3] = [Color(31, 119, 180), Color(217, 95, 2), Color(44, 160, 44)];
 
 /// A polyline through `points` (px), `width` px wide, dashed `dash` (an SVG dash array) if
@@ -208,6 +210,21 @@ fn line(out: &mut String, points: &[(f64, f64)], c: Color, width: f64, dash: Opt
 
 /// A closed polygon through `points` (px), filled with `fill` (none if `None`), outlined in
 /// `edge` 1 px wide.
+/// A thick polyline with square-cut ends, exactly as long as `points` (the patches' band).
+fn band(out: &mut String, points: &[(f64, f64)], c: Color, width: f64) {
+    let mut d = String::new();
+    for (k, (x, y)) in points.iter().enumerate() {
+        let sep = if k == 0 { "" } else { " " };
+        let _ = write!(d, "{sep}{x:.1},{y:.1}");
+    }
+    let _ = writeln!(
+        out,
+        "<polyline points=\"{d}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{width}\" \
+         stroke-linejoin=\"round\" stroke-linecap=\"butt\"/>",
+        color(c)
+    );
+}
+
 fn polygon(out: &mut String, points: &[(f64, f64)], fill: Option<Color>, edge: Color) {
     let mut d = String::new();
     for (k, (x, y)) in points.iter().enumerate() {
@@ -546,6 +563,8 @@ struct Shape {
     b: [[f64; 2]; 3],
     c: [[f64; 2]; 3],
     lines: [Vec<[f64; 2]>; 3],
+    /// Per link, the deformed centre line over each piezoelectric patch.
+    patches: [Vec<Vec<[f64; 2]>>; 3],
 }
 
 impl Shape {
@@ -572,24 +591,48 @@ impl Shape {
             let a = data.attachments[i];
             [p[0] + co * a[0] - s * a[1], p[1] + s * a[0] + co * a[1]]
         });
-        let lines = std::array::from_fn(|i| {
-            let link = &data.links[i];
+        // The point at `xi` of link `i`'s deflected centre line, `w` its deflection.
+        let point = |i: usize, xi: f64, w: f64| {
             let (dx, dy) = (c[i][0] - b[i][0], c[i][1] - b[i][1]);
             let chord = dx.hypot(dy);
             let (e, n) = ([dx / chord, dy / chord], [-dy / chord, dx / chord]);
+            [
+                b[i][0] + xi * chord * e[0] + amp * w * n[0],
+                b[i][1] + xi * chord * e[1] + amp * w * n[1],
+            ]
+        };
+        let lines = std::array::from_fn(|i| {
+            let link = &data.links[i];
             link.xi
                 .iter()
                 .enumerate()
-                .map(|(j, &xi)| {
-                    let w = amp * link.deflection(k, j);
-                    [
-                        b[i][0] + xi * chord * e[0] + w * n[0],
-                        b[i][1] + xi * chord * e[1] + w * n[1],
-                    ]
+                .map(|(j, &xi)| point(i, xi, link.deflection(k, j)))
+                .collect()
+        });
+        let patches = std::array::from_fn(|i| {
+            let link = &data.links[i];
+            link.patches
+                .iter()
+                .map(|&(start, end)| {
+                    let inside = link
+                        .xi
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, x)| **x > start && **x < end)
+                        .map(|(j, &x)| point(i, x, link.deflection(k, j)));
+                    std::iter::once(point(i, start, link.deflection_at(k, start)))
+                        .chain(inside)
+                        .chain(std::iter::once(point(i, end, link.deflection_at(k, end))))
+                        .collect()
                 })
                 .collect()
         });
-        Self { b, c, lines }
+        Self {
+            b,
+            c,
+            lines,
+            patches,
+        }
     }
 }
 
@@ -641,7 +684,7 @@ const BAND: f64 = 40.0;
 /// with a common amplification (a 1-2-5 number making the largest deflection in the
 /// shown frames about a tenth of the shortest link; `amplification` overrides it). Each
 /// panel shows the undeformed chords dashed, the deformed centre lines from the scene's
-/// mode shapes, sliders and platform, on the plot module's axes in millimetres with equal
+/// mode shapes (with a purple band over each piezoelectric patch), sliders and platform, on the plot module's axes in millimetres with equal
 /// scales, the same window in every panel.
 ///
 /// # Errors
@@ -706,7 +749,8 @@ pub fn snapshots_svg(
         );
         draw_snapshot(&mut svg, index, shape, &caption, window);
     }
-    snapshot_key(&mut svg, BAND + PANEL_H + 0.5 * BAND);
+    let patches = data.links.iter().any(|l| !l.patches.is_empty());
+    snapshot_key(&mut svg, BAND + PANEL_H + 0.5 * BAND, patches);
     close(&mut svg);
     Ok(svg)
 }
@@ -751,6 +795,10 @@ fn draw_snapshot(
             1.0,
             Some("4 4"),
         );
+        for band in &shape.patches[i] {
+            let band: Vec<(f64, f64)> = band.iter().map(|&p| px(p)).collect();
+            self::band(out, &band, PATCH, 7.0);
+        }
         let centre: Vec<(f64, f64)> = shape.lines[i].iter().map(|&p| px(p)).collect();
         line(out, &centre, INK, 2.0, None);
         let (x, y) = px(shape.b[i]);
@@ -761,8 +809,9 @@ fn draw_snapshot(
     let _ = writeln!(out, "</g>");
 }
 
-/// The key below the panels of `snapshots.svg`, its centre line at `y` (px).
-fn snapshot_key(out: &mut String, y: f64) {
+/// The key below the panels of `snapshots.svg`, its centre line at `y` (px), with the
+/// patches' band when there are `patches`.
+fn snapshot_key(out: &mut String, y: f64, patches: bool) {
     let mut x = 16.0;
     let mut entry = |out: &mut String, sample: &dyn Fn(&mut String, f64), label: &str| {
         sample(out, x);
@@ -790,6 +839,13 @@ fn snapshot_key(out: &mut String, y: f64) {
         &|out, x| rect(out, (x + 10.0, y - 4.0), (x + 18.0, y + 4.0), INK),
         "slider; triangle: platform",
     );
+    if patches {
+        entry(
+            out,
+            &|out, x| band(out, &[(x, y), (x + 28.0, y)], PATCH, 7.0),
+            "piezo patch",
+        );
+    }
 }
 
 #[cfg(test)]

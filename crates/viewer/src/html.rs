@@ -107,6 +107,7 @@ fn payload(data: &ViewerData, options: &ViewerOptions) -> Value {
             "xi": link.xi,
             "shapes": link.mode_shapes,
             "buckling": link.buckling.iter().map(|&(a, b)| [a, b]).collect::<Vec<_>>(),
+            "patches": link.patches.iter().map(|&(a, b)| [a, b]).collect::<Vec<_>>(),
         }));
         frame_modal.push(pack_f32(
             kept.iter().flat_map(|&i| link.modal[i].iter().copied()),

@@ -30,6 +30,7 @@
 //!     axial_force: vec![-12.0],
 //!     first_frequency: vec![110.0],
 //!     buckling: vec![],
+//!     patches: vec![(0.45, 0.55)],
 //! };
 //! let r = 0.1 / 3f64.sqrt();
 //! let data = ViewerData {

@@ -111,35 +111,65 @@ pub fn run_figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
         out.push(("machine_frequencies.svg".to_string(), f));
     }
     out.extend(crate::control::figures(scene, result));
+    out.extend(crate::piezo::figures(scene, result));
     out.retain(|(_, f)| f.panels.iter().any(|p| !p.series.is_empty()));
     out
 }
 
 /// The paper's figures 6-7: per deflection point `xi`, the three links'
-/// deflections with and without the axial force, one panel per link.
+/// deflections with and without the axial force, one panel per link; with vibration
+/// control, the controlled deflection (solid) against the same scene without control
+/// (dashed, light).
 fn deflection_figures(t: &Table, points: &[f64], figure: Titled<'_>) -> Vec<(String, Figure)> {
     points
         .iter()
         .map(|&xi| {
-            let mut f = figure(&format!("Deflection of the links at ξ = {xi}"));
+            let compared = t.column(&format!("w_1_xi{xi}_uncontrolled_m")).is_some();
+            let title = if compared {
+                format!("Deflection of the links at ξ = {xi}, with and without vibration control")
+            } else {
+                format!("Deflection of the links at ξ = {xi}")
+            };
+            let mut f = figure(&title);
             for i in 1..=3 {
                 // The legend once, on the top panel: the styles are the same below.
-                let (with, without) = if i == 1 {
-                    ("with axial force", "without axial force")
+                let first = i == 1;
+                let legend = |s: &'static str| if first { s } else { "" };
+                let main = if compared {
+                    "with vibration control"
                 } else {
-                    ("", "")
+                    "with axial force"
                 };
                 f = f.panel(panel(
                     Axis::new(format!("w_{{{i}}}"), "m"),
                     [
-                        series(t, &format!("w_{i}_xi{xi}_m"), with, solid(0)),
-                        series(t, &format!("w_{i}_xi{xi}_no_axial_m"), without, dashed(1)),
+                        series(
+                            t,
+                            &format!("w_{i}_xi{xi}_uncontrolled_m"),
+                            legend("without vibration control"),
+                            light_dashed(),
+                        ),
+                        series(t, &format!("w_{i}_xi{xi}_m"), legend(main), solid(0)),
+                        series(
+                            t,
+                            &format!("w_{i}_xi{xi}_no_axial_m"),
+                            legend("without axial force"),
+                            dashed(1),
+                        ),
                     ],
                 ));
             }
             (format!("deflections_xi{xi}.svg"), f)
         })
         .collect()
+}
+
+/// A light grey dashed line: the reference a result is compared with, drawn under it.
+fn light_dashed() -> Style {
+    Style {
+        color: super::Color(150, 150, 150),
+        ..Style::nth(0).dash(Dash::Dashed)
+    }
 }
 
 /// The paper's figure 8: the modal coordinates of link 1, one panel per mode (at most

@@ -84,6 +84,7 @@ pub fn paper_scene(duration: f64, step: f64, with_buckling: bool) -> ViewerData 
             axial_force: axial,
             first_frequency: freq,
             buckling,
+            patches: Vec::new(),
         }
     });
     ViewerData {

@@ -1,0 +1,183 @@
+//! The piezoelectric patches in a run (docs/piezo.md): the `piezo` table (each patch's
+//! sensor, commanded and applied voltages, saturation and actuator power), the comparison
+//! with the same scene without its vibration control law (the reduction of the mid-point
+//! deflection, the `_uncontrolled` deflection columns), the `vibration_control` section of
+//! `summary.json`, the warnings when a patch saturates, and `piezo.svg`.
+//!
+//! Everything reads the integrated model through [`SceneModel::patch_states`] and
+//! [`SceneModel::deflection`]; nothing here asks which model ran.
+
+mod figures;
+mod report;
+
+use flexprr_dynamics::{DynamicsError, PatchState, SceneModel};
+use flexprr_integrators::Solution;
+use flexprr_scene::{OutputKind, Scene};
+
+pub(crate) use figures::figures;
+pub use report::{LinkReduction, PatchSummary, PiezoReport};
+
+use crate::column::{Column, Quantity as Q};
+use crate::integrate::integrate_model;
+use crate::run::scene_integrator;
+use crate::table::{RunResult, RunStats, Table};
+
+/// Where along the links the reduction is measured: the mid-point.
+pub const REDUCTION_XI: f64 = 0.5;
+
+/// Whether a run of `scene` also runs it without its vibration control law: the scene has
+/// patches under a law, and the deflections or the piezo output are requested.
+pub fn needs_uncontrolled(scene: &Scene) -> bool {
+    !scene.patches.is_empty()
+        && scene.vibration_controller.is_some()
+        && (scene.outputs.contains(&OutputKind::Deflections)
+            || scene.outputs.contains(&OutputKind::Piezo))
+}
+
+/// The run of the scene without its vibration control law: its model and states, or why it
+/// stopped (the controlled run keeps its outputs; only the comparison is missing).
+pub(crate) enum Uncontrolled {
+    /// Integrated over the whole span.
+    Solved(Box<dyn SceneModel>, Solution),
+    /// Stopped or could not start: the reason.
+    Failed(String),
+}
+
+impl Uncontrolled {
+    /// The model and its states, when the run reached the end.
+    pub(crate) fn solved(&self) -> Option<(&dyn SceneModel, &Solution)> {
+        match self {
+            Uncontrolled::Solved(model, solution) => Some((model.as_ref(), solution)),
+            Uncontrolled::Failed(_) => None,
+        }
+    }
+}
+
+/// Integrates [`Scene::without_vibration_control`] (progress to `report`), adding its work
+/// to `stats`.
+pub(crate) fn integrate_uncontrolled(
+    scene: &Scene,
+    report: &mut dyn FnMut(f64),
+    stats: &mut RunStats,
+) -> Uncontrolled {
+    let free = scene.without_vibration_control();
+    let mut model = match free.build_model() {
+        Ok(model) => model,
+        Err(e) => return Uncontrolled::Failed(e.to_string()),
+    };
+    let integration = integrate_model(
+        &free,
+        scene_integrator(&free).as_ref(),
+        model.as_mut(),
+        report,
+    );
+    let counters = model.counters();
+    stats.rhs_evaluations += counters.rhs_evaluations;
+    stats.inverse_dynamics_solves += counters.inverse_dynamics_solves;
+    match integration.failure {
+        Some(e) => Uncontrolled::Failed(e.to_string()),
+        None => Uncontrolled::Solved(model, integration.solution),
+    }
+}
+
+/// The patch outputs of an integrated run into `result`: the `piezo` table when requested,
+/// the [`PiezoReport`] (and its warnings) whenever the scene has patches.
+///
+/// # Errors
+/// The model could not give its patches' states or a deflection at an output time.
+pub(crate) fn produce(
+    scene: &Scene,
+    model: &mut dyn SceneModel,
+    solution: &Solution,
+    uncontrolled: Option<&Uncontrolled>,
+    result: &mut RunResult,
+) -> Result<(), DynamicsError> {
+    if scene.patches.is_empty() || solution.is_empty() {
+        return Ok(());
+    }
+    let states = (0..solution.len())
+        .map(|k| model.patch_states(solution.t[k], solution.y(k)))
+        .collect::<Result<Vec<_>, _>>()?;
+    if states
+        .first()
+        .is_none_or(|s| s.len() != scene.patches.len())
+    {
+        return Err(DynamicsError::Inconsistent(format!(
+            "the {} model reports no state for the scene's {} patches",
+            model.kind(),
+            scene.patches.len()
+        )));
+    }
+    if scene.outputs.contains(&OutputKind::Piezo) {
+        result.tables.push(table(scene, &solution.t, &states));
+    }
+    let mut report = PiezoReport::of(scene, &solution.t, &states);
+    match uncontrolled {
+        Some(Uncontrolled::Solved(free, free_solution)) => {
+            report.uncontrolled_run = true;
+            report.reduction = Some(reductions(model, solution, free.as_ref(), free_solution)?);
+        }
+        Some(Uncontrolled::Failed(why)) => {
+            report.uncontrolled_run = true;
+            report.uncontrolled_failure = Some(why.clone());
+        }
+        None => {}
+    }
+    result.warnings.extend(report.warnings());
+    result.piezo = Some(report);
+    Ok(())
+}
+
+/// Patch `p`'s index among the patches on its link (0-based): the second index of its
+/// columns.
+pub(crate) fn index_on_link(scene: &Scene, p: usize) -> usize {
+    let link = scene.patches[p].link;
+    scene.patches[..p].iter().filter(|q| q.link == link).count()
+}
+
+/// `piezo.csv`: per patch (link, index on the link) the sensor voltage, the command, the
+/// applied voltage, the saturation flag and the actuator power.
+fn table(scene: &Scene, t: &[f64], states: &[Vec<PatchState>]) -> Table {
+    let mut table = Table::new("piezo", t);
+    type Part = fn(&PatchState) -> f64;
+    let parts: [(Q, Part); 5] = [
+        (Q::PatchSensorVoltage, |s| s.sensor),
+        (Q::PatchCommandVoltage, |s| s.command),
+        (Q::PatchVoltage, |s| s.voltage),
+        (Q::PatchSaturated, |s| f64::from(u8::from(s.saturated))),
+        (Q::PatchPower, |s| s.power),
+    ];
+    for (p, patch) in scene.patches.iter().enumerate() {
+        let index = index_on_link(scene, p);
+        for (q, value) in parts {
+            let column = states.iter().map(|s| value(&s[p])).collect();
+            table.push(Column::mode(q, patch.link, index), column);
+        }
+    }
+    table
+}
+
+/// The mid-point deflection of every link with and without control, over the output
+/// times both runs reached.
+fn reductions(
+    model: &dyn SceneModel,
+    solution: &Solution,
+    free: &dyn SceneModel,
+    free_solution: &Solution,
+) -> Result<Vec<LinkReduction>, DynamicsError> {
+    let n = solution.len().min(free_solution.len());
+    let series = |m: &dyn SceneModel, s: &Solution, i: usize| {
+        (0..n)
+            .map(|k| m.deflection(s.t[k], i, REDUCTION_XI, s.y(k)))
+            .collect::<Result<Vec<_>, _>>()
+    };
+    (0..3)
+        .map(|i| {
+            Ok(LinkReduction::of(
+                i,
+                &series(model, solution, i)?,
+                &series(free, free_solution, i)?,
+            ))
+        })
+        .collect()
+}
