@@ -22,6 +22,7 @@ mod basis;
 mod error;
 mod frequency;
 mod integrals;
+mod patched;
 pub mod quadrature;
 mod section;
 
@@ -31,5 +32,6 @@ pub use frequency::{
     AxialLoad, Coupling, FrequencySolver, LinkFrequencies, ModeFrequency, ModeState, frequencies,
 };
 pub use integrals::ModalIntegrals;
+pub use patched::{Layer, LayeredSection};
 pub use quadrature::{CompositeRule, GaussLegendre};
 pub use section::{Section, SteppedSection, TaperedSection, UniformSection};

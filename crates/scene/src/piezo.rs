@@ -10,13 +10,15 @@
 
 use std::sync::Arc;
 
+use flexprr_beam::{Layer, LayeredSection};
 use flexprr_control::{VibrationController, VibrationInput};
-use flexprr_dynamics::{Machine, Patch};
+use flexprr_dynamics::{LinkModel, Machine, Patch};
 
 use crate::error::ScenarioError;
+use crate::link::build_section;
 use crate::registry::{Registry, TableParams};
 use crate::scene::Checker;
-use crate::schema::SceneFile;
+use crate::schema::{CouplingChoice, SceneFile};
 
 /// What `[[links.patches]]` and `[vibration_control]` build.
 pub(crate) struct PiezoParts {
@@ -136,4 +138,71 @@ pub(crate) fn build_piezo(
         patches,
         controller,
     })
+}
+
+/// The three links with the mass and bending stiffness of their patches bonded on
+/// (`added_mass`, `added_bending_stiffness` of each `[[links.patches]]` entry, as layers of
+/// [`flexprr_beam::LayeredSection`]); a link without such patches is `link` itself.
+///
+/// The nonlinear model's elements are uniform, so it refuses a patch that adds mass or
+/// stiffness, at that key.
+pub(crate) fn with_patch_layers(
+    c: &Checker<'_>,
+    raw: &SceneFile,
+    link: LinkModel,
+) -> Result<[LinkModel; 3], ScenarioError> {
+    let mut layers: [Vec<Layer>; 3] = Default::default();
+    for (k, config) in raw.links.patches.iter().enumerate() {
+        let key = |name: &str| format!("links.patches.{k}.{name}");
+        let added = [
+            ("added_mass", config.added_mass, "kg"),
+            (
+                "added_bending_stiffness",
+                config.added_bending_stiffness,
+                "N m^2",
+            ),
+        ];
+        for (name, value, unit) in added {
+            c.non_negative(&key(name), value, unit)?;
+            if value > 0.0 && raw.model.coupling == CouplingChoice::Nonlinear {
+                return Err(c.value_error(
+                    &key(name),
+                    "the nonlinear model's elements are uniform and carry no patch mass or \
+                     stiffness: set it to 0, or use model.coupling = \"ked\" or \"coupled\"",
+                ));
+            }
+        }
+        let span = config.xi_end - config.xi_start;
+        // An invalid span is refused, at its key, where the patch itself is checked.
+        if !(span > 0.0 && config.xi_start >= 0.0 && config.xi_end <= 1.0)
+            || (config.added_mass == 0.0 && config.added_bending_stiffness == 0.0)
+        {
+            continue;
+        }
+        let layer = Layer {
+            xi_start: config.xi_start,
+            xi_end: config.xi_end,
+            mass_per_length: config.added_mass / (span * raw.links.length),
+            bending_stiffness: config.added_bending_stiffness,
+        };
+        for &l in config.links.as_deref().unwrap_or(&[1, 2, 3]) {
+            if (1..=3).contains(&l) {
+                layers[l - 1].push(layer);
+            }
+        }
+    }
+    if layers.iter().all(Vec::is_empty) {
+        return Ok([link.clone(), link.clone(), link]);
+    }
+    let section = build_section(&raw.links.material, &raw.links.section)
+        .map_err(|(k, msg)| c.error(&format!("links.{k}"), msg))?;
+    let build = |layers: &Vec<Layer>| {
+        if layers.is_empty() {
+            return Ok(link.clone());
+        }
+        let layered = LayeredSection::new(section.as_ref(), layers.clone());
+        LinkModel::new(link.basis.clone(), &layered, raw.links.length)
+            .map_err(|e| c.error("links.patches", e.to_string()))
+    };
+    Ok([build(&layers[0])?, build(&layers[1])?, build(&layers[2])?])
 }

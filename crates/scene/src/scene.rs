@@ -118,7 +118,7 @@ pub(crate) struct Checker<'a> {
 
 impl Checker<'_> {
     /// An error at the value of `key` (for an unknown name).
-    fn value_error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
+    pub(crate) fn value_error(&self, key: &str, message: impl Into<String>) -> ScenarioError {
         ScenarioError::Input {
             location: locate_value(self.file, self.text, key),
             key: key.to_string(),
@@ -142,7 +142,12 @@ impl Checker<'_> {
             ))
         }
     }
-    fn non_negative(&self, key: &str, value: f64, unit: &str) -> Result<f64, ScenarioError> {
+    pub(crate) fn non_negative(
+        &self,
+        key: &str,
+        value: f64,
+        unit: &str,
+    ) -> Result<f64, ScenarioError> {
         if value.is_finite() && value >= 0.0 {
             Ok(value)
         } else {
@@ -267,7 +272,13 @@ impl Scene {
         let c = Checker { file, text };
         let name = scene_name(&c, raw.name.as_deref(), default_name)?;
         let link = build_link(&c, registry, &raw.links)?;
-        let machine = build_machine(&c, &raw.machine, link)?;
+        // Mean cross-section area from the bare link's mass: EA for the coupled model's
+        // stretch output (the patches' layers carry no axial load).
+        let links = &raw.links;
+        let axial_stiffness =
+            links.material.youngs_modulus * link.mass() / (links.length * links.material.density);
+        let link_models = crate::piezo::with_patch_layers(&c, &raw, link)?;
+        let machine = build_machine(&c, &raw.machine, link_models)?;
         let output_times = build_times(&c, &raw.time)?;
         let stop_times = build_stops(&c, &raw.time, &output_times)?;
         let trajectory = build_trajectory_checked(&c, &raw.trajectory, &machine, &output_times)?;
@@ -293,10 +304,6 @@ impl Scene {
             )
             .map_err(|m| c.value_error("integrator.method", m))?;
         let outputs = build_outputs(&c, &raw)?;
-        // Mean cross-section area from the mass: EA for the coupled model's stretch output.
-        let links = &raw.links;
-        let axial_stiffness = links.material.youngs_modulus * machine.links[0].mass()
-            / (links.length * links.material.density);
         Ok(Scene {
             name,
             file: raw,
@@ -369,11 +376,11 @@ fn build_link(
 fn build_machine(
     c: &Checker<'_>,
     m: &MachineConfig,
-    link: LinkModel,
+    links: [LinkModel; 3],
 ) -> Result<Machine, ScenarioError> {
     let geometry = match m.layout {
-        Layout::Radial => radial_geometry(c, m, link.length())?,
-        Layout::General => general_geometry(c, m, link.length())?,
+        Layout::Radial => radial_geometry(c, m, links[0].length())?,
+        Layout::General => general_geometry(c, m, links[0].length())?,
     };
     let platform_mass = c.non_negative("machine.platform_mass", m.platform_mass, "kg")?;
     let platform_inertia = match m.platform_inertia {
@@ -383,7 +390,7 @@ fn build_machine(
     let slider_mass = c.non_negative("machine.slider_mass", m.slider_mass, "kg")?;
     Machine::new(
         geometry,
-        [link.clone(), link.clone(), link],
+        links,
         [slider_mass; 3],
         platform_mass,
         platform_inertia,

@@ -247,6 +247,13 @@ pub struct PatchConfig {
     pub sensor_constant: f64,
     /// Largest voltage magnitude (V).
     pub voltage_limit: f64,
+    /// Mass the pair adds to each link it is on (kg), spread evenly over its span; 0 (the
+    /// default) leaves the link as it is.
+    #[serde(default)]
+    pub added_mass: f64,
+    /// Bending stiffness the pair adds over its span (N m^2); 0 by default.
+    #[serde(default)]
+    pub added_bending_stiffness: f64,
 }
 
 fn default_length() -> f64 {
