@@ -228,6 +228,30 @@ impl Quantity {
                     OptionalNumber,
                 ),
             ],
+            Quantity::LowestFrequency
+            | Quantity::DeflectionReduction { .. }
+            | Quantity::PatchVoltage => self.analysis_column_specs(),
+            Quantity::Buckling { link } => vec![
+                Column::new(
+                    format!("buckles_{link}"),
+                    format!("link {link} buckles"),
+                    "",
+                    Flag,
+                ),
+                Column::new(
+                    format!("buckling_start_{link}_s"),
+                    format!("time link {link} starts to buckle"),
+                    "s",
+                    OptionalNumber,
+                ),
+            ],
+        }
+    }
+
+    /// The columns of the quantities from the linear models and the vibration control.
+    fn analysis_column_specs(&self) -> Vec<Column> {
+        use ColumnValues::{Flag, Number};
+        match *self {
             Quantity::LowestFrequency => vec![
                 Column::new(
                     "f_machine_lowest_Hz".into(),
@@ -276,20 +300,7 @@ impl Quantity {
                     Number,
                 ),
             ],
-            Quantity::Buckling { link } => vec![
-                Column::new(
-                    format!("buckles_{link}"),
-                    format!("link {link} buckles"),
-                    "",
-                    Flag,
-                ),
-                Column::new(
-                    format!("buckling_start_{link}_s"),
-                    format!("time link {link} starts to buckle"),
-                    "s",
-                    OptionalNumber,
-                ),
-            ],
+            _ => Vec::new(),
         }
     }
 
@@ -489,6 +500,26 @@ impl Quantity {
                     None => vec!["no".into(), String::new()],
                 })
             }
+            Quantity::DeflectionReduction { .. } | Quantity::PatchVoltage => {
+                self.derive_piezo(result, i, needs)
+            }
+            Quantity::Collapse => Err("the collapse is derived above".into()),
+            Quantity::LowestFrequency => Err(
+                "quantity f_machine_lowest_Hz is computed from the case's scene \
+                 (Quantity::derive_from_scene), not from its run"
+                    .into(),
+            ),
+        }
+    }
+
+    /// The vibration-control quantities of link `i` from the run's piezo report.
+    fn derive_piezo(
+        &self,
+        result: &RunResult,
+        i: usize,
+        needs: impl Fn(&str) -> String,
+    ) -> Result<Vec<String>, String> {
+        match *self {
             Quantity::DeflectionReduction { .. } => {
                 let reduction = result
                     .piezo
@@ -524,12 +555,10 @@ impl Quantity {
                     format_value(max(|p| p.saturated_fraction)),
                 ])
             }
-            Quantity::Collapse => Err("the collapse is derived above".into()),
-            Quantity::LowestFrequency => Err(
-                "quantity f_machine_lowest_Hz is computed from the case's scene \
-                 (Quantity::derive_from_scene), not from its run"
-                    .into(),
-            ),
+            _ => Err(format!(
+                "quantity {} is not a vibration-control quantity",
+                self.columns()[0]
+            )),
         }
     }
 
