@@ -701,3 +701,71 @@ fn beam_prints_tiny_and_huge_numbers_briefly() {
     assert_bad_input(&out, &["thick.toml", "section.thickness", "3.0000e-5 m"]);
     assert!(!long_digits(&stderr_of(&out)), "{}", stderr_of(&out));
 }
+
+/// `frf` and `statespace` on a KED scene, at a singular pose or outside the scene's time
+/// span: the error used to come without its place (`model.coupling: ...`, `pose: ...`);
+/// it now names the scene file's line, or the option, as `modes` does. Nothing is written.
+#[test]
+fn linearisation_errors_name_their_place() {
+    let ked = std::fs::read_to_string(configs().join("paper_f20.toml")).unwrap();
+    let coupled = std::fs::read_to_string(configs().join("coupled_f20.toml")).unwrap();
+    let tmp = sandbox(&[("ked.toml", &ked), ("c.toml", &coupled)]);
+    let dir = tmp.path();
+    // The coupling is not written (KED by default): the error points at [model].
+    let line = line_of(&ked, "[model]");
+    let io = [
+        "--input",
+        "slider_force:1",
+        "--output",
+        "platform:x",
+        "--out",
+        "o",
+    ];
+    for command in ["frf", "statespace"] {
+        let with = |scene: &str, extra: &[&str]| {
+            let mut args = vec![command, scene];
+            args.extend_from_slice(&io);
+            args.extend_from_slice(extra);
+            run_in(dir, &args)
+        };
+        assert_bad_input(
+            &with("ked.toml", &[]),
+            &[&format!("ked.toml:{line}:"), "model.coupling", "KED"],
+        );
+        assert_bad_input(
+            &with("c.toml", &["--pose", "0,0,0"]),
+            &["--pose 0,0,0", "type-II"],
+        );
+        assert_bad_input(
+            &with("c.toml", &["--time", "5"]),
+            &["--time 5", "outside the scene's time span"],
+        );
+        assert!(!dir.join("o").exists(), "{command} wrote o");
+    }
+}
+
+/// An FRF grid below the first mode listed nothing after `modes up to 100 Hz:`; it says so.
+#[test]
+fn an_frf_below_every_mode_says_so() {
+    let coupled = std::fs::read_to_string(configs().join("coupled_f20.toml")).unwrap();
+    let tmp = sandbox(&[("c.toml", &coupled), ("f.txt", "0\n100\n")]);
+    let out = run_in(
+        tmp.path(),
+        &[
+            "frf",
+            "c.toml",
+            "--input",
+            "point_force:1@0.125",
+            "--output",
+            "acceleration:1@0.5",
+            "--frequencies",
+            "f.txt",
+            "--out",
+            "o",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // The lowest mode of the paper's machine is 116.4 Hz (docs/linear.md).
+    assert!(stdout.contains("no mode up to 100 Hz"), "{stdout}");
+}

@@ -101,8 +101,8 @@ fn table_report(
     let _ = writeln!(
         s,
         "link: l = {} m, mass = {} kg, EI(0) = {:.6e} N m^2, rhoA(0) = {:.6e} kg/m",
-        short(file.length, 7),
-        short(mi.total_mass, 7),
+        super::short(file.length, 7),
+        super::short(mi.total_mass, 7),
         link.bending_stiffness_at_start,
         link.mass_per_length_at_start
     );
@@ -117,9 +117,9 @@ fn table_report(
     let _ = writeln!(
         s,
         "load: P(x) = {} + {} x + {} x^2 N (tension positive)",
-        short(load.p0, 10),
-        short(load.p1, 10),
-        short(load.p2, 10)
+        super::short(load.p0, 10),
+        super::short(load.p1, 10),
+        super::short(load.p2, 10)
     );
     let _ = writeln!(
         s,
@@ -190,22 +190,6 @@ fn significant(value: f64, digits: usize) -> String {
     }
 }
 
-/// `value` rounded to `digits` significant digits and written in the shortest form that
-/// reads back as that: plain between 1e-3 and 1e7, scientific outside.
-fn short(value: f64, digits: usize) -> String {
-    if value == 0.0 || !value.is_finite() {
-        return format!("{value}");
-    }
-    let rounded: f64 = format!("{value:.prec$e}", prec = digits.max(1) - 1)
-        .parse()
-        .unwrap_or(value);
-    if (1e-3..1e7).contains(&rounded.abs()) {
-        format!("{rounded}")
-    } else {
-        format!("{rounded:e}")
-    }
-}
-
 /// `value` with `decimals` decimals between 1e-3 and 1e7 (the table's usual range), else in
 /// scientific notation with as many digits after the point, so a frequency of a tiny link is
 /// not printed as twenty digits, nor a slow one as `0.000000`.
@@ -229,13 +213,13 @@ mod tests {
         assert_eq!(fixed_or_scientific(3.2e-5, 6), "3.200000e-5");
         assert_eq!(fixed_or_scientific(0.0, 6), "0.000000");
         // Lengths and masses as a person writes them, without binary noise.
-        assert_eq!(short(0.3 / 10.0, 7), "0.03");
-        assert_eq!(short(0.2, 7), "0.2");
-        assert_eq!(short(1e-9, 7), "1e-9");
-        assert_eq!(short(2.770000000000001e-18, 7), "2.77e-18");
-        assert_eq!(short(0.004986123456, 7), "0.004986123");
-        assert_eq!(short(-1e12, 10), "-1e12");
-        assert_eq!(short(50.0, 10), "50");
+        assert_eq!(super::short(0.3 / 10.0, 7), "0.03");
+        assert_eq!(super::short(0.2, 7), "0.2");
+        assert_eq!(super::short(1e-9, 7), "1e-9");
+        assert_eq!(super::short(2.770000000000001e-18, 7), "2.77e-18");
+        assert_eq!(super::short(0.004986123456, 7), "0.004986123");
+        assert_eq!(super::short(-1e12, 10), "-1e12");
+        assert_eq!(super::short(50.0, 10), "50");
     }
 
     #[test]
