@@ -250,3 +250,28 @@ time = 0.5
     assert!(lo < hi && hi - lo <= 0.1, "{brackets:?}");
     assert_eq!(rounds, vec![8, 5, 4, 4], "{rounds:?}");
 }
+
+/// A tolerance below the resolution of `f64` near the bracket could never be met: the
+/// bracket stops shrinking when its midpoints round onto its ends (bisection then looped
+/// for ever). It is refused when the search is read, naming `search.tolerance`.
+#[test]
+fn a_tolerance_below_the_resolution_of_the_numbers_is_refused() {
+    let config = |low: f64, high: f64, tolerance: f64| SearchConfig {
+        key: "trajectory.frequency".into(),
+        low,
+        high,
+        tolerance,
+        revolutions: None,
+        time: Some(0.5),
+        criterion: None,
+    };
+    let (key, message) = Search::from_config(&config(1e17, 1e17 + 64.0, 1.0)).unwrap_err();
+    assert_eq!(key, "search.tolerance");
+    assert!(message.contains("resolution"), "{message}");
+    // The same bracket width near 20 is fine, and so is a tolerance just above the bound.
+    assert!(Search::from_config(&config(20.0, 84.0, 1.0)).is_ok());
+    let s = Search::from_config(&config(1e17, 1e17 + 8192.0, 2048.0)).unwrap();
+    let o = run_k(&s, 3, &|v| Some(v >= 1e17 + 3000.0));
+    assert_eq!(o.status, "bracketed", "{o:?}");
+    assert!(o.at_or_above.unwrap() - o.below.unwrap() <= 2048.0, "{o:?}");
+}
