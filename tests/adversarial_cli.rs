@@ -686,7 +686,10 @@ fn beam_prints_tiny_and_huge_numbers_briefly() {
     };
     assert!(!long_digits(&stdout), "{stdout}");
     let first = stdout.lines().next().unwrap();
-    assert!(first.starts_with("link: l = 1e-9 m, mass = 2.77e-27 kg"), "{first}");
+    assert!(
+        first.starts_with("link: l = 1e-9 m, mass = 2.77e-27 kg"),
+        "{first}"
+    );
     let (e, rho, t, h, l, p) = (7.3e10, 2770.0, 1e-11, 1e-10, 1e-9, 50.0);
     let (ei, rho_a) = (e * h * t * t * t / 12.0, rho * t * h);
     let k = std::f64::consts::PI / l;

@@ -213,13 +213,13 @@ mod tests {
         assert_eq!(fixed_or_scientific(3.2e-5, 6), "3.200000e-5");
         assert_eq!(fixed_or_scientific(0.0, 6), "0.000000");
         // Lengths and masses as a person writes them, without binary noise.
-        assert_eq!(super::short(0.3 / 10.0, 7), "0.03");
-        assert_eq!(super::short(0.2, 7), "0.2");
-        assert_eq!(super::short(1e-9, 7), "1e-9");
-        assert_eq!(super::short(2.770000000000001e-18, 7), "2.77e-18");
-        assert_eq!(super::short(0.004986123456, 7), "0.004986123");
-        assert_eq!(super::short(-1e12, 10), "-1e12");
-        assert_eq!(super::short(50.0, 10), "50");
+        assert_eq!(crate::cli::short(0.3 / 10.0, 7), "0.03");
+        assert_eq!(crate::cli::short(0.2, 7), "0.2");
+        assert_eq!(crate::cli::short(1e-9, 7), "1e-9");
+        assert_eq!(crate::cli::short(2.770000000000001e-18, 7), "2.77e-18");
+        assert_eq!(crate::cli::short(0.004986123456, 7), "0.004986123");
+        assert_eq!(crate::cli::short(-1e12, 10), "-1e12");
+        assert_eq!(crate::cli::short(50.0, 10), "50");
     }
 
     #[test]

@@ -10,7 +10,7 @@ use flexprr_run::statespace::{state_space, write_statespace};
 use flexprr_scene::{ScenarioError, Scene};
 
 use super::Failure;
-use super::frf::{channels, operating_point, parse_pose, located_failure};
+use super::frf::{channels, located_failure, operating_point, parse_pose};
 use super::run::failure;
 
 /// Arguments of `flexprr statespace`.

@@ -269,10 +269,7 @@ fn the_csv_has_every_column_and_reads_back() {
     // naming the file and what is wrong.
     let header_only = format!("{}\n", text.lines().next().expect("header"));
     let row = text.lines().nth(1).expect("row");
-    let nan_rtol = format!(
-        "{header_only}{}\n",
-        row.replacen(",1e-6,", ",NaN,", 1)
-    );
+    let nan_rtol = format!("{header_only}{}\n", row.replacen(",1e-6,", ",NaN,", 1));
     assert!(nan_rtol.contains(",NaN,"), "{nan_rtol}");
     for (contents, words) in [
         ("", "holds no rows"),

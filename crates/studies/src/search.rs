@@ -735,7 +735,14 @@ fn search_json(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> se
         "searches": outcomes.iter().map(one).collect::<Vec<_>>(),
     });
     if let ([single], Some(map)) = (outcomes, json.as_object_mut()) {
-        for key in ["criterion", "status", "below", "at_or_above", "rounds", "probes"] {
+        for key in [
+            "criterion",
+            "status",
+            "below",
+            "at_or_above",
+            "rounds",
+            "probes",
+        ] {
             map.insert(key.to_string(), one(single)[key].clone());
         }
     }
