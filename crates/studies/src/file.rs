@@ -37,7 +37,7 @@ pub struct StudyFile {
     /// Plots of the results table written next to `results.csv`.
     #[serde(default)]
     pub plot: Vec<PlotConfig>,
-    /// A speed search instead of a sweep (`crate::search`): bisection over one key for the
+    /// A speed search instead of a sweep (`crate::search`): bisection (or k-section) over one key for the
     /// smallest value that collapses.
     #[serde(default)]
     pub search: Option<crate::search::SearchConfig>,
