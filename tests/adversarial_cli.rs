@@ -621,3 +621,154 @@ fn bad_options_exit_2() {
         &["not a directory"],
     );
 }
+
+/// `work-precision --peers` with a file holding no rows (empty, or a header alone) was
+/// accepted, and a bad peers file was found only after the whole measurement. Both are now
+/// refused at once, in one line naming the file and what is wrong, before anything is
+/// measured or written.
+#[test]
+fn peers_files_without_rows_are_refused_before_measuring() {
+    let header = "package,method,rtol,atol,time_median_s,time_min_s,repeats,accepted_steps,\
+                  rejected_steps,rhs_evaluations,jacobian_evaluations,end_error,max_error,model\n";
+    let nan_row = format!("{header}peer,lsoda,NaN,1e-10,0.1,0.1,1,,,,,1e-5,1e-5,\n");
+    let tmp = sandbox(&[
+        ("empty.csv", ""),
+        ("header.csv", header),
+        ("nan.csv", &nan_row),
+    ]);
+    let dir = tmp.path();
+    for (file, words) in [
+        ("empty.csv", &["empty.csv", "holds no rows"][..]),
+        ("header.csv", &["header.csv", "holds no rows"][..]),
+        ("nan.csv", &["nan.csv", "line 2", "rtol = NaN"][..]),
+    ] {
+        let out = run_in(
+            dir,
+            &[
+                "work-precision",
+                "scene.toml",
+                "--repeats",
+                "1",
+                "--warmup",
+                "0",
+                "--out",
+                "w",
+                "--peers",
+                file,
+            ],
+        );
+        assert_bad_input(&out, words);
+        assert!(out.stdout.is_empty(), "{file}: nothing measured");
+        assert!(!dir.join("w").exists(), "{file}: nothing written");
+    }
+}
+
+/// A tiny link printed its length, mass and frequencies as long strings of digits
+/// (`0.000000 kg`, `2124296443310437120.000000 Hz`) and its slenderness error as
+/// `0.000029999999999999997 m`. They are now short, and the numbers still are the closed
+/// forms: the mass `rho A l` and the pinned-pinned frequency under tension
+/// `omega^2 = (pi / l)^4 EI / rhoA + P (pi / l)^2 / rhoA`.
+#[test]
+fn beam_prints_tiny_and_huge_numbers_briefly() {
+    let link = std::fs::read_to_string(configs().join("link_paper.toml")).unwrap();
+    let tiny = link
+        .replace("length = 0.2 ", "length = 1e-9 ")
+        .replace("thickness = 0.002 ", "thickness = 1e-11 ")
+        .replace("height = 0.03 ", "height = 1e-10 ");
+    let thick = link.replace("length = 0.2 ", "length = 0.0003 ");
+    let tmp = sandbox(&[("tiny.toml", &tiny), ("thick.toml", &thick)]);
+    let out = run_in(tmp.path(), &["beam", "tiny.toml"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let long_digits = |s: &str| {
+        s.split(|c: char| !c.is_ascii_digit())
+            .any(|run| run.len() > 12)
+    };
+    assert!(!long_digits(&stdout), "{stdout}");
+    let first = stdout.lines().next().unwrap();
+    assert!(
+        first.starts_with("link: l = 1e-9 m, mass = 2.77e-27 kg"),
+        "{first}"
+    );
+    let (e, rho, t, h, l, p) = (7.3e10, 2770.0, 1e-11, 1e-10, 1e-9, 50.0);
+    let (ei, rho_a) = (e * h * t * t * t / 12.0, rho * t * h);
+    let k = std::f64::consts::PI / l;
+    let f1 = (k.powi(4) * ei / rho_a + p * k * k / rho_a).sqrt() / (2.0 * std::f64::consts::PI);
+    let row = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("1 "))
+        .unwrap();
+    let hz: f64 = row.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!((hz / f1 - 1.0).abs() < 1e-6, "{row}: closed form {f1:e}");
+    let out = run_in(tmp.path(), &["beam", "thick.toml"]);
+    assert_bad_input(&out, &["thick.toml", "section.thickness", "3.0000e-5 m"]);
+    assert!(!long_digits(&stderr_of(&out)), "{}", stderr_of(&out));
+}
+
+/// `frf` and `statespace` on a KED scene, at a singular pose or outside the scene's time
+/// span: the error used to come without its place (`model.coupling: ...`, `pose: ...`);
+/// it now names the scene file's line, or the option, as `modes` does. Nothing is written.
+#[test]
+fn linearisation_errors_name_their_place() {
+    let ked = std::fs::read_to_string(configs().join("paper_f20.toml")).unwrap();
+    let coupled = std::fs::read_to_string(configs().join("coupled_f20.toml")).unwrap();
+    let tmp = sandbox(&[("ked.toml", &ked), ("c.toml", &coupled)]);
+    let dir = tmp.path();
+    // The coupling is not written (KED by default): the error points at [model].
+    let line = line_of(&ked, "[model]");
+    let io = [
+        "--input",
+        "slider_force:1",
+        "--output",
+        "platform:x",
+        "--out",
+        "o",
+    ];
+    for command in ["frf", "statespace"] {
+        let with = |scene: &str, extra: &[&str]| {
+            let mut args = vec![command, scene];
+            args.extend_from_slice(&io);
+            args.extend_from_slice(extra);
+            run_in(dir, &args)
+        };
+        assert_bad_input(
+            &with("ked.toml", &[]),
+            &[&format!("ked.toml:{line}:"), "model.coupling", "KED"],
+        );
+        assert_bad_input(
+            &with("c.toml", &["--pose", "0,0,0"]),
+            &["--pose 0,0,0", "type-II"],
+        );
+        assert_bad_input(
+            &with("c.toml", &["--time", "5"]),
+            &["--time 5", "outside the scene's time span"],
+        );
+        assert!(!dir.join("o").exists(), "{command} wrote o");
+    }
+}
+
+/// An FRF grid below the first mode listed nothing after `modes up to 100 Hz:`; it says so.
+#[test]
+fn an_frf_below_every_mode_says_so() {
+    let coupled = std::fs::read_to_string(configs().join("coupled_f20.toml")).unwrap();
+    let tmp = sandbox(&[("c.toml", &coupled), ("f.txt", "0\n100\n")]);
+    let out = run_in(
+        tmp.path(),
+        &[
+            "frf",
+            "c.toml",
+            "--input",
+            "point_force:1@0.125",
+            "--output",
+            "acceleration:1@0.5",
+            "--frequencies",
+            "f.txt",
+            "--out",
+            "o",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // The lowest mode of the paper's machine is 116.4 Hz (docs/linear.md).
+    assert!(stdout.contains("no mode up to 100 Hz"), "{stdout}");
+}

@@ -100,8 +100,11 @@ fn table_report(
     let mi = &link.integrals;
     let _ = writeln!(
         s,
-        "link: l = {} m, mass = {:.6} kg, EI(0) = {:.6e} N m^2, rhoA(0) = {:.6e} kg/m",
-        file.length, mi.total_mass, link.bending_stiffness_at_start, link.mass_per_length_at_start
+        "link: l = {} m, mass = {} kg, EI(0) = {:.6e} N m^2, rhoA(0) = {:.6e} kg/m",
+        super::short(file.length, 7),
+        super::short(mi.total_mass, 7),
+        link.bending_stiffness_at_start,
+        link.mass_per_length_at_start
     );
     let _ = writeln!(
         s,
@@ -114,7 +117,9 @@ fn table_report(
     let _ = writeln!(
         s,
         "load: P(x) = {} + {} x + {} x^2 N (tension positive)",
-        load.p0, load.p1, load.p2
+        super::short(load.p0, 10),
+        super::short(load.p1, 10),
+        super::short(load.p2, 10)
     );
     let _ = writeln!(
         s,
@@ -124,9 +129,9 @@ fn table_report(
     for m in &result.modes[..link.reported] {
         let _ = writeln!(
             s,
-            "{:>5}  {:>16.6}  {:>20.9e}  {}",
+            "{:>5}  {:>16}  {:>20.9e}  {}",
             m.mode,
-            m.frequency_hz,
+            fixed_or_scientific(m.frequency_hz, 6),
             m.omega_squared,
             m.state.name()
         );
@@ -185,9 +190,37 @@ fn significant(value: f64, digits: usize) -> String {
     }
 }
 
+/// `value` with `decimals` decimals between 1e-3 and 1e7 (the table's usual range), else in
+/// scientific notation with as many digits after the point, so a frequency of a tiny link is
+/// not printed as twenty digits, nor a slow one as `0.000000`.
+fn fixed_or_scientific(value: f64, decimals: usize) -> String {
+    let magnitude = value.abs();
+    if value == 0.0 || !value.is_finite() || (1e-3..1e7).contains(&magnitude) {
+        format!("{value:.decimals$}")
+    } else {
+        format!("{value:.decimals$e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn table_numbers_stay_short_at_any_scale() {
+        assert_eq!(fixed_or_scientific(116.41234567, 6), "116.412346");
+        assert_eq!(fixed_or_scientific(2.124296443310437e18, 6), "2.124296e18");
+        assert_eq!(fixed_or_scientific(3.2e-5, 6), "3.200000e-5");
+        assert_eq!(fixed_or_scientific(0.0, 6), "0.000000");
+        // Lengths and masses as a person writes them, without binary noise.
+        assert_eq!(crate::cli::short(0.3 / 10.0, 7), "0.03");
+        assert_eq!(crate::cli::short(0.2, 7), "0.2");
+        assert_eq!(crate::cli::short(1e-9, 7), "1e-9");
+        assert_eq!(crate::cli::short(2.770000000000001e-18, 7), "2.77e-18");
+        assert_eq!(crate::cli::short(0.004986123456, 7), "0.004986123");
+        assert_eq!(crate::cli::short(-1e12, 10), "-1e12");
+        assert_eq!(crate::cli::short(50.0, 10), "50");
+    }
 
     #[test]
     fn factors_keep_their_significant_digits() {

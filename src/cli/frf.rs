@@ -235,7 +235,14 @@ pub fn run(args: FrfArgs) -> Result<(), Failure> {
     let target = OutputDir::check(&out, FRF, args.force, &inputs_read, &[])
         .map_err(|e| failure(e.into()))?;
     target.check_writable().map_err(|e| failure(e.into()))?;
-    let frf = frequency_responses(&scene, &request).map_err(run_failure)?;
+    let frf = frequency_responses(&scene, &request).map_err(|e| {
+        located_failure(
+            e,
+            args.scene.as_deref(),
+            args.pose.as_deref(),
+            args.time.map(|t| t.to_string()),
+        )
+    })?;
     let written = write_frf(&scene, &frf, &target).map_err(|e| match e {
         ScenarioError::Io { .. } => Failure::run(e),
         other => failure(other),
@@ -251,9 +258,44 @@ pub fn run_failure(e: flexprr_run::RunError) -> Failure {
     }
 }
 
-/// `f` to six decimals, without trailing zeros.
-fn rounded(f: f64) -> f64 {
-    (f * 1e6).round() / 1e6
+/// As [`run_failure`], with bad input put at its place: a scene key at its line in
+/// `scene` (e.g. `paper_f20.toml:30:2: model.coupling: ...` for a KED scene), a pose or
+/// time after the option that gave it (`pose` and `time`, as written).
+pub fn located_failure(
+    e: flexprr_run::RunError,
+    scene: Option<&Path>,
+    pose: Option<&str>,
+    time: Option<String>,
+) -> Failure {
+    let flexprr_run::RunError::Scene(ScenarioError::Input {
+        location,
+        key,
+        message,
+    }) = e
+    else {
+        return run_failure(e);
+    };
+    match (key.as_str(), pose, time) {
+        ("pose", Some(p), _) => Failure::bad_input(format!("--pose {p}: {message}")),
+        ("time", _, Some(t)) => Failure::bad_input(format!("--time {t}: {message}")),
+        _ => {
+            let location = location.or_else(|| {
+                let path = scene?;
+                let text = flexprr_scene::read_input_file(path).ok()?;
+                flexprr_scene::locate(&path.display().to_string(), &text, &key)
+            });
+            failure(ScenarioError::Input {
+                location,
+                key,
+                message,
+            })
+        }
+    }
+}
+
+/// `f` to ten significant digits, briefly (`1571.283581`, `1e300`).
+fn rounded(f: f64) -> String {
+    super::short(f, 10)
 }
 
 /// Prints what was written, the modes in the grid and the identified shapes; an
@@ -295,7 +337,11 @@ fn report(
             }
         })
         .collect();
-    println!("  modes up to {} Hz: {}", rounded(top), listed.join(", "));
+    if listed.is_empty() {
+        println!("  no mode up to {} Hz", rounded(top));
+    } else {
+        println!("  modes up to {} Hz: {}", rounded(top), listed.join(", "));
+    }
     match &frf.identified {
         None => Ok(()),
         Some(Ok(modes)) => {

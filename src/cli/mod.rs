@@ -42,6 +42,22 @@ impl Failure {
     }
 }
 
+/// `value` rounded to `digits` significant digits and written in the shortest form that
+/// reads back as that: plain between 1e-3 and 1e7, scientific outside.
+pub fn short(value: f64, digits: usize) -> String {
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    let rounded: f64 = format!("{value:.prec$e}", prec = digits.max(1) - 1)
+        .parse()
+        .unwrap_or(value);
+    if (1e-3..1e7).contains(&rounded.abs()) {
+        format!("{rounded}")
+    } else {
+        format!("{rounded:e}")
+    }
+}
+
 fn one_line(message: impl std::fmt::Display) -> String {
     message
         .to_string()

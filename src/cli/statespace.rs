@@ -10,7 +10,7 @@ use flexprr_run::statespace::{state_space, write_statespace};
 use flexprr_scene::{ScenarioError, Scene};
 
 use super::Failure;
-use super::frf::{channels, operating_point, parse_pose, run_failure};
+use super::frf::{channels, located_failure, operating_point, parse_pose};
 use super::run::failure;
 
 /// Arguments of `flexprr statespace`.
@@ -59,7 +59,14 @@ pub fn run(args: StateSpaceArgs) -> Result<(), Failure> {
     let target = OutputDir::check(&out, STATESPACE, args.force, &[&args.scene], &[])
         .map_err(|e| failure(e.into()))?;
     target.check_writable().map_err(|e| failure(e.into()))?;
-    let ss = state_space(&scene, at, &inputs, &outputs).map_err(run_failure)?;
+    let ss = state_space(&scene, at, &inputs, &outputs).map_err(|e| {
+        located_failure(
+            e,
+            Some(&args.scene),
+            args.pose.as_deref(),
+            args.time.map(|t| t.to_string()),
+        )
+    })?;
     let written = write_statespace(&scene, &ss, &target).map_err(|e| match e {
         ScenarioError::Io { .. } => Failure::run(e),
         other => failure(other),

@@ -315,18 +315,20 @@ fn search(study: &Study, args: &StudyArgs, options: &StudyOptions) -> Result<(),
         let cause = s
             .probes
             .iter()
+            .filter(|_| s.status == "failed")
             .find_map(|p| p.error.as_deref())
             .map(|e| format!(": {}", shorten(e, 200)))
             .unwrap_or_default();
         println!(
-            "{} [{}]: {} search {} (not reached at {}, reached at {}), {} probes{cause}",
+            "{} [{}]: {} search {} (not reached at {}, reached at {}), {} probes in {} rounds after the ends{cause}",
             study.name,
             s.case_label(),
             s.criterion.name(),
             s.status,
             show(s.below),
             show(s.at_or_above),
-            s.probes.len()
+            s.probes.len(),
+            s.rounds
         );
     }
     println!(

@@ -80,6 +80,11 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     for path in args.reference.iter().chain(&args.peers) {
         flexprr_scene::check_input_file(path, flexprr_scene::MAX_DATA_BYTES).map_err(failure)?;
     }
+    // The peers' rows are read before anything is measured: a bad file is refused at once.
+    let mut peers: Vec<WorkPrecisionRow> = Vec::new();
+    for path in &args.peers {
+        peers.extend(read_csv(path).map_err(failure)?);
+    }
     let config = config_of(&args, &scene)?;
     let measure_name = check_choices(&args, &config, &scene)?;
     let out_dir = output_dir(&args, &scene)?;
@@ -89,10 +94,6 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     reference
         .write_csv(&out.join("reference.csv"))
         .map_err(failure)?;
-    let mut peers: Vec<WorkPrecisionRow> = Vec::new();
-    for path in &args.peers {
-        peers.extend(read_csv(path).map_err(failure)?);
-    }
     let (mut rows, mut failures) = measure_printed(&scene, &reference, &config)?;
     if !args.compare.is_empty() {
         label_with_scene(&mut rows, &scene);

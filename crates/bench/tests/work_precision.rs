@@ -257,13 +257,32 @@ fn the_csv_has_every_column_and_reads_back() {
     std::fs::write(&path, &text).expect("write");
     assert_eq!(read_csv(&path).expect("reads"), rows);
 
-    // A row with a negative error is rejected, naming the row.
+    // A row with a negative error is rejected, naming the file's line (the header is
+    // line 1).
     let broken = text
         .replace("3e-6", "-3e-6")
         .replace("0.000003", "-0.000003");
-    std::fs::write(&path, broken).expect("write");
+    std::fs::write(&path, &broken).expect("write");
     let err = read_csv(&path).expect_err("negative error").to_string();
-    assert!(err.contains("row 1"), "{err}");
+    assert!(err.contains("line 2") && err.contains("peers.csv"), "{err}");
+    // A file without rows, or with a tolerance that is no tolerance, is refused: one line
+    // naming the file and what is wrong.
+    let header_only = format!("{}\n", text.lines().next().expect("header"));
+    let row = text.lines().nth(1).expect("row");
+    let nan_rtol = format!("{header_only}{}\n", row.replacen(",1e-6,", ",NaN,", 1));
+    assert!(nan_rtol.contains(",NaN,"), "{nan_rtol}");
+    for (contents, words) in [
+        ("", "holds no rows"),
+        (header_only.as_str(), "holds no rows"),
+        (nan_rtol.as_str(), "rtol = NaN"),
+    ] {
+        std::fs::write(&path, contents).expect("write");
+        let err = read_csv(&path).expect_err(words).to_string();
+        assert!(
+            err.contains(words) && err.contains("peers.csv") && err.lines().count() == 1,
+            "{err}"
+        );
+    }
 }
 
 /// The paper scene at 30 Hz over `end` seconds, consistent formulation (every model can be

@@ -194,7 +194,7 @@ pub fn check_link(
                 thickness_key,
                 format!(
                     "length / thickness = {length} m / {thickness} m = {ratio:.3} is below {MIN_SLENDERNESS}: \
-                     the Euler-Bernoulli link model needs a slender link (thickness at most length / {MIN_SLENDERNESS} = {} m)",
+                     the Euler-Bernoulli link model needs a slender link (thickness at most length / {MIN_SLENDERNESS} = {:.4e} m)",
                     length / MIN_SLENDERNESS
                 ),
             ));

@@ -37,8 +37,8 @@ pub struct StudyFile {
     /// Plots of the results table written next to `results.csv`.
     #[serde(default)]
     pub plot: Vec<PlotConfig>,
-    /// A speed search instead of a sweep (`crate::search`): bisection over one key for the
-    /// smallest value that collapses.
+    /// A speed search instead of a sweep (`crate::search`): bisection (or k-section) over
+    /// one key for the smallest value that collapses.
     #[serde(default)]
     pub search: Option<crate::search::SearchConfig>,
     /// A workspace map instead of a sweep (`crate::map`): a quantity of the machine at rest

@@ -99,7 +99,9 @@ pub fn worker_threads(requested: Option<usize>) -> Result<usize, StudyError> {
         Some(n) if n > max => Err(StudyError::Option {
             option: "--threads".into(),
             message: format!(
-                "{n} is more than {MAX_THREADS_PER_CPU} per available CPU ({cpus} CPUs, so at                  most {max}): each case keeps one thread busy, so more threads only share the                  CPUs and cost memory"
+                "{n} is more than {MAX_THREADS_PER_CPU} per available CPU ({cpus} CPUs, so at \
+                 most {max}): each case keeps one thread busy, so more threads only share the \
+                 CPUs and cost memory"
             ),
         }),
         Some(n) => Ok(n),
@@ -347,8 +349,9 @@ pub fn run_study(
 }
 
 /// Runs a speed-search study ([`crate::search`]): one search per case of its axes (or one),
-/// the searches in parallel on [`StudyOptions::threads`] workers, each search's probes in
-/// order; no shards and no resume. `on_probe` sees every probe as it ends, with its search
+/// the searches in parallel on [`StudyOptions::threads`] workers, the threads that searches
+/// leave free running several probes of a search at once (k-section, see
+/// [`crate::search::section_search`]); no shards and no resume. `on_probe` sees every probe as it ends, with its search
 /// (for progress). A sweep study (no `[search]`) is refused.
 ///
 /// # Errors
@@ -373,7 +376,7 @@ pub fn run_search_study(
                 "--shard"
             }
             .into(),
-            message: "a speed search runs its probes one after the other, each depending on the \
+            message: "a speed search runs its probes in rounds, each depending on the \
                       last: it cannot be sharded or resumed"
                 .into(),
         });

@@ -11,13 +11,16 @@
 //! nonlinear models come out side by side in one study.
 //!
 //! The search assumes a threshold: values below it do not reach the limit within the
-//! window, values at or above it do. It first runs both ends of the bracket (`low` must not collapse, `high`
-//! must), then halves the bracket until it is at most `tolerance` wide (bisection: the
-//! bracket after `n` halvings is `(high - low) / 2^n`, Burden & Faires, *Numerical
-//! Analysis*, section 2.1). The answer is the bracket: the largest value seen not to
-//! collapse and the smallest seen to collapse. A probe that fails for another reason (a
-//! diverged KED run, an integrator failure) ends the search with that failure: the threshold
-//! is then not known, and the search says so instead of guessing.
+//! window, values at or above it do. It first runs both ends of the bracket (`low` must not
+//! collapse, `high` must), then narrows the bracket until it is at most `tolerance` wide.
+//! With one thread per search this is bisection (the bracket after `n` halvings is
+//! `(high - low) / 2^n`, Burden & Faires, *Numerical Analysis*, section 2.1); with `k`
+//! threads free for a search, each round probes `k` interior values at once and keeps one
+//! of the `k + 1` parts (k-section: `(high - low) / (k + 1)^n` after `n` rounds), see
+//! [`section_search`]. The answer is the bracket: the largest value seen not to collapse
+//! below the smallest seen to collapse. A probe that fails for another reason (a diverged
+//! KED run, an integrator failure) ends the search with that failure: the threshold is then
+//! not known, and the search says so instead of guessing.
 
 use std::path::Path;
 
@@ -144,6 +147,9 @@ pub struct SearchOutcome {
     pub below: Option<f64>,
     /// Smallest value seen to reach it: the speed limit to within the tolerance.
     pub at_or_above: Option<f64>,
+    /// Rounds of interior probes after the two ends (each round probes up to as many values
+    /// at once as the search had threads; see [`section_search`]).
+    pub rounds: usize,
     /// The probes in the order they ran.
     pub probes: Vec<Probe>,
 }
@@ -191,6 +197,16 @@ impl Search {
                 format!(
                     "{:?} is below 2^-30 of the bracket: the search would not end in a useful time",
                     c.tolerance
+                ),
+            ));
+        }
+        let resolution = 64.0 * f64::EPSILON * c.low.abs().max(c.high.abs());
+        if c.tolerance <= resolution {
+            return Err((
+                "search.tolerance",
+                format!(
+                    "{:?} is below the resolution of the numbers near {:?} ({resolution:.3e}): the bracket could not shrink to it",
+                    c.tolerance, c.high
                 ),
             ));
         }
@@ -398,14 +414,94 @@ fn probe(
     out
 }
 
-/// Bisection of one case: `high`, then `low`, then halvings until the bracket is at most
-/// `tolerance` wide; `on_probe` sees each probe as it ends.
-fn bisect(
-    study: &Study,
+/// How many probes a search may run at once: the worker threads shared among the searches
+/// still running. While a search waits for a thread, every running search probes one value
+/// at a time (bisection); once every search has started, the threads are split among the
+/// unfinished ones (the remainder to the first), so a lone search gets them all.
+pub(crate) struct ThreadShare {
+    threads: usize,
+    /// Per search: started, finished.
+    state: std::sync::Mutex<Vec<(bool, bool)>>,
+}
+
+impl ThreadShare {
+    /// `threads` workers for `searches` searches.
+    pub(crate) fn new(threads: usize, searches: usize) -> Self {
+        Self {
+            threads: threads.max(1),
+            state: std::sync::Mutex::new(vec![(false, false); searches]),
+        }
+    }
+
+    fn mark(&self, index: usize, started: bool, finished: bool) {
+        if let Ok(mut s) = self.state.lock() {
+            if let Some(slot) = s.get_mut(index) {
+                *slot = (started, finished);
+            }
+        }
+    }
+
+    /// The probes search `index` may run in its next round (at least 1).
+    pub(crate) fn width(&self, index: usize) -> usize {
+        let Ok(s) = self.state.lock() else { return 1 };
+        if s.iter().any(|&(started, _)| !started) {
+            return 1;
+        }
+        let running: Vec<usize> = (0..s.len()).filter(|&i| !s[i].1).collect();
+        let Some(rank) = running.iter().position(|&i| i == index) else {
+            return 1;
+        };
+        let n = running.len();
+        (self.threads / n + usize::from(rank < self.threads % n)).max(1)
+    }
+}
+
+/// The `k` interior points of `(low, high)` that cut it into `k + 1` equal parts, ascending;
+/// points that rounding puts on an end or on each other are left out (a bracket near the
+/// resolution of `f64`), so the list may be shorter, even empty.
+pub fn section_points(low: f64, high: f64, k: usize) -> Vec<f64> {
+    let parts = (k + 1) as f64;
+    let mut points: Vec<f64> = Vec::with_capacity(k);
+    for i in 1..=k {
+        let x = low + (high - low) * (i as f64 / parts);
+        if x > low && x < high && points.last().is_none_or(|&last| x > last) {
+            points.push(x);
+        }
+    }
+    points
+}
+
+/// One search by k-section (the bisection of Burden & Faires, section 2.1, with `k` probes
+/// per round: each round cuts the bracket into `k + 1` equal parts and keeps the one where
+/// the limit starts, so `n` rounds shrink it by `(k + 1)^n`; `k = 1` is bisection).
+///
+/// `width()` gives `k` before each round (the threads free for this search, see
+/// [`run_search`]); `probe(value)` runs one probe (the rounds' probes run in parallel on the
+/// current rayon pool); `on_probe` sees each probe as it ends, with the outcome as it stood
+/// before its round.
+///
+/// The rules are bisection's, whatever `k`:
+/// - the ends first: `high` must reach the limit, then `low` must not (run together when
+///   `k >= 2`, read in that order); otherwise the status is `"high-does-not-reach"`,
+///   `"low-reaches"` or `"failed"`;
+/// - the bracket `(low, high]` keeps `low` not reaching and `high` reaching, and rounds
+///   continue while it is wider than `tolerance`;
+/// - in a round, the smallest value that reaches the limit becomes `high` and the one below
+///   it `low` (or the largest value becomes `low` when none reaches);
+/// - a probe that fails for another reason ends the search as `"failed"` (the threshold is
+///   then not known), except the lower end when the upper one already did not reach the
+///   limit (bisection would not have run it).
+///
+/// For a criterion with a threshold, every `k` brackets it within `tolerance`, so the
+/// answers of different thread counts agree to the tolerance; `k` changes only which values
+/// are probed, and the number of rounds (`ceil(log(w0 / tolerance) / log(k + 1))` for a
+/// bracket of width `w0` and a constant `k`).
+pub fn section_search(
     search: &Search,
     case: CaseLabels,
-    scene: &toml::Table,
     criterion: Criterion,
+    width: &(dyn Fn() -> usize + Sync),
+    probe: &(dyn Fn(f64) -> Probe + Sync),
     on_probe: &(dyn Fn(&SearchOutcome, &Probe) + Sync),
 ) -> SearchOutcome {
     let mut outcome = SearchOutcome {
@@ -414,19 +510,41 @@ fn bisect(
         status: "failed",
         below: None,
         at_or_above: None,
+        rounds: 0,
         probes: Vec::new(),
     };
-    let run = |value: f64, outcome: &mut SearchOutcome| {
-        let p = probe(study, search, scene, criterion, value);
-        on_probe(outcome, &p);
-        outcome.probes.push(p.clone());
-        p
+    // Runs `values` at once and appends the probes in the order of `values`.
+    let round = |values: &[f64], outcome: &mut SearchOutcome| -> Vec<Option<bool>> {
+        use rayon::prelude::*;
+        let before: &SearchOutcome = outcome;
+        let run = |&v: &f64| {
+            let p = probe(v);
+            on_probe(before, &p);
+            p
+        };
+        let probes: Vec<Probe> = if values.len() == 1 {
+            values.iter().map(run).collect()
+        } else {
+            values.par_iter().map(run).collect()
+        };
+        let reached = probes.iter().map(|p| p.reached).collect();
+        outcome.probes.extend(probes);
+        reached
     };
     let (mut low, mut high) = (search.low, search.high);
     outcome.status = 'search: {
-        for (value, must_reach) in [(high, true), (low, false)] {
-            let p = run(value, &mut outcome);
-            let Some(reached) = p.reached else {
+        let ends: Vec<Option<bool>> = if width() >= 2 {
+            round(&[high, low], &mut outcome)
+        } else {
+            let first = round(&[high], &mut outcome);
+            if first[0] == Some(true) {
+                [first, round(&[low], &mut outcome)].concat()
+            } else {
+                first
+            }
+        };
+        for (reached, must_reach) in ends.into_iter().zip([true, false]) {
+            let Some(reached) = reached else {
                 break 'search "failed";
             };
             if reached != must_reach {
@@ -438,31 +556,43 @@ fn bisect(
             }
         }
         while high - low > search.tolerance {
-            let mid = 0.5 * (low + high);
-            let p = run(mid, &mut outcome);
-            let Some(reached) = p.reached else {
+            let points = section_points(low, high, width());
+            if points.is_empty() {
+                break;
+            }
+            let reached = round(&points, &mut outcome);
+            outcome.rounds += 1;
+            if reached.contains(&None) {
                 break 'search "failed";
-            };
-            if reached {
-                high = mid;
-            } else {
-                low = mid;
+            }
+            match reached.iter().position(|r| *r == Some(true)) {
+                Some(j) => {
+                    high = points[j];
+                    if j > 0 {
+                        low = points[j - 1];
+                    }
+                }
+                None => low = points[points.len() - 1],
             }
         }
         "bracketed"
     };
-    outcome.below = outcome
-        .probes
-        .iter()
-        .filter(|p| p.reached == Some(false))
-        .map(|p| p.value)
-        .reduce(f64::max);
-    outcome.at_or_above = outcome
-        .probes
-        .iter()
-        .filter(|p| p.reached == Some(true))
-        .map(|p| p.value)
-        .reduce(f64::min);
+    if outcome.status == "bracketed" {
+        (outcome.below, outcome.at_or_above) = (Some(low), Some(high));
+    } else {
+        outcome.below = outcome
+            .probes
+            .iter()
+            .filter(|p| p.reached == Some(false))
+            .map(|p| p.value)
+            .reduce(f64::max);
+        outcome.at_or_above = outcome
+            .probes
+            .iter()
+            .filter(|p| p.reached == Some(true))
+            .map(|p| p.value)
+            .reduce(f64::min);
+    }
     outcome
 }
 
@@ -495,9 +625,10 @@ pub fn search_cases(study: &Study) -> Result<Vec<(CaseLabels, toml::Table)>, Str
 }
 
 /// Runs every search of `study` (one per case of its axes, or one on the base scene), the
-/// searches in parallel on `threads` workers (each search's probes in order). `on_probe`
-/// sees each probe as it ends, with its search. Nothing is written: see
-/// [`write_search_files`].
+/// searches in parallel on `threads` workers. When there are more threads than searches
+/// still running, each search probes several values per round ([`section_search`]), so the
+/// threads stay busy to the last search. `on_probe` sees each probe as it ends, with its
+/// search. Nothing is written: see [`write_search_files`].
 ///
 /// # Errors
 /// [`StudyError::Input`] when a case's scene cannot be formed; [`StudyError::Io`] when the
@@ -530,10 +661,22 @@ pub fn run_search(
             path: study.file.clone(),
             source: std::io::Error::other(format!("cannot start worker threads: {e}")),
         })?;
+    let share = ThreadShare::new(threads, jobs.len());
     Ok(pool.install(|| {
         jobs.into_par_iter()
-            .map(|(labels, table, criterion)| {
-                bisect(study, search, labels, &table, criterion, on_probe)
+            .enumerate()
+            .map(|(index, (labels, table, criterion))| {
+                share.mark(index, true, false);
+                let outcome = section_search(
+                    search,
+                    labels,
+                    criterion,
+                    &|| share.width(index),
+                    &|value| probe(study, search, &table, criterion, value),
+                    on_probe,
+                );
+                share.mark(index, true, true);
+                outcome
             })
             .collect()
     }))
@@ -575,6 +718,7 @@ fn search_json(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> se
             "status": o.status,
             "below": o.below,
             "at_or_above": o.at_or_above,
+            "rounds": o.rounds,
             "probes": o.probes,
         })
     };
@@ -591,7 +735,14 @@ fn search_json(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> se
         "searches": outcomes.iter().map(one).collect::<Vec<_>>(),
     });
     if let ([single], Some(map)) = (outcomes, json.as_object_mut()) {
-        for key in ["criterion", "status", "below", "at_or_above", "probes"] {
+        for key in [
+            "criterion",
+            "status",
+            "below",
+            "at_or_above",
+            "rounds",
+            "probes",
+        ] {
             map.insert(key.to_string(), one(single)[key].clone());
         }
     }
@@ -606,10 +757,12 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
         Window::Time(t) => format!("{t} s"),
     };
     let mut md = format!(
-        "# {}: speed limit in `{}`\n\nBisection over {} to {} (tolerance {}), window {window}. \
-         The limit is reached at or above the upper end and not at the lower end.\n\n\
-         | case | criterion | status | not reached at | reached at | when (s) | link | probes |\n\
-         |---|---|---|---:|---:|---:|---:|---:|\n",
+        "# {}: speed limit in `{}`\n\nSearch over {} to {} (tolerance {}), window {window}: \
+         the two ends, then rounds of as many probes at once as the search had threads \
+         (bisection with one). The limit is reached at or above the upper end and not at \
+         the lower end.\n\n\
+         | case | criterion | status | not reached at | reached at | when (s) | link | probes | rounds |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|\n",
         study.name, search.key, search.low, search.high, search.tolerance
     );
     for o in outcomes {
@@ -619,7 +772,7 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
                 .find(|p| p.reached == Some(true) && p.value.total_cmp(&v).is_eq())
         });
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             o.case_label(),
             o.criterion.name(),
             o.status,
@@ -629,11 +782,13 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
             first
                 .and_then(|p| p.link)
                 .map_or("-".to_string(), |l| l.to_string()),
-            o.probes.len()
+            o.probes.len(),
+            o.rounds
         ));
     }
     let failed: Vec<String> = outcomes
         .iter()
+        .filter(|o| o.status == "failed")
         .filter_map(|o| {
             let probe = o.probes.iter().find(|p| p.error.is_some())?;
             Some(format!(
@@ -648,6 +803,28 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
     if !failed.is_empty() {
         md.push_str("\nFailed searches (no bracket is claimed):\n\n");
         md.push_str(&failed.concat());
+    }
+    let ignored: Vec<String> = outcomes
+        .iter()
+        .filter(|o| o.status != "failed")
+        .flat_map(|o| {
+            o.probes.iter().filter(|p| p.error.is_some()).map(|p| {
+                format!(
+                    "- {}: the probe at {} = {} failed: {}\n",
+                    o.case_label(),
+                    search.key,
+                    crate::record::format_value(p.value),
+                    p.error.as_deref().unwrap_or_default()
+                )
+            })
+        })
+        .collect();
+    if !ignored.is_empty() {
+        md.push_str(
+            "\nProbes that failed without deciding the outcome (the lower end, run together \
+             with an upper end that did not reach the limit):\n\n",
+        );
+        md.push_str(&ignored.concat());
     }
     md
 }

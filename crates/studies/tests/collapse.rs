@@ -1,6 +1,7 @@
 //! The study quantity `collapse` and the speed search, checked against direct runs of the
 //! same scenes (the run layer's collapse outcome, not the study code) and against the
-//! bisection's own law: the bracket halves per probe and ends no wider than the tolerance.
+//! search's own law: the bracket shrinks by k + 1 per round of k probes and ends no wider
+//! than the tolerance.
 
 use std::path::{Path, PathBuf};
 
@@ -105,7 +106,11 @@ fn the_speed_search_brackets_the_threshold_found_by_direct_runs() {
     );
     let study = Study::from_text("search.toml", "search", &text, &configs()).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let summary = run_study(&study, dir.path(), &StudyOptions::default(), &|_, _| {}).unwrap();
+    let options = StudyOptions {
+        threads: Some(2),
+        ..StudyOptions::default()
+    };
+    let summary = run_study(&study, dir.path(), &options, &|_, _| {}).unwrap();
     let [outcome] = &summary.searches[..] else {
         panic!("one search: {:?}", summary.searches)
     };
@@ -115,8 +120,10 @@ fn the_speed_search_brackets_the_threshold_found_by_direct_runs() {
         below < above && above - below <= tolerance,
         "{below} {above}"
     );
-    // Bisection: the two ends, then ceil(log2(12 / 0.2)) = 6 halvings.
-    assert_eq!(outcome.probes.len(), 2 + 6);
+    // One search on two threads: the two ends together, then ceil(log3(12 / 0.2)) = 4
+    // rounds of two probes (trisection; bisection would take 6 halvings).
+    assert_eq!(outcome.rounds, 4);
+    assert_eq!(outcome.probes.len(), 2 + 2 * 4);
     // Independent check: direct runs on either side of the bracket agree with it, and so
     // does every probe (each probe's outcome is a direct run's).
     assert_eq!(direct(below, window), None, "{below} Hz");

@@ -27,11 +27,13 @@ pub fn csv_text(rows: &[WorkPrecisionRow]) -> Result<String, ScenarioError> {
     String::from_utf8(bytes).map_err(|e| ScenarioError::Run(format!("work-precision CSV: {e}")))
 }
 
-/// Reads rows (e.g. a peers file) in the [`WorkPrecisionRow`] format.
+/// Reads rows (e.g. a peers file) in the [`WorkPrecisionRow`] format: at least one row,
+/// each with a package and a method, a positive finite `rtol`, finite non-negative `atol`,
+/// times and errors, and at least one timed run.
 ///
 /// # Errors
-/// [`ScenarioError::Io`] if unreadable, [`ScenarioError::Input`] naming the file and row if
-/// a row is malformed or has a non-positive time or error.
+/// [`ScenarioError::Io`] if unreadable, [`ScenarioError::Input`] naming the file and line
+/// if the file holds no row or a row is malformed or out of range.
 pub fn read_csv(path: &Path) -> Result<Vec<WorkPrecisionRow>, ScenarioError> {
     let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
         path: path.display().to_string(),
@@ -43,29 +45,54 @@ pub fn read_csv(path: &Path) -> Result<Vec<WorkPrecisionRow>, ScenarioError> {
         message,
     };
     let mut rows = Vec::new();
-    for (k, row) in csv::Reader::from_reader(text.as_bytes())
-        .deserialize::<WorkPrecisionRow>()
-        .enumerate()
-    {
-        let row = row.map_err(|e| bad(format!("row {}: {e}", k + 1)))?;
-        for (name, v) in [
-            ("time_median_s", row.time_median_s),
-            ("end_error", row.end_error),
-            ("max_error", row.max_error),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad(format!(
-                    "row {} ({} {} at rtol {}): {name} = {v} is not a finite non-negative number",
-                    k + 1,
-                    row.package,
-                    row.method,
-                    row.rtol
-                )));
-            }
-        }
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
+    for row in reader.deserialize::<WorkPrecisionRow>() {
+        let line = rows.len() + 2;
+        let row = row.map_err(|e| bad(format!("line {line}: {e}")))?;
+        check_row(&row).map_err(|m| {
+            bad(format!(
+                "line {line} ({} {} at rtol {}): {m}",
+                row.package, row.method, row.rtol
+            ))
+        })?;
         rows.push(row);
     }
+    if rows.is_empty() {
+        return Err(bad(
+            "holds no rows: expected a header and at least one row in the work_precision.csv \
+             format (package,method,rtol,atol,time_median_s,...)"
+                .into(),
+        ));
+    }
     Ok(rows)
+}
+
+/// The range checks of one row read from a file.
+fn check_row(row: &WorkPrecisionRow) -> Result<(), String> {
+    if row.package.trim().is_empty() || row.method.trim().is_empty() {
+        return Err("package and method must not be empty".into());
+    }
+    if !(row.rtol.is_finite() && row.rtol > 0.0) {
+        return Err(format!(
+            "rtol = {} is not a positive finite number",
+            row.rtol
+        ));
+    }
+    for (name, v) in [
+        ("atol", row.atol),
+        ("time_median_s", row.time_median_s),
+        ("time_min_s", row.time_min_s),
+        ("end_error", row.end_error),
+        ("max_error", row.max_error),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!("{name} = {v} is not a finite non-negative number"));
+        }
+    }
+    if row.repeats == 0 {
+        return Err("repeats = 0: a row needs at least one timed run".into());
+    }
+    Ok(())
 }
 
 /// The series of the diagram: `(package, series label)` in order of first appearance (the
