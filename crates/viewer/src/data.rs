@@ -238,33 +238,7 @@ impl ViewerData {
             check_finite(|| "reference_sliders".into(), reference.iter().flatten())?;
         }
         check_finite(|| "attachments".into(), self.attachments.iter().flatten())?;
-        for (i, g) in self.guides.iter().enumerate() {
-            let field = || format!("guides[{i}]");
-            check_finite(
-                field,
-                g.anchor
-                    .iter()
-                    .chain(&g.direction)
-                    .chain([&g.travel.0, &g.travel.1]),
-            )?;
-            let norm = g.direction[0].hypot(g.direction[1]);
-            if (norm - 1.0).abs() > 1e-9 {
-                return Err(ViewerError::Invalid {
-                    field: format!("guides[{i}].direction"),
-                    index: 0,
-                    value: norm,
-                    reason: "must have unit length",
-                });
-            }
-            if g.travel.0 >= g.travel.1 {
-                return Err(ViewerError::Invalid {
-                    field: format!("guides[{i}].travel"),
-                    index: 1,
-                    value: g.travel.1,
-                    reason: "max must exceed min",
-                });
-            }
-        }
+        self.validate_guides()?;
         for (i, link) in self.links.iter().enumerate() {
             let name = |f: &str| format!("links[{i}].{f}");
             if !(link.length.is_finite() && link.length > 0.0) {
@@ -341,6 +315,38 @@ impl ViewerData {
                         reason: "a patch must span 0 <= xi_start < xi_end <= 1",
                     });
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Every guide finite, of unit direction and with `min < max` travel.
+    fn validate_guides(&self) -> Result<(), ViewerError> {
+        for (i, g) in self.guides.iter().enumerate() {
+            let field = || format!("guides[{i}]");
+            check_finite(
+                field,
+                g.anchor
+                    .iter()
+                    .chain(&g.direction)
+                    .chain([&g.travel.0, &g.travel.1]),
+            )?;
+            let norm = g.direction[0].hypot(g.direction[1]);
+            if (norm - 1.0).abs() > 1e-9 {
+                return Err(ViewerError::Invalid {
+                    field: format!("guides[{i}].direction"),
+                    index: 0,
+                    value: norm,
+                    reason: "must have unit length",
+                });
+            }
+            if g.travel.0 >= g.travel.1 {
+                return Err(ViewerError::Invalid {
+                    field: format!("guides[{i}].travel"),
+                    index: 1,
+                    value: g.travel.1,
+                    reason: "max must exceed min",
+                });
             }
         }
         Ok(())
