@@ -83,7 +83,7 @@ fn along_motion(scene: &Scene, t: f64) -> Result<AtOperatingPoint, RunError> {
         return Err(RunError::Scene(ScenarioError::Input {
             location: None,
             key: "time".into(),
-            message: format!("t = {t} s is outside the scene's time span [{t0}, {t1}] s"),
+            message: format!("t = {t:?} s is outside the scene's time span [{t0:?}, {t1:?}] s"),
         }));
     }
     let mut model = scene.build_model()?;

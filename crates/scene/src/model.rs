@@ -229,7 +229,7 @@ impl Scene {
             message,
         };
         let where_ = format!(
-            "(x, y, phi) = ({} m, {} m, {} deg)",
+            "(x, y, phi) = ({:?} m, {:?} m, {:?} deg)",
             pose.x,
             pose.y,
             pose.phi.to_degrees()
