@@ -920,7 +920,7 @@ impl NonlinearSystem {
 
     /// Accelerations `z''` into `acc` (the second block of `dy`): assembles and solves
     /// `M z'' = F` (`self.forces` and the actuators' forces must be assembled).
-    fn accelerations(
+    pub(super) fn accelerations(
         &mut self,
         t: f64,
         y: &[f64],
