@@ -18,8 +18,8 @@ use flexprr_dynamics::{
     AxialForceModel, AxialModel, JointReactionAxialForce, NoAxialForce, PaperAxialForce,
 };
 use flexprr_integrators::{
-    Abm, Auto, Bdf, DynIntegrator, IntegratorError, Interruption, Magnus, OdeSystem, Options, Rk45,
-    Solution,
+    Abm, Auto, Bdf, DynIntegrator, GeneralizedAlpha, IntegratorError, Interruption, Magnus,
+    OdeSystem, Options, Rk45, Solution,
 };
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
@@ -365,7 +365,8 @@ pub(crate) struct AxialEntry {
 }
 
 /// The named parts scenes can use. [`Registry::default`] holds the built-ins: integrators
-/// `abm`, `rk45`, `bdf`, `magnus4`, `magnus6` (linear models only) and `auto`; bases `sine`,
+/// `abm`, `rk45`, `bdf`, `generalized_alpha` (mechanical models), `magnus4`, `magnus6`
+/// (linear models only) and `auto`; bases `sine`,
 /// `classical`, `hermite`; axial force models `none`, `paper`, `joint-reaction`; control
 /// laws `pd` and `pid`.
 #[derive(Clone)]
@@ -396,6 +397,10 @@ impl Default for Registry {
         r.register_integrator("abm", Arc::new(|o| Box::new(Abm::new(o))));
         r.register_integrator("rk45", Arc::new(|o| Box::new(Rk45::new(o))));
         r.register_integrator("bdf", Arc::new(|o| Box::new(Bdf::new(o))));
+        r.register_integrator(
+            "generalized_alpha",
+            Arc::new(|o| Box::new(GeneralizedAlpha::new(o))),
+        );
         r.register_integrator_kind(
             "magnus4",
             Arc::new(|o| Box::new(Magnus::magnus4(o))),
