@@ -244,6 +244,20 @@ fn first_non_finite(v: &[f64]) -> Option<usize> {
     v.iter().position(|x| !x.is_finite())
 }
 
+/// `out = sign * mass x` column by column (contiguous, vectorizable).
+#[inline]
+fn multiply(mass: &Mat<f64>, x: &[f64], sign: f64, out: &mut [f64]) {
+    out.fill(0.0);
+    for (j, xj) in x.iter().enumerate() {
+        let w = sign * xj;
+        if w != 0.0 {
+            for (o, m) in out.iter_mut().zip(mass.col_as_slice(j)) {
+                *o += w * m;
+            }
+        }
+    }
+}
+
 /// Cubic Hermite interpolation at `theta` in `[0, 1]` of a step of length `h` from values
 /// `p0, p1` and derivatives `d0, d1`.
 #[inline]
@@ -300,9 +314,13 @@ impl GeneralizedAlphaStepper {
         let ck = self.parameters.beta_prime() * h * h;
         self.span.stats.lu_decompositions += 1;
         for j in 0..n {
-            for i in 0..n {
-                self.lu[(i, j)] =
-                    self.mass[(i, j)] + cc * self.damping[(i, j)] + ck * self.stiffness[(i, j)];
+            let (m, c, k) = (
+                self.mass.col_as_slice(j),
+                self.damping.col_as_slice(j),
+                self.stiffness.col_as_slice(j),
+            );
+            for (i, a) in self.lu.col_as_slice_mut(j).iter_mut().enumerate() {
+                *a = m[i] + cc * c[i] + ck * k[i];
             }
         }
         lu_factor::lu_in_place(
@@ -412,13 +430,7 @@ impl GeneralizedAlphaStepper {
             for i in 0..n {
                 self.error[i] = self.x[i] - self.f[n + i];
             }
-            for i in 0..n {
-                let mut s = 0.0;
-                for j in 0..n {
-                    s += self.mass[(i, j)] * self.error[j];
-                }
-                self.delta[i] = -s;
-            }
+            multiply(&self.mass, &self.error[..n], -1.0, &mut self.delta);
             self.solve_in_place();
             for i in 0..n {
                 self.x[i] += self.delta[i];
@@ -450,13 +462,7 @@ impl GeneralizedAlphaStepper {
         for i in 0..n {
             self.error[i] = c * (self.x[i] - self.acc[i]);
         }
-        for i in 0..n {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += self.mass[(i, j)] * self.error[j];
-            }
-            self.delta[i] = s;
-        }
+        multiply(&self.mass, &self.error[..n], 1.0, &mut self.delta);
         self.solve_in_place();
         for i in 0..n {
             self.error[i] = self.delta[i];
