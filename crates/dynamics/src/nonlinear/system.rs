@@ -1105,8 +1105,12 @@ impl OdeSystem for NonlinearSystem {
         }
     }
 
-    /// The mechanical form for implicit integrators (super::tangent).
+    /// The mechanical form for implicit integrators (super::tangent); none when a
+    /// continuous control law adds first-order states.
     fn second_order_form(&mut self) -> Option<&mut dyn flexprr_integrators::SecondOrderForm> {
+        if self.actuated.as_ref().is_some_and(|a| a.ode_states() > 0) {
+            return None;
+        }
         Some(self)
     }
 
