@@ -3,7 +3,7 @@
 //!
 //! # Method
 //!
-//! For `M(t, q) q'' = F(t, q, q')` ([`SecondOrderForm`]) the method of Chung & Hulbert
+//! For `M(t, q) q'' = F(t, q, q')` ([`SecondOrderForm`](crate::SecondOrderForm)) the method of Chung & Hulbert
 //! ("A time integration algorithm for structural dynamics with improved numerical
 //! dissipation: the generalized-alpha method", *J. Appl. Mech.* 60, 1993) in the form of
 //! Arnold & Brüls ("Convergence of the generalized-alpha scheme for constrained mechanical
@@ -36,7 +36,7 @@
 //! `gamma' = gamma (1 - alpha_f)/(1 - alpha_m)`. The residual `r(x) = x - M^-1 F` is what
 //! [`OdeSystem::rhs`] gives; Newton's matrix `dr/dx = M^-1 (M + gamma' h C + beta' h^2 K)`
 //! gives the corrections `(M + gamma' h C + beta' h^2 K) dx = -M r`, with the `M`, `C` and
-//! `K` of [`SecondOrderForm::matrices`]. The iteration is modified Newton after CVODE
+//! `K` of [`SecondOrderForm::matrices`](crate::SecondOrderForm::matrices). The iteration is modified Newton after CVODE
 //! (Hindmarsh et al., ACM TOMS 31, 2005): the matrices are kept for [`MATRIX_MAX_AGE`]
 //! accepted steps, renewed when an iteration converges slowly or fails, and the
 //! factorisation (dense LU with partial pivoting, faer's `lu_in_place` into preallocated
@@ -112,7 +112,7 @@ const MAX_FACTOR: f64 = 5.0;
 
 /// The generalized-alpha method (see the module documentation).
 ///
-/// Needs a system with a [`SecondOrderForm`] (state `(q, q')`); others are refused at
+/// Needs a system with a [`SecondOrderForm`](crate::SecondOrderForm) (state `(q, q')`); others are refused at
 /// [`crate::Integrator::start`] with a message saying so.
 #[derive(Debug, Clone)]
 pub struct GeneralizedAlpha {
