@@ -142,23 +142,3 @@ fn genalpha_keeps_the_energy_balance() {
         assert!(worst < bound * scale, "rho_inf {rho}: {worst} of {scale}");
     }
 }
-
-#[test]
-#[ignore]
-fn tolerance_ladder() {
-    let (t, w_ref) = reference();
-    for rtol in [1e-3, 1e-4, 1e-5, 1e-6] {
-        let mut s = nonlinear(30.0, 8);
-        let ga = GeneralizedAlpha::new(Options::default().rtol(rtol).atol(rtol * 1.78e-2));
-        let clock = Instant::now();
-        let (w, stats) = deflections(&ga, &mut s, &t);
-        println!(
-            "rtol {rtol:e}: {:.3} % ({:.3} s, {} steps, {} rejected, {} LU)",
-            100.0 * rel_l2(&w, &w_ref),
-            clock.elapsed().as_secs_f64(),
-            stats.accepted_steps,
-            stats.rejected_steps,
-            stats.lu_decompositions,
-        );
-    }
-}
