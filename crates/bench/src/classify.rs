@@ -246,9 +246,11 @@ pub fn attempt(scene: &Scene, method: Method) -> Attempt {
     };
     // The method a scene naming `method` would run on this model.
     let linear = model.linear_form().is_some();
-    let handle = match flexprr_scene::Registry::default().resolve_method(
+    let mechanical = flexprr_scene::mechanical_model(scene.coupling, scene.controller.as_ref());
+    let handle = match flexprr_scene::Registry::default().resolve_method_for(
         method.name(),
         linear,
+        mechanical,
         model.kind(),
     ) {
         Ok(handle) => handle,

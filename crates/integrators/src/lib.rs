@@ -12,6 +12,10 @@
 //! * [`Bdf`]: variable-step, variable-order BDF, orders 1-5, with simplified Newton iterations
 //!   and Jacobian/LU reuse, after CVODE (Hindmarsh et al., *ACM TOMS* 31, 2005) and Byrne &
 //!   Hindmarsh (1975).
+//! * [`GeneralizedAlpha`]: the generalized-alpha method of Chung & Hulbert (1993) for
+//!   mechanical systems `M q'' = F` ([`SecondOrderForm`]), second order with controllable
+//!   high-frequency dissipation, modified Newton on the `n x n` iteration matrix
+//!   `M + c_C C + c_K K`, local error control and Hermite dense output.
 //!
 //! A new method is a new file: implement [`Stepper`] for its state and [`Integrator`] for
 //! its configuration; [`Integrator::solve`] (dense output at requested times) comes free.
@@ -45,6 +49,7 @@ mod observe;
 pub mod abm;
 pub mod bdf;
 pub mod exponential;
+pub mod genalpha;
 pub mod rk45;
 #[cfg(feature = "test-problems")]
 pub mod test_problems;
@@ -56,11 +61,12 @@ pub use error::IntegratorError;
 pub use exponential::{
     Auto, BlockOperators, LinearSecondOrder, Magnus, MagnusOrder, MagnusStepper,
 };
+pub use genalpha::{GeneralizedAlpha, GeneralizedAlphaStepper};
 pub use observe::{DynIntegrator, Flow, Interrupted, Interruption, Observer, OnStep};
 pub use options::{Options, Tolerance};
 pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};
 pub use solution::{Solution, Stats};
-pub use system::{OdeSystem, finite_difference_jacobian};
+pub use system::{OdeSystem, SecondOrderForm, finite_difference_jacobian};
 
 /// An integration in progress: the method's state between steps.
 ///
@@ -184,7 +190,7 @@ pub trait Integrator {
     /// The state of one integration with this method.
     type Stepper: Stepper;
 
-    /// Short name (`"rk45"`, `"abm"`, `"bdf"`).
+    /// Short name (`"rk45"`, `"abm"`, `"bdf"`, `"generalized_alpha"`).
     fn name(&self) -> &'static str;
 
     /// The shared options.

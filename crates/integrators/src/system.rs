@@ -79,6 +79,15 @@ pub trait OdeSystem {
         None
     }
 
+    /// The system's mechanical (second-order) form `M(t, q) q'' = F(t, q, q')`, when it has
+    /// one: its mass, damping and stiffness matrices for the iteration matrix of implicit
+    /// methods for structural dynamics ([`crate::GeneralizedAlpha`] solves with the `n x n`
+    /// matrix `M + c_C C + c_K K` instead of the `2n x 2n` `I - c J`). `None` (the default)
+    /// for systems without one.
+    fn second_order_form(&mut self) -> Option<&mut dyn SecondOrderForm> {
+        None
+    }
+
     /// Called by the stepping loop at the start of every integration segment (the start
     /// time and every stop time) with the state there, before the integrator (re)starts: a
     /// system with discrete updates (a sampled controller's zero-order hold) takes them here,
@@ -107,9 +116,80 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn linear_form(&mut self) -> Option<&mut dyn LinearSecondOrder> {
         (**self).linear_form()
     }
+    fn second_order_form(&mut self) -> Option<&mut dyn SecondOrderForm> {
+        (**self).second_order_form()
+    }
     fn segment_start(&mut self, t: f64, y: &[f64]) {
         (**self).segment_start(t, y);
     }
+}
+
+/// The mechanical form of an [`OdeSystem`] whose state is `y = (q, q')`: `n` coordinates
+/// `q` and their rates `v = q'`,
+///
+/// ```text
+/// q' = v,   M(t, q) v' = F(t, q, v)
+/// ```
+///
+/// with `OdeSystem::rhs` returning `(v, M^-1 F)`. The form gives what an implicit method for
+/// structural dynamics needs beyond the right-hand side: the mass matrix `M`, the tangent
+/// stiffness `K ~ -dF/dq` and damping `C ~ -dF/dv`, from which
+/// [`crate::GeneralizedAlpha`] builds its `n x n` iteration matrix `M + c_C C + c_K K`
+/// (instead of the `2n x 2n` `I - c J` of the first-order form). `K` and `C` may be
+/// approximations (Newton's iteration converges to the same solution, a poorer matrix only
+/// costs iterations); `M` should be the mass the right-hand side divides by.
+///
+/// ```
+/// use flexprr_integrators::{GeneralizedAlpha, Integrator, OdeSystem, Options, SecondOrderForm};
+///
+/// /// Two masses on springs, `m q1'' = -k (2 q1 - q2)`, `m q2'' = -k (2 q2 - q1)`.
+/// struct Chain { m: f64, k: f64 }
+/// impl OdeSystem for Chain {
+///     fn dim(&self) -> usize { 4 }
+///     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) {
+///         dy[0] = y[2];
+///         dy[1] = y[3];
+///         dy[2] = -self.k * (2.0 * y[0] - y[1]) / self.m;
+///         dy[3] = -self.k * (2.0 * y[1] - y[0]) / self.m;
+///     }
+///     fn second_order_form(&mut self) -> Option<&mut dyn SecondOrderForm> { Some(self) }
+/// }
+/// impl SecondOrderForm for Chain {
+///     fn coordinates(&self) -> usize { 2 }
+///     fn matrices(
+///         &mut self, _t: f64, _y: &[f64],
+///         mut m: faer::MatMut<'_, f64>, _c: faer::MatMut<'_, f64>, mut k: faer::MatMut<'_, f64>,
+///     ) {
+///         for i in 0..2 {
+///             m[(i, i)] = self.m;
+///             k[(i, i)] = 2.0 * self.k;
+///         }
+///         k[(0, 1)] = -self.k;
+///         k[(1, 0)] = -self.k;
+///     }
+/// }
+///
+/// // The in-phase mode q1 = q2 = cos(w t), w^2 = k / m = 25.
+/// let mut chain = Chain { m: 2.0, k: 50.0 };
+/// let opts = Options::default().rtol(1e-9).atol(1e-12);
+/// let sol = GeneralizedAlpha::new(opts).solve(&mut chain, 0.0, &[1.0, 1.0, 0.0, 0.0], &[1.0]).unwrap();
+/// assert!((sol.y(0)[0] - 5.0_f64.cos()).abs() < 1e-4);
+/// ```
+pub trait SecondOrderForm {
+    /// Number of coordinates `n` (the state is `(q, v)`, `n` each).
+    fn coordinates(&self) -> usize;
+
+    /// Writes `M`, `C` and `K` at `(t, y)` (`n x n` each, both triangles, into zeroed
+    /// storage). Called rarely (when the iteration matrix is renewed), so it may cost a
+    /// few right-hand sides, but must not allocate.
+    fn matrices(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        mass: MatMut<'_, f64>,
+        damping: MatMut<'_, f64>,
+        stiffness: MatMut<'_, f64>,
+    );
 }
 
 /// Forward-difference Jacobian `J[:, j] = (f(y + d_j e_j) - f(y)) / d_j` with

@@ -37,7 +37,7 @@ pub use parse::{parse_scene, parse_toml};
 pub use piezo::PatchContext;
 pub use registry::{
     BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount,
-    Registry, TableParams,
+    Registry, TableParams, mechanical_model,
 };
 pub use scene::{DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, Scene};
 pub use schema::{

@@ -18,8 +18,8 @@ use flexprr_dynamics::{
     AxialForceModel, AxialModel, JointReactionAxialForce, NoAxialForce, PaperAxialForce,
 };
 use flexprr_integrators::{
-    Abm, Auto, Bdf, DynIntegrator, IntegratorError, Interruption, Magnus, OdeSystem, Options, Rk45,
-    Solution,
+    Abm, Auto, Bdf, DynIntegrator, GeneralizedAlpha, IntegratorError, Interruption, Magnus,
+    OdeSystem, Options, Rk45, Solution,
 };
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
@@ -111,15 +111,33 @@ pub enum MethodKind {
     /// Needs a model that is linear in its state ([`OdeSystem::linear_form`]: the KED modal
     /// equations); `magnus4` and `magnus6`. A scene with another model is refused at load.
     Linear,
-    /// Stands for one of two registered methods, chosen by the scene's model: `linear` for a
-    /// linear (KED) model, `general` otherwise (`auto`: `magnus6` or `abm`). The scene records
-    /// the method chosen, so runs and summaries name the method actually used.
+    /// Needs a model with a mechanical form ([`OdeSystem::second_order_form`]: state
+    /// `(q, q')`, mass, damping and stiffness): the nonlinear model without a continuous
+    /// control law's states; `generalized_alpha`. A scene with another model is refused at
+    /// load.
+    Mechanical,
+    /// Stands for one of the registered methods, chosen by the scene's model: `linear` for a
+    /// linear (KED) model, `mechanical` (when set) for a model with a mechanical form,
+    /// `general` otherwise (`auto`: `magnus6`, `generalized_alpha` or `abm`). The scene
+    /// records the method chosen, so runs and summaries name the method actually used.
     Auto {
         /// The method for linear models.
         linear: String,
         /// The method for every other model.
         general: String,
+        /// The method for models with a mechanical form, if not `general`.
+        mechanical: Option<String>,
     },
+}
+
+/// Whether a scene's model has a mechanical form ([`MethodKind::Mechanical`]): the nonlinear
+/// model, with no control law or one without continuous states (a sampled or stateless law).
+pub fn mechanical_model(
+    coupling: flexprr_dynamics::CouplingModel,
+    controller: Option<&Arc<dyn flexprr_control::Controller>>,
+) -> bool {
+    coupling == flexprr_dynamics::CouplingModel::Nonlinear
+        && controller.is_none_or(|c| c.period() > 0.0 || c.states() == 0)
 }
 
 /// How a basis gets its number of functions.
@@ -365,7 +383,8 @@ pub(crate) struct AxialEntry {
 }
 
 /// The named parts scenes can use. [`Registry::default`] holds the built-ins: integrators
-/// `abm`, `rk45`, `bdf`, `magnus4`, `magnus6` (linear models only) and `auto`; bases `sine`,
+/// `abm`, `rk45`, `bdf`, `generalized_alpha` (mechanical models), `magnus4`, `magnus6`
+/// (linear models only) and `auto`; bases `sine`,
 /// `classical`, `hermite`; axial force models `none`, `paper`, `joint-reaction`; control
 /// laws `pd` and `pid`.
 #[derive(Clone)]
@@ -397,6 +416,11 @@ impl Default for Registry {
         r.register_integrator("rk45", Arc::new(|o| Box::new(Rk45::new(o))));
         r.register_integrator("bdf", Arc::new(|o| Box::new(Bdf::new(o))));
         r.register_integrator_kind(
+            "generalized_alpha",
+            Arc::new(|o| Box::new(GeneralizedAlpha::new(o))),
+            MethodKind::Mechanical,
+        );
+        r.register_integrator_kind(
             "magnus4",
             Arc::new(|o| Box::new(Magnus::magnus4(o))),
             MethodKind::Linear,
@@ -412,6 +436,7 @@ impl Default for Registry {
             MethodKind::Auto {
                 linear: "magnus6".to_string(),
                 general: "abm".to_string(),
+                mechanical: Some("generalized_alpha".to_string()),
             },
         );
         r.register_basis("sine", Arc::new(SineFactory));
@@ -485,7 +510,8 @@ impl Registry {
 
     /// The method a scene with the integrator `name` runs, given whether its model is linear
     /// in the state (`model_name` names the model in the error): an `auto` name becomes its
-    /// choice for the model, a linear-only method on another model is refused.
+    /// choice for the model, a linear-only method on another model is refused. The same as
+    /// [`Registry::resolve_method_for`] for a model without a mechanical form.
     ///
     /// # Errors
     /// One line saying which method needs what and what to use instead, or naming an
@@ -496,42 +522,52 @@ impl Registry {
         linear_model: bool,
         model_name: &str,
     ) -> Result<MethodHandle, String> {
+        self.resolve_method_for(name, linear_model, false, model_name)
+    }
+
+    /// The method a scene with the integrator `name` runs, given whether its model is linear
+    /// in the state and whether it has a mechanical form ([`mechanical_model`]): an `auto`
+    /// name becomes its choice for the model, a linear-only or mechanical-only method on
+    /// another model is refused.
+    ///
+    /// # Errors
+    /// One line saying which method needs what and what to use instead, or naming an
+    /// unregistered method.
+    pub fn resolve_method_for(
+        &self,
+        name: &str,
+        linear_model: bool,
+        mechanical_model: bool,
+        model_name: &str,
+    ) -> Result<MethodHandle, String> {
         let unknown = |n: &str| {
             format!(
                 "unknown value \"{n}\", expected one of {}",
                 quoted_list(&self.integrator_names())
             )
         };
+        let needs = |kind: &str| {
+            format!(
+                "method {name} needs {kind}; this scene is {model_name}: use {}",
+                self.fallbacks().join(" or ")
+            )
+        };
         let chosen = match self.method_kind(name) {
-            Some(MethodKind::Auto { linear, general }) => {
-                if linear_model {
-                    linear.as_str()
-                } else {
-                    general.as_str()
-                }
-            }
+            Some(MethodKind::Auto {
+                linear,
+                general,
+                mechanical,
+            }) => match mechanical {
+                _ if linear_model => linear.as_str(),
+                Some(m) if mechanical_model => m.as_str(),
+                _ => general.as_str(),
+            },
             Some(MethodKind::Linear) if !linear_model => {
-                // The methods `auto` falls back to, then the `auto` names themselves.
-                let mut alternatives: Vec<&str> = Vec::new();
-                for (n, kind) in &self.method_kinds {
-                    if let MethodKind::Auto { general, .. } = kind {
-                        for a in [general.as_str(), n.as_str()] {
-                            if !alternatives.contains(&a) {
-                                alternatives.push(a);
-                            }
-                        }
-                    }
-                }
-                if alternatives.is_empty() {
-                    alternatives = self
-                        .integrator_names()
-                        .into_iter()
-                        .filter(|n| self.method_kind(n) == Some(&MethodKind::General))
-                        .collect();
-                }
-                return Err(format!(
-                    "method {name} needs a linear (KED) model; this scene is {model_name}: use {}",
-                    alternatives.join(" or ")
+                return Err(needs("a linear (KED) model"));
+            }
+            Some(MethodKind::Mechanical) if !mechanical_model => {
+                return Err(needs(
+                    "a mechanical model (nonlinear, without a continuous control law's states)",
                 ));
             }
             _ => name,
@@ -543,8 +579,34 @@ impl Registry {
             Some(MethodKind::Linear) if !linear_model => Err(format!(
                 "method {name} chooses {chosen}, which needs a linear (KED) model; this scene is {model_name}"
             )),
+            Some(MethodKind::Mechanical) if !mechanical_model => Err(format!(
+                "method {name} chooses {chosen}, which needs a mechanical model; this scene is {model_name}"
+            )),
             _ => self.method(chosen).ok_or_else(|| unknown(chosen)),
         }
+    }
+
+    /// The methods `auto` falls back to, then the `auto` names themselves (or, without an
+    /// `auto`, every general method): what to use instead of a method the model refuses.
+    fn fallbacks(&self) -> Vec<&str> {
+        let mut alternatives: Vec<&str> = Vec::new();
+        for (n, kind) in &self.method_kinds {
+            if let MethodKind::Auto { general, .. } = kind {
+                for a in [general.as_str(), n.as_str()] {
+                    if !alternatives.contains(&a) {
+                        alternatives.push(a);
+                    }
+                }
+            }
+        }
+        if alternatives.is_empty() {
+            alternatives = self
+                .integrator_names()
+                .into_iter()
+                .filter(|n| self.method_kind(n) == Some(&MethodKind::General))
+                .collect();
+        }
+        alternatives
     }
 
     /// Registers (or replaces) the basis `name` for `basis.kind`.

@@ -297,9 +297,10 @@ impl Scene {
             model_name.push_str(" with piezoelectric patches");
         }
         let method = registry
-            .resolve_method(
+            .resolve_method_for(
                 method.name(),
                 model.coupling == CouplingModel::Ked && piezo.patches.is_empty(),
+                crate::mechanical_model(model.coupling, control.controller.as_ref()),
                 &model_name,
             )
             .map_err(|m| c.value_error("integrator.method", m))?;

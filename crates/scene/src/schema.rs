@@ -469,8 +469,10 @@ impl Default for ModelConfig {
 pub struct IntegratorConfig {
     /// A registered integrator: `"auto"` (the default: `"magnus6"` for the KED model, `"abm"`
     /// for the coupled and nonlinear ones; resolved when the scene is loaded), `"abm"` (like
-    /// the paper's ode113), `"rk45"`, `"bdf"`, or `"magnus4"` and `"magnus6"` (exponential,
-    /// KED model only).
+    /// the paper's ode113), `"rk45"`, `"bdf"`, `"magnus4"` and `"magnus6"` (exponential,
+    /// KED model only), or `"generalized_alpha"` (implicit, for structural dynamics:
+    /// models with a mechanical form, the nonlinear one, without continuous controller
+    /// states; spectral radius at infinity 0.9).
     #[serde(default = "default_method")]
     pub method: String,
     /// Relative tolerance.
@@ -682,17 +684,21 @@ pub enum Method {
     Magnus6,
     /// `magnus6` for linear models, `abm` otherwise.
     Auto,
+    /// Generalized-alpha (mechanical systems: the nonlinear model).
+    #[serde(rename = "generalized_alpha")]
+    GeneralizedAlpha,
 }
 
 impl Method {
     /// Every built-in method.
-    pub const ALL: [Method; 6] = [
+    pub const ALL: [Method; 7] = [
         Method::Abm,
         Method::Rk45,
         Method::Bdf,
         Method::Magnus4,
         Method::Magnus6,
         Method::Auto,
+        Method::GeneralizedAlpha,
     ];
 
     /// Parses a method name.
@@ -708,6 +714,7 @@ impl Method {
             Method::Magnus4 => "magnus4",
             Method::Magnus6 => "magnus6",
             Method::Auto => "auto",
+            Method::GeneralizedAlpha => "generalized_alpha",
         }
     }
 
@@ -738,7 +745,7 @@ impl Method {
         y0: &[f64],
         t_out: &[f64],
     ) -> Result<flexprr_integrators::Solution, flexprr_integrators::IntegratorError> {
-        use flexprr_integrators::{Abm, Bdf, Integrator, Magnus, Rk45};
+        use flexprr_integrators::{Abm, Bdf, GeneralizedAlpha, Integrator, Magnus, Rk45};
         let t0 = t_out[0];
         match self {
             Method::Abm => Abm::new(options).solve(system, t0, y0, t_out),
@@ -746,6 +753,7 @@ impl Method {
             Method::Bdf => Bdf::new(options).solve(system, t0, y0, t_out),
             Method::Magnus4 => Magnus::magnus4(options).solve(system, t0, y0, t_out),
             Method::Magnus6 => Magnus::magnus6(options).solve(system, t0, y0, t_out),
+            Method::GeneralizedAlpha => GeneralizedAlpha::new(options).solve(system, t0, y0, t_out),
             Method::Auto => {
                 if system.linear_form().is_some() {
                     Magnus::magnus6(options).solve(system, t0, y0, t_out)

@@ -206,7 +206,15 @@ fn the_registry_resolves_names_and_reports_the_known_ones() {
     let registry = Registry::default();
     assert_eq!(
         registry.integrator_names(),
-        ["abm", "auto", "bdf", "magnus4", "magnus6", "rk45"]
+        [
+            "abm",
+            "auto",
+            "bdf",
+            "generalized_alpha",
+            "magnus4",
+            "magnus6",
+            "rk45"
+        ]
     );
     assert_eq!(registry.basis_names(), ["classical", "hermite", "sine"]);
     assert_eq!(
@@ -228,8 +236,9 @@ fn the_registry_resolves_names_and_reports_the_known_ones() {
     );
     let err = Scene::from_text("scene.toml", "scene", &text).expect_err("unknown by default");
     assert!(
-        err.to_string()
-            .contains("\"abm\", \"auto\", \"bdf\", \"magnus4\", \"magnus6\", \"rk45\""),
+        err.to_string().contains(
+            "\"abm\", \"auto\", \"bdf\", \"generalized_alpha\", \"magnus4\", \"magnus6\", \"rk45\""
+        ),
         "{err}"
     );
 }

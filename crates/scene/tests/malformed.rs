@@ -480,7 +480,7 @@ fn unknown_integrator_method() {
         "integrator.method",
         &[
             "unknown value \"ode45\"",
-            "\"abm\", \"auto\", \"bdf\", \"magnus4\", \"magnus6\", \"rk45\"",
+            "\"abm\", \"auto\", \"bdf\", \"generalized_alpha\", \"magnus4\", \"magnus6\", \"rk45\"",
         ],
     );
 }

@@ -101,14 +101,45 @@ fn the_registry_lists_the_new_methods_with_their_kinds() {
     let r = Registry::default();
     assert_eq!(
         r.integrator_names(),
-        ["abm", "auto", "bdf", "magnus4", "magnus6", "rk45"]
+        [
+            "abm",
+            "auto",
+            "bdf",
+            "generalized_alpha",
+            "magnus4",
+            "magnus6",
+            "rk45"
+        ]
     );
     assert_eq!(r.method_kind("magnus4"), Some(&MethodKind::Linear));
     assert_eq!(r.method_kind("abm"), Some(&MethodKind::General));
     assert!(matches!(
         r.method_kind("auto"),
-        Some(MethodKind::Auto { linear, general }) if linear == "magnus6" && general == "abm"
+        Some(MethodKind::Auto { linear, general, mechanical })
+            if linear == "magnus6" && general == "abm"
+                && mechanical.as_deref() == Some("generalized_alpha")
     ));
+    assert_eq!(
+        r.method_kind("generalized_alpha"),
+        Some(&MethodKind::Mechanical)
+    );
+    // auto: magnus6 for KED, generalized_alpha for a mechanical (nonlinear) model, abm else.
+    let chosen = |linear, mechanical| {
+        r.resolve_method_for("auto", linear, mechanical, "m")
+            .unwrap()
+            .name()
+            .to_string()
+    };
+    assert_eq!(chosen(true, false), "magnus6");
+    assert_eq!(chosen(false, true), "generalized_alpha");
+    assert_eq!(chosen(false, false), "abm");
+    let err = r
+        .resolve_method_for("generalized_alpha", false, false, "coupled")
+        .expect_err("refused");
+    assert!(
+        err.contains("needs a mechanical model") && err.contains("use abm"),
+        "{err}"
+    );
     let err = r.resolve_method("nope", true, "ked").expect_err("unknown");
     assert!(err.contains("unknown value \"nope\""), "{err}");
 }

@@ -255,9 +255,10 @@ fn measure_point(
 /// The registry's one-line reason.
 pub fn method_applies(scene: &Scene, method: Method) -> Result<(), String> {
     flexprr_scene::Registry::default()
-        .resolve_method(
+        .resolve_method_for(
             method.name(),
             scene.coupling == flexprr_dynamics::CouplingModel::Ked,
+            flexprr_scene::mechanical_model(scene.coupling, scene.controller.as_ref()),
             scene.coupling.name(),
         )
         .map(|_| ())

@@ -214,6 +214,48 @@ impl CorotationalElement {
         ]
     }
 
+    /// The Kelvin-Voigt damping matrix `C = B^T D_d B` (6x6, symmetric) of the nodal forces
+    /// of [`crate::NonlinearSystem`]'s strain-rate damping at `q`: the axial force
+    /// `beta_a EA u' / L0` and the end moments `beta_b (2 EI / L0) (2 th1' + th2', th1' + 2 th2')`
+    /// are linear in the rates `(u', th1', th2') = B q'`, so `C = df/dq'` exactly (with
+    /// `B = d(u, th1, th2)/dq` of [`CorotationalElement::tangent`]).
+    pub fn damping_matrix(&self, q: &[f64; 6], beta_a: f64, beta_b: f64) -> [[f64; 6]; 6] {
+        let st = self.state(q);
+        let b = Self::strain_matrix(&st);
+        let ea = beta_a * self.axial_stiffness / self.length;
+        let ei = beta_b * 2.0 * self.bending_stiffness / self.length;
+        let d = [[ea, 0.0, 0.0], [0.0, 2.0 * ei, ei], [0.0, ei, 2.0 * ei]];
+        let mut c = [[0.0; 6]; 6];
+        for i in 0..6 {
+            for j in 0..6 {
+                let mut v = 0.0;
+                for a in 0..3 {
+                    for bb in 0..3 {
+                        v += b[a][i] * d[a][bb] * b[bb][j];
+                    }
+                }
+                c[i][j] = v;
+            }
+        }
+        c
+    }
+
+    /// `B = d(u, th1, th2)/dq` at a state: `du/dq = r`, `dth_k/dq = e_k - z / l`.
+    fn strain_matrix(st: &ElementState) -> [[f64; 6]; 3] {
+        let [c, s] = st.direction;
+        let l = st.chord_length;
+        let z = [s, -c, 0.0, -s, c, 0.0];
+        let mut b = [[0.0; 6]; 3];
+        b[0] = [-c, -s, 0.0, c, s, 0.0];
+        for j in 0..6 {
+            b[1][j] = -z[j] / l;
+            b[2][j] = -z[j] / l;
+        }
+        b[1][2] += 1.0;
+        b[2][5] += 1.0;
+        b
+    }
+
     /// Consistent tangent stiffness `K = df/dq` (6x6, symmetric) at `q` (Crisfield 1991,
     /// eq. 7.23 in the notation of this module).
     pub fn tangent(&self, q: &[f64; 6]) -> [[f64; 6]; 6] {

@@ -15,6 +15,7 @@ mod equations;
 mod inertia;
 mod statics;
 mod system;
+mod tangent;
 
 pub use element::{CorotationalElement, ElementState, LocalStrain};
 pub use inertia::{ElementInertia, InertiaDerivatives, NodalMass};

@@ -230,6 +230,8 @@ pub struct NonlinearSystem {
     /// Piezoelectric patches under a vibration control law, with each end's element and
     /// position in it.
     patches: Option<(crate::patches::PatchLaw, Vec<PatchEnds>)>,
+    /// A state-sized work vector for the differenced actuator derivatives (super::tangent).
+    pub(super) tangent_work: Vec<f64>,
 }
 
 impl std::fmt::Debug for NonlinearSystem {
@@ -340,6 +342,7 @@ impl NonlinearSystem {
             point_loads: Vec::new(),
             slider_loads: [0.0; 3],
             patches: None,
+            tangent_work: vec![0.0; 2 * (3 + 3 * per_link)],
         })
     }
 
@@ -478,6 +481,7 @@ impl NonlinearSystem {
         self.actuated = Some(Actuated::new(actuation, &self.machine, t0));
         self.mass = BorderedBanded::new(3, self.per_link, MASS_BANDWIDTH, 6);
         self.generalized = vec![0.0; self.coordinates()];
+        self.tangent_work = vec![0.0; self.dim()];
         self.start_at(t0)?;
         Ok(self)
     }
@@ -571,7 +575,7 @@ impl NonlinearSystem {
 
     /// Sliders from the rigid inverse kinematics of the nominal motion, platform points from
     /// the state.
-    fn frame(&self, t: f64, y: &[f64]) -> Result<Frame, DynamicsError> {
+    pub(super) fn frame(&self, t: f64, y: &[f64]) -> Result<Frame, DynamicsError> {
         let n = self.coordinates();
         let nominal = self.trajectory.motion(t);
         let rigid = self
@@ -640,7 +644,7 @@ impl NonlinearSystem {
     }
 
     /// Assembles the nodal forces (internal plus damping) of every link into `self.forces`.
-    fn assemble(&mut self, y: &[f64], frame: &Frame) {
+    pub(super) fn assemble(&mut self, y: &[f64], frame: &Frame) {
         let ne = self.options.elements;
         let stride = 3 * (ne + 1);
         let (beta_a, beta_b) = (
@@ -916,7 +920,7 @@ impl NonlinearSystem {
 
     /// Accelerations `z''` into `acc` (the second block of `dy`): assembles and solves
     /// `M z'' = F` (`self.forces` and the actuators' forces must be assembled).
-    fn accelerations(
+    pub(super) fn accelerations(
         &mut self,
         t: f64,
         y: &[f64],
@@ -929,7 +933,7 @@ impl NonlinearSystem {
 
     /// The actuators' commands and outputs at `(t, y)` for the frame's commanded state
     /// (the control law's state rates into `rates`); their forces into `slider_forces`.
-    fn actuate(
+    pub(super) fn actuate(
         &mut self,
         t: f64,
         y: &[f64],
@@ -1099,6 +1103,15 @@ impl OdeSystem for NonlinearSystem {
         if let Err(e) = self.accelerations(t, y, &frame, dzd) {
             self.fail(e, dy);
         }
+    }
+
+    /// The mechanical form for implicit integrators (super::tangent); none when a
+    /// continuous control law adds first-order states.
+    fn second_order_form(&mut self) -> Option<&mut dyn flexprr_integrators::SecondOrderForm> {
+        if self.actuated.as_ref().is_some_and(|a| a.ode_states() > 0) {
+            return None;
+        }
+        Some(self)
     }
 
     /// A sampled controller takes its sample when a segment starts at one of its sample

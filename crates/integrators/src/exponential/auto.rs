@@ -1,15 +1,19 @@
 //! The `auto` method: the exponential integrator for systems that are linear in the state,
-//! Adams-Bashforth-Moulton for every other system.
+//! generalized-alpha for mechanical systems, Adams-Bashforth-Moulton for every other system.
 
 use super::{Magnus, MagnusOrder};
-use crate::{Abm, DynIntegrator, Interrupted, Observer, OdeSystem, Options, Solution};
+use crate::{
+    Abm, DynIntegrator, GeneralizedAlpha, Interrupted, Observer, OdeSystem, Options, Solution,
+};
 
 /// Chooses the method per system: [`Magnus`] when [`OdeSystem::linear_form`] offers the linear
-/// time-varying form (the KED modal equations), [`Abm`] otherwise (the coupled and nonlinear
-/// models, whose coefficients depend on the state, so the Magnus expansion of a linear
-/// operator does not apply).
+/// time-varying form (the KED modal equations), [`GeneralizedAlpha`] when
+/// [`OdeSystem::second_order_form`] offers a mechanical form covering the whole state (the
+/// nonlinear model: its stiff axial modes are damped, not resolved), [`Abm`] otherwise (the
+/// coupled model, whose coefficients depend on the state, so the Magnus expansion of a
+/// linear operator does not apply).
 ///
-/// The choice costs one call of `linear_form` per solve. [`Auto::choose`] tells which method a
+/// The choice costs one call of `linear_form` and `second_order_form` per solve. [`Auto::choose`] tells which method a
 /// system gets, so that a caller can record the method actually used.
 ///
 /// ```
@@ -30,12 +34,14 @@ use crate::{Abm, DynIntegrator, Interrupted, Observer, OdeSystem, Options, Solut
 #[derive(Debug, Clone)]
 pub struct Auto {
     linear: Magnus,
+    mechanical: GeneralizedAlpha,
     general: Abm,
 }
 
 impl Auto {
     /// `auto` with the 6th-order Magnus method for linear systems (the faster of the two
-    /// orders on the KED scenes, see docs/performance.md) and ABM otherwise.
+    /// orders on the KED scenes, see docs/performance.md), generalized-alpha for mechanical
+    /// systems and ABM otherwise.
     pub fn new(options: Options) -> Self {
         Self::with_order(options, MagnusOrder::Six)
     }
@@ -44,6 +50,7 @@ impl Auto {
     pub fn with_order(options: Options, order: MagnusOrder) -> Self {
         Self {
             linear: Magnus::new(options.clone(), order),
+            mechanical: GeneralizedAlpha::new(options.clone()),
             general: Abm::new(options),
         }
     }
@@ -51,9 +58,12 @@ impl Auto {
     /// The method `system` gets.
     pub fn choose(&self, system: &mut dyn OdeSystem) -> &dyn DynIntegrator {
         if system.linear_form().is_some() {
-            &self.linear
-        } else {
-            &self.general
+            return &self.linear;
+        }
+        let dim = system.dim();
+        match system.second_order_form() {
+            Some(form) if 2 * form.coordinates() == dim => &self.mechanical,
+            _ => &self.general,
         }
     }
 }

@@ -1,0 +1,761 @@
+//! The generalized-alpha method for structural dynamics, with Newton iterations on the
+//! mechanical form, local error control and dense output.
+//!
+//! # Method
+//!
+//! For `M(t, q) q'' = F(t, q, q')` ([`SecondOrderForm`](crate::SecondOrderForm)) the method of Chung & Hulbert
+//! ("A time integration algorithm for structural dynamics with improved numerical
+//! dissipation: the generalized-alpha method", *J. Appl. Mech.* 60, 1993) in the form of
+//! Arnold & Brüls ("Convergence of the generalized-alpha scheme for constrained mechanical
+//! systems", *Multibody Syst. Dyn.* 18, 2007, eqs. 8-9) advances the positions `q`, the
+//! velocities `v`, the accelerations `a_dd = q''` that satisfy the equations of motion at
+//! `t_{n+1}`, and an auxiliary acceleration `a`:
+//!
+//! ```text
+//! q_{n+1} = q_n + h v_n + h^2 (1/2 - beta) a_n + h^2 beta a_{n+1}
+//! v_{n+1} = v_n + h (1 - gamma) a_n + h gamma a_{n+1}
+//! (1 - alpha_m) a_{n+1} + alpha_m a_n = (1 - alpha_f) a_dd_{n+1} + alpha_f a_dd_n
+//! M(q_{n+1}) a_dd_{n+1} = F(t_{n+1}, q_{n+1}, v_{n+1}),     a_0 = a_dd_0
+//! ```
+//!
+//! with the parameters of the user's spectral radius at infinite frequency `rho_inf`
+//! (Chung & Hulbert 1993, eqs. 25, 17, 20):
+//! `alpha_m = (2 rho - 1)/(rho + 1)`, `alpha_f = rho/(rho + 1)`,
+//! `gamma = 1/2 - alpha_m + alpha_f`, `beta = (1 - alpha_m + alpha_f)^2 / 4`. The method is
+//! second-order accurate and unconditionally stable for linear problems; `rho_inf = 1` is the
+//! trapezoidal rule (no dissipation), `rho_inf = 0` annihilates the highest frequencies in one
+//! step. The default [`DEFAULT_SPECTRAL_RADIUS`] = 0.9 is Exudyn's (its
+//! `generalizedAlpha.spectralRadius`): the stiff axial modes of beam elements, far beyond any
+//! accuracy the steps resolve, are damped by 0.9 per step while the resolved bending modes
+//! keep their energy to second order.
+//!
+//! # Newton iterations
+//!
+//! The unknown of a step is `x = a_dd_{n+1}`; `q_{n+1} = q* + beta' h^2 x`,
+//! `v_{n+1} = v* + gamma' h x` with `beta' = beta (1 - alpha_f)/(1 - alpha_m)`,
+//! `gamma' = gamma (1 - alpha_f)/(1 - alpha_m)`. The residual `r(x) = x - M^-1 F` is what
+//! [`OdeSystem::rhs`] gives; Newton's matrix `dr/dx = M^-1 (M + gamma' h C + beta' h^2 K)`
+//! gives the corrections `(M + gamma' h C + beta' h^2 K) dx = -M r`, with the `M`, `C` and
+//! `K` of [`SecondOrderForm::matrices`](crate::SecondOrderForm::matrices). The iteration is modified Newton after CVODE
+//! (Hindmarsh et al., ACM TOMS 31, 2005): the matrices are kept for [`MATRIX_MAX_AGE`]
+//! accepted steps, renewed when an iteration converges slowly or fails, and the
+//! factorisation (dense LU with partial pivoting, faer's `lu_in_place` into preallocated
+//! storage) is kept while the step size stays within [`REFACTOR_RATIO`] of the one it was
+//! made for. The convergence test is CVODE's: the rate `R` from successive corrections and
+//! `min(1, R) |dx|_w <= 0.01`, where `|.|_w` is the weighted RMS norm of the position
+//! corrections `beta' h^2 dx` with the error test's weights (velocities are not tested: an
+//! unresolved mode's velocity is `omega` times its position), at most
+//! [`NEWTON_MAX_ITERATIONS`] iterations.
+//!
+//! # Error control and dense output
+//!
+//! The local error is estimated as in Zienkiewicz & Xie ("A simple error estimator and
+//! adaptive time stepping procedure for dynamic analysis", *Earthquake Eng. Struct. Dyn.*
+//! 20, 1991; for the generalized-alpha method Géradin & Cardona, *Flexible Multibody
+//! Dynamics*, 2001, ch. 14): the Taylor term the scheme misses in the positions,
+//! `e_q = (beta - 1/6) h^2 (a_dd_{n+1} - a_dd_n)` (`= (beta - 1/6) h^3 q'''`). The estimate
+//! is filtered through the iteration matrix, `e <- (M + gamma' h C + beta' h^2 K)^-1 M e`, as stiff solvers filter
+//! theirs (Shampine 1980; Hairer & Wanner II, IV.8, eq. 8.20 for Radau5): a mode of
+//! frequency `omega` keeps its estimate when `omega h << 1` and loses it by
+//! `1 / (1 + beta' (omega h)^2)` beyond, so the axial modes of the links, which the method
+//! damps rather than resolves, do not dictate the step. A step is accepted when the
+//! weighted RMS norm of `e_q` is at most 1 (positions only, as Zienkiewicz & Xie: the
+//! velocities of modes near `omega h ~ 1` would set the step otherwise); the next step is
+//! `h (0.9 / err^(1/3))` bounded to `[0.2, 5] h`, and not increased below [`MIN_INCREASE`]
+//! (each change of step may cost a factorisation). Dense output is cubic Hermite
+//! interpolation of `q` from `(q, v)` and of `v` from `(v, a_dd)` at both ends of the step.
+//!
+//! Nothing is allocated after [`crate::Integrator::start`].
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
+use faer::perm::PermRef;
+use faer::{Mat, MatMut, Par};
+
+use crate::common::Span;
+use crate::{IntegratorError, OdeSystem, Options, Stats, Stepper, error_norm, initial_step};
+
+/// The spectral radius at infinite frequency used by [`GeneralizedAlpha::new`] (Exudyn's
+/// default).
+pub const DEFAULT_SPECTRAL_RADIUS: f64 = 0.9;
+
+/// Accepted steps after which the matrices `M`, `C`, `K` are re-evaluated.
+pub const MATRIX_MAX_AGE: usize = 50;
+
+/// The factorisation is kept while `h / h_factor` stays within `[1 / REFACTOR_RATIO,
+/// REFACTOR_RATIO]`: in a stiff mode (`beta' h^2 K >> M`) a matrix made for another step
+/// converges at the rate `|h^2 / h_factor^2 - 1|`, so any real change refactors.
+pub const REFACTOR_RATIO: f64 = 1.0 + 1e-9;
+
+/// A proposed step increase below this ratio is not taken.
+pub const MIN_INCREASE: f64 = 1.25;
+
+/// Newton iterations allowed per attempt.
+pub const NEWTON_MAX_ITERATIONS: usize = 8;
+
+/// A convergence rate above this renews the matrices at the next step.
+const SLOW_RATE: f64 = 0.3;
+
+/// Weight of the Newton convergence test relative to the error test (CVODE's `nlscoef` is 0.1;
+/// 0.01 halves the error of the 30 Hz collapse at rtol 1e-5 for fewer steps).
+const NEWTON_COEFFICIENT: f64 = 0.01;
+
+/// Consecutive failed attempts before giving up.
+const MAX_CONSECUTIVE_FAILURES: usize = 10;
+
+/// Step reduction after a Newton failure with fresh matrices.
+const NEWTON_FAILURE_FACTOR: f64 = 0.25;
+
+const SAFETY: f64 = 0.9;
+const MIN_FACTOR: f64 = 0.2;
+const MAX_FACTOR: f64 = 5.0;
+
+/// The generalized-alpha method (see the module documentation).
+///
+/// Needs a system with a [`SecondOrderForm`](crate::SecondOrderForm) (state `(q, q')`); others are refused at
+/// [`crate::Integrator::start`] with a message saying so.
+#[derive(Debug, Clone)]
+pub struct GeneralizedAlpha {
+    /// Shared options.
+    pub options: Options,
+    /// Spectral radius at infinite frequency, `0 <= rho_inf <= 1`.
+    pub spectral_radius: f64,
+}
+
+impl GeneralizedAlpha {
+    /// The method with [`DEFAULT_SPECTRAL_RADIUS`].
+    pub fn new(options: Options) -> Self {
+        Self {
+            options,
+            spectral_radius: DEFAULT_SPECTRAL_RADIUS,
+        }
+    }
+
+    /// Sets the spectral radius at infinite frequency (`0` to `1`).
+    #[must_use]
+    pub fn spectral_radius(mut self, rho_inf: f64) -> Self {
+        self.spectral_radius = rho_inf;
+        self
+    }
+}
+
+/// The parameters of one `rho_inf` (Chung & Hulbert 1993, eqs. 25, 17, 20).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Parameters {
+    /// `alpha_m = (2 rho - 1) / (rho + 1)`.
+    pub alpha_m: f64,
+    /// `alpha_f = rho / (rho + 1)`.
+    pub alpha_f: f64,
+    /// `gamma = 1/2 - alpha_m + alpha_f`.
+    pub gamma: f64,
+    /// `beta = (1 - alpha_m + alpha_f)^2 / 4`.
+    pub beta: f64,
+}
+
+impl Parameters {
+    /// The parameters for `rho_inf` in `[0, 1]`.
+    pub fn new(rho_inf: f64) -> Self {
+        let alpha_m = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+        let alpha_f = rho_inf / (rho_inf + 1.0);
+        let gamma = 0.5 - alpha_m + alpha_f;
+        let beta = 0.25 * (1.0 - alpha_m + alpha_f).powi(2);
+        Self {
+            alpha_m,
+            alpha_f,
+            gamma,
+            beta,
+        }
+    }
+
+    /// `beta' = beta (1 - alpha_f) / (1 - alpha_m)`: `dq_{n+1} / d a_dd_{n+1}` over `h^2`.
+    fn beta_prime(&self) -> f64 {
+        self.beta * (1.0 - self.alpha_f) / (1.0 - self.alpha_m)
+    }
+
+    /// `gamma' = gamma (1 - alpha_f) / (1 - alpha_m)`: `dv_{n+1} / d a_dd_{n+1}` over `h`.
+    fn gamma_prime(&self) -> f64 {
+        self.gamma * (1.0 - self.alpha_f) / (1.0 - self.alpha_m)
+    }
+}
+
+/// Why one attempt at a step failed.
+#[derive(Debug)]
+enum AttemptFailure {
+    /// Newton did not converge; `non_finite` names a component if the rhs was NaN/inf.
+    Newton { non_finite: Option<usize> },
+    /// The iteration matrix had a zero (or non-finite) pivot.
+    Singular,
+    /// A matrix of the form has a non-finite entry in this row.
+    NonFiniteMatrix { row: usize },
+}
+
+/// The state of one generalized-alpha integration.
+pub struct GeneralizedAlphaStepper {
+    options: Options,
+    parameters: Parameters,
+    /// Coordinates `n` (the state has `2 n` components).
+    n: usize,
+    span: Span,
+    direction: f64,
+    /// Step size magnitude wanted for the next step.
+    h_next: f64,
+    /// `(q, v)`, `a_dd` and `a` at the current point.
+    y: Vec<f64>,
+    acc: Vec<f64>,
+    aux: Vec<f64>,
+    /// The same at the start of the last accepted step (dense output).
+    y_old: Vec<f64>,
+    acc_old: Vec<f64>,
+    /// The attempt's state, unknown `x = a_dd_{n+1}` and fixed parts `(q*, v*)`.
+    y_new: Vec<f64>,
+    x: Vec<f64>,
+    fixed: Vec<f64>,
+    f: Vec<f64>,
+    delta: Vec<f64>,
+    error: Vec<f64>,
+    mass: Mat<f64>,
+    damping: Mat<f64>,
+    stiffness: Mat<f64>,
+    lu: Mat<f64>,
+    row_perm: Vec<usize>,
+    row_perm_inv: Vec<usize>,
+    lu_stack: MemBuffer,
+    /// Signed step the factorisation was made for, if any.
+    lu_h: Option<f64>,
+    /// The matrices were evaluated at the current accepted point.
+    matrices_current: bool,
+    /// Whether the matrices were ever evaluated.
+    matrices_valid: bool,
+    steps_since_matrices: usize,
+    /// Newton rate estimate carried between steps while the factorisation is unchanged.
+    newton_rate: f64,
+}
+
+impl std::fmt::Debug for GeneralizedAlphaStepper {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GeneralizedAlphaStepper")
+            .field("t", &self.span.t)
+            .field("h_next", &self.h_next)
+            .field("parameters", &self.parameters)
+            .field("stats", &self.span.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+/// First non-finite entry of `v`.
+fn first_non_finite(v: &[f64]) -> Option<usize> {
+    v.iter().position(|x| !x.is_finite())
+}
+
+/// `out = sign * mass x` column by column (contiguous, vectorizable).
+#[inline]
+fn multiply(mass: &Mat<f64>, x: &[f64], sign: f64, out: &mut [f64]) {
+    out.fill(0.0);
+    for (j, xj) in x.iter().enumerate() {
+        let w = sign * xj;
+        if w != 0.0 {
+            for (o, m) in out.iter_mut().zip(mass.col_as_slice(j)) {
+                *o += w * m;
+            }
+        }
+    }
+}
+
+/// Cubic Hermite interpolation at `theta` in `[0, 1]` of a step of length `h` from values
+/// `p0, p1` and derivatives `d0, d1`.
+#[inline]
+fn hermite(theta: f64, h: f64, p0: f64, d0: f64, p1: f64, d1: f64) -> f64 {
+    let t2 = theta * theta;
+    let t3 = t2 * theta;
+    (2.0 * t3 - 3.0 * t2 + 1.0) * p0
+        + (t3 - 2.0 * t2 + theta) * h * d0
+        + (-2.0 * t3 + 3.0 * t2) * p1
+        + (t3 - t2) * h * d1
+}
+
+impl GeneralizedAlphaStepper {
+    /// Evaluates `M`, `C`, `K` at the current accepted point.
+    fn evaluate_matrices<S: OdeSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+    ) -> Result<(), AttemptFailure> {
+        self.mass.fill(0.0);
+        self.damping.fill(0.0);
+        self.stiffness.fill(0.0);
+        if let Some(form) = system.second_order_form() {
+            form.matrices(
+                self.span.t,
+                &self.y,
+                self.mass.as_mut(),
+                self.damping.as_mut(),
+                self.stiffness.as_mut(),
+            );
+        }
+        self.span.stats.jacobian_evaluations += 1;
+        self.matrices_current = true;
+        self.matrices_valid = true;
+        self.steps_since_matrices = 0;
+        self.lu_h = None;
+        let n = self.n;
+        for j in 0..n {
+            for i in 0..n {
+                let finite = self.mass[(i, j)].is_finite()
+                    && self.damping[(i, j)].is_finite()
+                    && self.stiffness[(i, j)].is_finite();
+                if !finite {
+                    return Err(AttemptFailure::NonFiniteMatrix { row: i });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Forms and factors `M + gamma' h C + beta' h^2 K` for the signed step `h`.
+    fn factor(&mut self, h: f64) -> Result<(), AttemptFailure> {
+        let n = self.n;
+        let cc = self.parameters.gamma_prime() * h;
+        let ck = self.parameters.beta_prime() * h * h;
+        self.span.stats.lu_decompositions += 1;
+        for j in 0..n {
+            let (m, c, k) = (
+                self.mass.col_as_slice(j),
+                self.damping.col_as_slice(j),
+                self.stiffness.col_as_slice(j),
+            );
+            for (i, a) in self.lu.col_as_slice_mut(j).iter_mut().enumerate() {
+                *a = m[i] + cc * c[i] + ck * k[i];
+            }
+        }
+        lu_factor::lu_in_place(
+            self.lu.as_mut(),
+            &mut self.row_perm,
+            &mut self.row_perm_inv,
+            Par::Seq,
+            MemStack::new(&mut self.lu_stack),
+            Default::default(),
+        );
+        self.newton_rate = 1.0;
+        if (0..n).any(|i| {
+            let p = self.lu[(i, i)];
+            !(p.is_finite() && p.abs() > f64::MIN_POSITIVE)
+        }) {
+            self.lu_h = None;
+            return Err(AttemptFailure::Singular);
+        }
+        self.lu_h = Some(h);
+        Ok(())
+    }
+
+    /// Solves with the current factorisation in place in `self.delta`.
+    fn solve_in_place(&mut self) {
+        let n = self.n;
+        let perm = PermRef::new_checked(&self.row_perm, &self.row_perm_inv, n);
+        let rhs = MatMut::from_column_major_slice_mut(&mut self.delta, n, 1);
+        lu_solve::solve_in_place(
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            perm,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut self.lu_stack),
+        );
+    }
+
+    /// Writes `(q, v)` of the attempt from the unknown `x` into `y_new`.
+    fn positions_from_unknown(&mut self, h: f64) {
+        let n = self.n;
+        let cq = self.parameters.beta_prime() * h * h;
+        let cv = self.parameters.gamma_prime() * h;
+        for i in 0..n {
+            self.y_new[i] = self.fixed[i] + cq * self.x[i];
+            self.y_new[n + i] = self.fixed[n + i] + cv * self.x[i];
+        }
+    }
+
+    /// Weighted RMS norm of the position corrections `beta' h^2 dx` of `dx = self.delta`.
+    fn correction_norm(&self, h: f64) -> f64 {
+        let n = self.n;
+        let cq = self.parameters.beta_prime() * h * h;
+        let mut sum = 0.0;
+        for i in 0..n {
+            let scale = self.options.atol.get(i) + self.options.rtol * self.y[i].abs();
+            let r = cq * self.delta[i] / scale;
+            sum += r * r;
+        }
+        (sum / n as f64).sqrt()
+    }
+
+    /// One attempt at a step of signed size `h` to `t_new`: predicts, then iterates Newton
+    /// until the correction is small. On success `x` holds `a_dd_{n+1}` and `y_new` the
+    /// state.
+    fn attempt<S: OdeSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        t_new: f64,
+        h: f64,
+    ) -> Result<(), AttemptFailure> {
+        let n = self.n;
+        let p = self.parameters;
+        if !self.matrices_valid
+            || (self.steps_since_matrices >= MATRIX_MAX_AGE && !self.matrices_current)
+        {
+            self.evaluate_matrices(system)?;
+        }
+        let reuse = self
+            .lu_h
+            .is_some_and(|hf| (h / hf) <= REFACTOR_RATIO && (hf / h) <= REFACTOR_RATIO);
+        if !reuse {
+            self.factor(h)?;
+        }
+        // Fixed parts: everything of q_{n+1}, v_{n+1} but the terms in x.
+        let scale = 1.0 / (1.0 - p.alpha_m);
+        for i in 0..n {
+            let known = scale * (p.alpha_f * self.acc[i] - p.alpha_m * self.aux[i]);
+            self.fixed[i] = self.y[i]
+                + h * self.y[n + i]
+                + h * h * ((0.5 - p.beta) * self.aux[i] + p.beta * known);
+            self.fixed[n + i] =
+                self.y[n + i] + h * ((1.0 - p.gamma) * self.aux[i] + p.gamma * known);
+        }
+        self.x.copy_from_slice(&self.acc);
+        let mut previous = 0.0;
+        for m in 0..NEWTON_MAX_ITERATIONS {
+            self.positions_from_unknown(h);
+            system.rhs(t_new, &self.y_new, &mut self.f);
+            self.span.stats.rhs_evaluations += 1;
+            self.span.stats.newton_iterations += 1;
+            if let Some(component) = first_non_finite(&self.f) {
+                return Err(AttemptFailure::Newton {
+                    non_finite: Some(component),
+                });
+            }
+            // delta = -M r, r = x - M^-1 F.
+            for i in 0..n {
+                self.error[i] = self.x[i] - self.f[n + i];
+            }
+            multiply(&self.mass, &self.error[..n], -1.0, &mut self.delta);
+            self.solve_in_place();
+            for i in 0..n {
+                self.x[i] += self.delta[i];
+            }
+            let norm = self.correction_norm(h);
+            if !norm.is_finite() {
+                return Err(AttemptFailure::Newton { non_finite: None });
+            }
+            if m > 0 {
+                self.newton_rate = (0.3 * self.newton_rate).max(norm / previous);
+                if norm > 2.0 * previous {
+                    return Err(AttemptFailure::Newton { non_finite: None });
+                }
+            }
+            if norm * self.newton_rate.min(1.0) <= NEWTON_COEFFICIENT || norm == 0.0 {
+                self.positions_from_unknown(h);
+                return Ok(());
+            }
+            previous = norm;
+        }
+        Err(AttemptFailure::Newton { non_finite: None })
+    }
+
+    /// The weighted norm of the local error estimate of the attempt (module documentation),
+    /// filtered through the iteration matrix.
+    fn local_error(&mut self, h: f64) -> f64 {
+        let n = self.n;
+        let c = (self.parameters.beta - 1.0 / 6.0) * h * h;
+        for i in 0..n {
+            self.error[i] = c * (self.x[i] - self.acc[i]);
+        }
+        multiply(&self.mass, &self.error[..n], 1.0, &mut self.delta);
+        self.solve_in_place();
+        for i in 0..n {
+            self.error[i] = self.delta[i];
+            self.error[n + i] = 0.0;
+        }
+        error_norm(
+            &self.error[..n],
+            &self.y[..n],
+            &self.y_new[..n],
+            &self.options,
+        )
+    }
+
+    /// Accepts the attempt: the new point becomes the current one.
+    fn accept(&mut self) {
+        let p = self.parameters;
+        let scale = 1.0 / (1.0 - p.alpha_m);
+        for i in 0..self.n {
+            self.aux[i] = scale
+                * ((1.0 - p.alpha_f) * self.x[i] + p.alpha_f * self.acc[i]
+                    - p.alpha_m * self.aux[i]);
+        }
+        self.y_old.copy_from_slice(&self.y);
+        self.acc_old.copy_from_slice(&self.acc);
+        self.y.copy_from_slice(&self.y_new);
+        self.acc.copy_from_slice(&self.x);
+    }
+
+    /// Turns a failed attempt into the reaction: `Ok(true)` to retry the same step with
+    /// renewed matrices, `Ok(false)` to retry with a smaller step, `Err` to give up.
+    fn recover<S: OdeSystem + ?Sized>(
+        &mut self,
+        system: &mut S,
+        failure: AttemptFailure,
+        failures: usize,
+        t_new: f64,
+        last_non_finite: &mut Option<usize>,
+    ) -> Result<bool, IntegratorError> {
+        if let AttemptFailure::NonFiniteMatrix { row } = failure {
+            return Err(IntegratorError::NonFinite {
+                t: self.span.t,
+                component: row,
+            });
+        }
+        let singular = matches!(failure, AttemptFailure::Singular);
+        if let AttemptFailure::Newton { non_finite } = failure {
+            *last_non_finite = non_finite;
+        }
+        if failures >= MAX_CONSECUTIVE_FAILURES {
+            return Err(if singular {
+                IntegratorError::SingularMatrix { t: self.span.t }
+            } else if let Some(component) = *last_non_finite {
+                IntegratorError::NonFinite {
+                    t: t_new,
+                    component,
+                }
+            } else {
+                IntegratorError::NewtonFailure {
+                    t: self.span.t,
+                    h: self.h_next,
+                }
+            });
+        }
+        if !singular && !self.matrices_current && last_non_finite.is_none() {
+            if let Err(AttemptFailure::NonFiniteMatrix { row }) = self.evaluate_matrices(system) {
+                return Err(IntegratorError::NonFinite {
+                    t: self.span.t,
+                    component: row,
+                });
+            }
+            return Ok(true);
+        }
+        Ok(false)
+    }
+}
+
+impl Stepper for GeneralizedAlphaStepper {
+    fn t(&self) -> f64 {
+        self.span.t
+    }
+
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    fn t_previous(&self) -> f64 {
+        self.span.t_previous
+    }
+
+    fn step<S: OdeSystem + ?Sized>(&mut self, system: &mut S) -> Result<(), IntegratorError> {
+        self.span.check_open()?;
+        let mut h_abs = self.h_next.min(self.options.max_step);
+        let mut failures = 0usize;
+        let mut rejected = false;
+        let mut last_non_finite: Option<usize> = None;
+        loop {
+            self.span.check_budget(self.options.max_steps)?;
+            self.span
+                .check_step_size(h_abs * self.direction, last_non_finite)?;
+            let (h, last) = self
+                .span
+                .land(self.direction * h_abs, self.options.max_step);
+            let t_new = if last {
+                self.span.t_end
+            } else {
+                self.span.t + h
+            };
+            if let Err(failure) = self.attempt(system, t_new, h) {
+                self.span.stats.rejected_steps += 1;
+                failures += 1;
+                rejected = true;
+                let renewed =
+                    self.recover(system, failure, failures, t_new, &mut last_non_finite)?;
+                if !renewed {
+                    h_abs = h.abs() * NEWTON_FAILURE_FACTOR;
+                }
+                continue;
+            }
+            let error = self.local_error(h);
+            if error.is_nan() || error > 1.0 {
+                self.span.stats.rejected_steps += 1;
+                rejected = true;
+                let factor = if error.is_finite() {
+                    (SAFETY * error.powf(-1.0 / 3.0)).max(MIN_FACTOR)
+                } else {
+                    MIN_FACTOR
+                };
+                h_abs = h.abs() * factor;
+                continue;
+            }
+            if let Some(component) = first_non_finite(&self.y_new) {
+                return Err(IntegratorError::NonFinite {
+                    t: t_new,
+                    component,
+                });
+            }
+            self.accept();
+            self.span.advance(t_new, last);
+            self.span.stats.accepted_steps += 1;
+            self.span.stats.record_order(2);
+            self.steps_since_matrices += 1;
+            self.matrices_current = false;
+            if self.newton_rate > SLOW_RATE {
+                // Renew the matrices before the next step rather than after its failure.
+                self.steps_since_matrices = MATRIX_MAX_AGE;
+            }
+            if last {
+                self.span.finished = true;
+                return Ok(());
+            }
+            let factor = if error > 0.0 {
+                (SAFETY * error.powf(-1.0 / 3.0)).clamp(MIN_FACTOR, MAX_FACTOR)
+            } else {
+                MAX_FACTOR
+            };
+            self.h_next = if rejected || (1.0..MIN_INCREASE).contains(&factor) {
+                h.abs().min(h.abs() * factor)
+            } else {
+                h.abs() * factor
+            };
+            return Ok(());
+        }
+    }
+
+    fn interpolate(&self, t: f64, out: &mut [f64]) {
+        let n = self.n;
+        let h = self.span.t - self.span.t_previous;
+        if h == 0.0 {
+            out.copy_from_slice(&self.y);
+            return;
+        }
+        let theta = (t - self.span.t_previous) / h;
+        let (y0, y1) = (&self.y_old, &self.y);
+        for i in 0..n {
+            out[i] = hermite(theta, h, y0[i], y0[n + i], y1[i], y1[n + i]);
+            out[n + i] = hermite(theta, h, y0[n + i], self.acc_old[i], y1[n + i], self.acc[i]);
+        }
+    }
+
+    fn stats(&self) -> &Stats {
+        &self.span.stats
+    }
+}
+
+impl crate::Integrator for GeneralizedAlpha {
+    type Stepper = GeneralizedAlphaStepper;
+
+    fn name(&self) -> &'static str {
+        "generalized_alpha"
+    }
+
+    fn options(&self) -> &Options {
+        &self.options
+    }
+
+    fn start<S: OdeSystem + ?Sized>(
+        &self,
+        system: &mut S,
+        t0: f64,
+        y0: &[f64],
+        t_end: f64,
+    ) -> Result<GeneralizedAlphaStepper, IntegratorError> {
+        let dim = system.dim();
+        crate::common::validate_start(&self.options, dim, y0, t0, t_end)?;
+        let rho = self.spectral_radius;
+        if !(0.0..=1.0).contains(&rho) {
+            return Err(IntegratorError::InvalidOptions(format!(
+                "the generalized-alpha spectral radius must be between 0 and 1, got {rho}"
+            )));
+        }
+        let Some(form) = system.second_order_form() else {
+            return Err(IntegratorError::InvalidInput(
+                "generalized_alpha needs a mechanical system (M q'' = F with its mass and \
+                 stiffness matrices); this one has none: use abm, rk45 or bdf"
+                    .to_string(),
+            ));
+        };
+        let n = form.coordinates();
+        if 2 * n != dim {
+            return Err(IntegratorError::InvalidInput(format!(
+                "generalized_alpha integrates states (q, q') only: this system has {n} \
+                 coordinates and {} further first-order states; use abm, rk45 or bdf",
+                dim as isize - 2 * n as isize
+            )));
+        }
+        let mut stats = Stats {
+            orders: vec![0; 3],
+            ..Stats::default()
+        };
+        let direction = (t_end - t0).signum();
+        let mut f0 = vec![0.0; dim];
+        system.rhs(t0, y0, &mut f0);
+        stats.rhs_evaluations += 1;
+        if let Some(component) = first_non_finite(&f0) {
+            return Err(IntegratorError::NonFinite { t: t0, component });
+        }
+        let h_max = self.options.max_step.min((t_end - t0).abs());
+        let h0 = match self.options.initial_step {
+            Some(h) => h.min(h_max),
+            None => {
+                let mut work = vec![0.0; 2 * dim];
+                stats.rhs_evaluations += 1;
+                initial_step(
+                    system,
+                    t0,
+                    y0,
+                    &f0,
+                    2,
+                    direction,
+                    h_max,
+                    &self.options,
+                    &mut work,
+                )
+            }
+        };
+        let acc = f0[n..].to_vec();
+        let scratch = StackReq::any_of(&[
+            lu_factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default()),
+            lu_solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq),
+        ]);
+        Ok(GeneralizedAlphaStepper {
+            options: self.options.clone(),
+            parameters: Parameters::new(rho),
+            n,
+            span: Span::new(t0, t_end, stats),
+            direction,
+            h_next: h0,
+            y: y0.to_vec(),
+            aux: acc.clone(),
+            acc_old: acc.clone(),
+            acc,
+            y_old: y0.to_vec(),
+            y_new: vec![0.0; dim],
+            x: vec![0.0; n],
+            fixed: vec![0.0; dim],
+            f: f0,
+            delta: vec![0.0; n],
+            error: vec![0.0; dim],
+            mass: Mat::zeros(n, n),
+            damping: Mat::zeros(n, n),
+            stiffness: Mat::zeros(n, n),
+            lu: Mat::zeros(n, n),
+            row_perm: vec![0; n],
+            row_perm_inv: vec![0; n],
+            lu_stack: MemBuffer::new(scratch),
+            lu_h: None,
+            matrices_current: false,
+            matrices_valid: false,
+            steps_since_matrices: 0,
+            newton_rate: 1.0,
+        })
+    }
+}
