@@ -53,11 +53,8 @@ fn spectrum(y: &[f64]) -> Vec<f64> {
 fn a_hammer_blow_on_the_nonlinear_links_rings_at_the_linear_modes() {
     let at = Pose::new(0.0, 0.0, 45f64.to_radians());
     let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
-    // Lumped nodal masses: the consistent mass's highest axial modes are higher, and RK45 at
-    // this tolerance would need over a million steps for the 0.25 s record.
     let options = NonlinearOptions {
         elements: 8,
-        mass: flexprr_dynamics::nonlinear::NodalMass::Lumped,
         ..NonlinearOptions::paper(paper::YOUNGS_MODULUS)
     };
     let mut model = NonlinearSystem::new(machine, rest(at), options).unwrap();
