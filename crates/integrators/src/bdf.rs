@@ -46,12 +46,9 @@
 // Index loops below mirror the formulas (rows and columns of small coefficient tables).
 #![allow(clippy::needless_range_loop)]
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
-use faer::perm::PermRef;
-use faer::{Mat, MatMut, Par};
+use faer::Mat;
 
-use crate::common::Span;
+use crate::common::{DenseLu, Span};
 use crate::{
     IntegratorError, OdeSystem, Options, Stats, Stepper, error_norm, finite_difference_jacobian,
     initial_step,
@@ -237,10 +234,7 @@ pub struct BdfStepper {
     /// `f(t_n, y_n)` and work space for differenced Jacobians.
     jacobian_f0: Vec<f64>,
     jacobian_work: Vec<f64>,
-    lu: Mat<f64>,
-    row_perm: Vec<usize>,
-    row_perm_inv: Vec<usize>,
-    lu_stack: MemBuffer,
+    lu: DenseLu,
     /// `c` of the current factorization, if any.
     lu_c: Option<f64>,
     /// `c` when the Jacobian was evaluated, if ever.
@@ -361,22 +355,11 @@ impl BdfStepper {
         for j in 0..n {
             for i in 0..n {
                 let identity = if i == j { 1.0 } else { 0.0 };
-                self.lu[(i, j)] = identity - c * self.jacobian[(i, j)];
+                self.lu.matrix[(i, j)] = identity - c * self.jacobian[(i, j)];
             }
         }
-        lu_factor::lu_in_place(
-            self.lu.as_mut(),
-            &mut self.row_perm,
-            &mut self.row_perm_inv,
-            Par::Seq,
-            MemStack::new(&mut self.lu_stack),
-            Default::default(),
-        );
         self.newton_rate = 1.0;
-        if (0..n).any(|i| {
-            let p = self.lu[(i, i)];
-            !(p.is_finite() && p.abs() > f64::MIN_POSITIVE)
-        }) {
+        if !self.lu.factor() {
             self.lu_c = None;
             return Err(AttemptFailure::Singular);
         }
@@ -386,17 +369,7 @@ impl BdfStepper {
 
     /// Solves `(I - c J) x = delta` in place with the current factorization.
     fn solve_in_place(&mut self) {
-        let n = self.dim;
-        let perm = PermRef::new_checked(&self.row_perm, &self.row_perm_inv, n);
-        let rhs = MatMut::from_column_major_slice_mut(&mut self.delta, n, 1);
-        lu_solve::solve_in_place(
-            self.lu.as_ref(),
-            self.lu.as_ref(),
-            perm,
-            rhs,
-            Par::Seq,
-            MemStack::new(&mut self.lu_stack),
-        );
+        self.lu.solve_in_place(&mut self.delta);
     }
 
     /// Weighted RMS norm of `v` with the Newton weights.
@@ -791,10 +764,6 @@ impl crate::Integrator for Bdf {
         for i in 0..n {
             differences[n + i] = h * f0[i];
         }
-        let scratch = StackReq::any_of(&[
-            lu_factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default()),
-            lu_solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq),
-        ]);
         Ok(BdfStepper {
             options: self.options.clone(),
             coefficients: Coefficients::new(self.variant),
@@ -821,10 +790,7 @@ impl crate::Integrator for Bdf {
             jacobian: Mat::zeros(n, n),
             jacobian_f0: vec![0.0; n],
             jacobian_work: vec![0.0; 2 * n],
-            lu: Mat::zeros(n, n),
-            row_perm: vec![0; n],
-            row_perm_inv: vec![0; n],
-            lu_stack: MemBuffer::new(scratch),
+            lu: DenseLu::new(n),
             lu_c: None,
             jacobian_c: None,
             jacobian_current: false,

@@ -2,6 +2,11 @@
 //! the stepper's span ([`Span`]: where it is, where it ends, its statistics and the checks
 //! every step makes).
 
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
+use faer::perm::PermRef;
+use faer::{Mat, MatMut, Par};
+
 use crate::{IntegratorError, OdeSystem, Options, Stats};
 
 /// Weighted RMS norm of a local error estimate (Hairer, Norsett & Wanner I, eq. II.4.11):
@@ -222,6 +227,65 @@ impl Span {
     pub(crate) fn advance(&mut self, t_new: f64, last: bool) {
         self.t_previous = self.t;
         self.t = if last { self.t_end } else { t_new };
+    }
+}
+
+/// A dense `n x n` LU factorisation with partial pivoting (faer), with its permutation and
+/// scratch held for reuse: the implicit steppers write their iteration matrix into
+/// [`DenseLu::matrix`], factor it and solve with it without allocating.
+pub(crate) struct DenseLu {
+    /// The matrix to factor; its LU factors after [`DenseLu::factor`].
+    pub(crate) matrix: Mat<f64>,
+    row_perm: Vec<usize>,
+    row_perm_inv: Vec<usize>,
+    stack: MemBuffer,
+}
+
+impl DenseLu {
+    /// Storage for an `n x n` matrix and one right-hand side.
+    pub(crate) fn new(n: usize) -> Self {
+        let scratch = StackReq::any_of(&[
+            lu_factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default()),
+            lu_solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq),
+        ]);
+        Self {
+            matrix: Mat::zeros(n, n),
+            row_perm: vec![0; n],
+            row_perm_inv: vec![0; n],
+            stack: MemBuffer::new(scratch),
+        }
+    }
+
+    /// Factors [`DenseLu::matrix`] in place; `false` when a pivot is zero or not finite (the
+    /// matrix is singular to working precision).
+    pub(crate) fn factor(&mut self) -> bool {
+        lu_factor::lu_in_place(
+            self.matrix.as_mut(),
+            &mut self.row_perm,
+            &mut self.row_perm_inv,
+            Par::Seq,
+            MemStack::new(&mut self.stack),
+            Default::default(),
+        );
+        (0..self.matrix.nrows()).all(|i| {
+            let p = self.matrix[(i, i)];
+            p.is_finite() && p.abs() > f64::MIN_POSITIVE
+        })
+    }
+
+    /// Solves with the factors in place in `rhs`.
+    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        let n = self.matrix.nrows();
+        let perm = PermRef::new_checked(&self.row_perm, &self.row_perm_inv, n);
+        let rhs = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        lu_solve::solve_in_place(
+            self.matrix.as_ref(),
+            self.matrix.as_ref(),
+            perm,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut self.stack),
+        );
     }
 }
 

@@ -67,12 +67,9 @@
 //!
 //! Nothing is allocated after [`crate::Integrator::start`].
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
-use faer::perm::PermRef;
-use faer::{Mat, MatMut, Par};
+use faer::Mat;
 
-use crate::common::Span;
+use crate::common::{DenseLu, Span};
 use crate::{IntegratorError, OdeSystem, Options, Stats, Stepper, error_norm, initial_step};
 
 /// The spectral radius at infinite frequency used by [`GeneralizedAlpha::new`] (Exudyn's
@@ -216,10 +213,7 @@ pub struct GeneralizedAlphaStepper {
     mass: Mat<f64>,
     damping: Mat<f64>,
     stiffness: Mat<f64>,
-    lu: Mat<f64>,
-    row_perm: Vec<usize>,
-    row_perm_inv: Vec<usize>,
-    lu_stack: MemBuffer,
+    lu: DenseLu,
     /// Signed step the factorisation was made for, if any.
     lu_h: Option<f64>,
     /// The matrices were evaluated at the current accepted point.
@@ -322,23 +316,12 @@ impl GeneralizedAlphaStepper {
                 self.damping.col_as_slice(j),
                 self.stiffness.col_as_slice(j),
             );
-            for (i, a) in self.lu.col_as_slice_mut(j).iter_mut().enumerate() {
+            for (i, a) in self.lu.matrix.col_as_slice_mut(j).iter_mut().enumerate() {
                 *a = m[i] + cc * c[i] + ck * k[i];
             }
         }
-        lu_factor::lu_in_place(
-            self.lu.as_mut(),
-            &mut self.row_perm,
-            &mut self.row_perm_inv,
-            Par::Seq,
-            MemStack::new(&mut self.lu_stack),
-            Default::default(),
-        );
         self.newton_rate = 1.0;
-        if (0..n).any(|i| {
-            let p = self.lu[(i, i)];
-            !(p.is_finite() && p.abs() > f64::MIN_POSITIVE)
-        }) {
+        if !self.lu.factor() {
             self.lu_h = None;
             return Err(AttemptFailure::Singular);
         }
@@ -348,17 +331,7 @@ impl GeneralizedAlphaStepper {
 
     /// Solves with the current factorisation in place in `self.delta`.
     fn solve_in_place(&mut self) {
-        let n = self.n;
-        let perm = PermRef::new_checked(&self.row_perm, &self.row_perm_inv, n);
-        let rhs = MatMut::from_column_major_slice_mut(&mut self.delta, n, 1);
-        lu_solve::solve_in_place(
-            self.lu.as_ref(),
-            self.lu.as_ref(),
-            perm,
-            rhs,
-            Par::Seq,
-            MemStack::new(&mut self.lu_stack),
-        );
+        self.lu.solve_in_place(&mut self.delta);
     }
 
     /// Writes `(q, v)` of the attempt from the unknown `x` into `y_new`.
@@ -722,10 +695,6 @@ impl crate::Integrator for GeneralizedAlpha {
             }
         };
         let acc = f0[n..].to_vec();
-        let scratch = StackReq::any_of(&[
-            lu_factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default()),
-            lu_solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq),
-        ]);
         Ok(GeneralizedAlphaStepper {
             options: self.options.clone(),
             parameters: Parameters::new(rho),
@@ -747,10 +716,7 @@ impl crate::Integrator for GeneralizedAlpha {
             mass: Mat::zeros(n, n),
             damping: Mat::zeros(n, n),
             stiffness: Mat::zeros(n, n),
-            lu: Mat::zeros(n, n),
-            row_perm: vec![0; n],
-            row_perm_inv: vec![0; n],
-            lu_stack: MemBuffer::new(scratch),
+            lu: DenseLu::new(n),
             lu_h: None,
             matrices_current: false,
             matrices_valid: false,
