@@ -125,8 +125,14 @@ fn the_modal_test_identifies_the_pinned_pinned_sines() {
     );
     assert!(worst[0] < 0.01 && worst[1] < 0.01, "{worst:?}");
     // The paper's observations: nothing moves at the joints (points 1, 9), and the second
-    // mode's midpoint (point 5) is still.
-    assert!(rows[0][2].abs() < 1e-9 && rows[8][2].abs() < 1e-9);
+    // mode's midpoint (point 5) is still. The slider joint is locked; the platform joint
+    // moves with the platform on the links' axial springs, by a few thousandths of the
+    // mid-span (`xi` times its motion at `xi = 1`, fifth decimal at point 2).
+    println!(
+        "mode 1 at the platform joint: {:.2e} of the largest",
+        rows[8][2]
+    );
+    assert!(rows[0][2].abs() < 1e-9 && rows[8][2].abs() < 5e-3);
     assert!(rows[4][4].abs() < 1e-3);
     // The resonances picked from the responses against the closed form and the modes of
     // the linear model.
@@ -167,7 +173,7 @@ fn the_responses_are_the_pinned_pinned_modal_sum() {
     ];
     let mut command = flexprr();
     command
-        .args(["frf", "--config"])
+        .args(["frf", "--rigid-chords", "--config"])
         .arg(config("modal_test.toml"))
         .arg("--frequencies")
         .arg(&frequencies)
@@ -209,7 +215,7 @@ fn grids_follow_the_options() {
     let scene = config("coupled_f20.toml");
     let run = |args: &[&str], dir: &str| {
         let output = flexprr()
-            .arg("frf")
+            .args(["frf", "--rigid-chords"])
             .arg(&scene)
             .args(["--pose", "-0.05,0.02,40", "--input", "slider_force:1"])
             .args([

@@ -7,11 +7,13 @@
 //!
 //! Targets of the linear-models issue: the lowest 9 frequencies of the coupled model
 //! (r = 3) and the lowest 12 of the nonlinear model within 0.5 %. Measured (printed) and
-//! asserted here, with the two places the models fall short stated and bounded:
-//! * the coupled model's chords are axially rigid, so with the sliders locked its third
-//!   bending family stays at the pinned-pinned 1047.5 Hz where the axially elastic
+//! asserted here:
+//! * the coupled model at rest has its chords relaxed into the links' axial springs
+//!   (`SceneModel::chord_compliance`, as a scene builds it with `EA`): its lowest 9 (and 12
+//!   with the servo) are within 0.005 %. With the chords axially rigid (no `EA` given) the
+//!   third bending family stays at the pinned-pinned 1047.5 Hz where the axially elastic
 //!   machine's sits up to 0.6 % lower at poses where a platform (axial) mode comes near it
-//!   (1371-1444 Hz); everything else is within 0.5 %;
+//!   (1371-1444 Hz): that contrast is asserted too;
 //! * the nonlinear model (consistent mass, shallow-arch elements) converges at fourth
 //!   order: 8 elements are within 0.4 %, 16 within 0.03 %, 32 within 0.003 %
 //!   (with lumped masses, second order, 16 elements were 0.8 % off and 32 0.2 %).
@@ -57,8 +59,26 @@ fn servo(kd: f64) -> Actuation {
     }
 }
 
-/// The scene model held at rest at `pose`: coupled (`elements` = None) or nonlinear.
-fn model(pose: Pose, variant: &str, elements: Option<usize>) -> Box<dyn SceneModel> {
+/// The paper's links' axial stiffness `EA` (N).
+const AXIAL_STIFFNESS: f64 = paper::YOUNGS_MODULUS * paper::THICKNESS * paper::HEIGHT;
+
+/// How the coupled model's chords enter.
+#[derive(Clone, Copy, PartialEq)]
+enum Chords {
+    /// Relaxed into `EA / l` springs at rest (what a scene builds).
+    Elastic,
+    /// Axially rigid (no `EA` given).
+    Rigid,
+}
+
+/// The scene model held at rest at `pose`: coupled (`elements` = None, chords as given) or
+/// nonlinear.
+fn chords_model(
+    pose: Pose,
+    variant: &str,
+    elements: Option<usize>,
+    chords: Chords,
+) -> Box<dyn SceneModel> {
     let machine: Arc<Machine> = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
     let rest: Arc<dyn Trajectory + Send + Sync> =
         Arc::new(Line::new(pose, Vector3::zeros(), 0.0).unwrap());
@@ -69,8 +89,11 @@ fn model(pose: Pose, variant: &str, elements: Option<usize>) -> Box<dyn SceneMod
     };
     match elements {
         None => {
-            let c = CoupledSystem::new(machine, rest, ModalDamping::none(), CoupledOptions::full())
-                .unwrap();
+            let options = CoupledOptions {
+                axial_stiffness: (chords == Chords::Elastic).then_some([AXIAL_STIFFNESS; 3]),
+                ..CoupledOptions::full()
+            };
+            let c = CoupledSystem::new(machine, rest, ModalDamping::none(), options).unwrap();
             match actuation {
                 Some(a) => Box::new(c.with_actuation(a, 0.0).unwrap()),
                 None => Box::new(c),
@@ -94,13 +117,24 @@ fn model(pose: Pose, variant: &str, elements: Option<usize>) -> Box<dyn SceneMod
 /// The largest relative frequency difference over the lowest `count` modes, and the largest
 /// damping-ratio difference.
 fn compare(pose: &Value, variant: &str, elements: Option<usize>, count: usize) -> (f64, f64) {
+    compare_chords(pose, variant, elements, count, Chords::Elastic)
+}
+
+/// [`compare`] with the coupled model's chords as given.
+fn compare_chords(
+    pose: &Value,
+    variant: &str,
+    elements: Option<usize>,
+    count: usize,
+    chords: Chords,
+) -> (f64, f64) {
     let p = &pose["pose"];
     let at = Pose::new(
         p["x_m"].as_f64().unwrap(),
         p["y_m"].as_f64().unwrap(),
         p["phi_deg"].as_f64().unwrap().to_radians(),
     );
-    let mut model = model(at, variant, elements);
+    let mut model = chords_model(at, variant, elements, chords);
     let y0 = model.initial_state();
     let lin = linearize(
         model.as_mut(),
@@ -118,11 +152,19 @@ fn compare(pose: &Value, variant: &str, elements: Option<usize>, count: usize) -
         damping = damping.max((ours[k].damping_ratio - zeta).abs());
     }
     println!(
-        "pose ({}, {}, {}) {variant:13} {:10}: frequencies {:.3} %, damping ratios {:.4}",
+        "pose ({}, {}, {}) {variant:13} {:16}: frequencies {:.4} %, damping ratios {:.5}",
         p["x_m"],
         p["y_m"],
         p["phi_deg"],
-        elements.map_or("coupled".to_string(), |n| format!("nonlin. {n}")),
+        elements.map_or(
+            if chords == Chords::Elastic {
+                "coupled"
+            } else {
+                "coupled, rigid"
+            }
+            .to_string(),
+            |n| format!("nonlin. {n}")
+        ),
         100.0 * frequency,
         damping
     );
@@ -132,16 +174,24 @@ fn compare(pose: &Value, variant: &str, elements: Option<usize>, count: usize) -
 #[test]
 fn coupled_whole_machine_modes_match_the_external_eigen_analysis() {
     let data = external();
+    let mut worst_rigid = 0.0_f64;
     for pose in data["poses"].as_array().unwrap() {
         for variant in ["servo", "servo_damped"] {
-            let (f, zeta) = compare(pose, variant, None, 9);
-            assert!(f < 5e-3 && zeta < 5e-3, "{variant}: {f} {zeta}");
+            let (f, zeta) = compare(pose, variant, None, 12);
+            assert!(f < 5e-4 && zeta < 5e-4, "{variant}: {f} {zeta}");
         }
-        let (first_six, _) = compare(pose, "locked", None, 6);
-        assert!(first_six < 5e-3, "locked, first six: {first_six}");
         let (nine, _) = compare(pose, "locked", None, 9);
-        assert!(nine < 7e-3, "locked, nine: {nine}");
+        assert!(nine < 5e-4, "locked, nine: {nine}");
+        // Rigid chords: the first six are good, the third family is off by up to 0.6 %.
+        let (first_six, _) = compare_chords(pose, "locked", None, 6, Chords::Rigid);
+        assert!(first_six < 5e-3, "rigid chords, first six: {first_six}");
+        let (rigid_nine, _) = compare_chords(pose, "locked", None, 9, Chords::Rigid);
+        assert!(rigid_nine < 7e-3, "rigid chords, nine: {rigid_nine}");
+        worst_rigid = worst_rigid.max(rigid_nine);
     }
+    // What relaxing the chords changes: the rigid chords miss the third family by more
+    // than the elastic ones miss anything.
+    assert!(worst_rigid > 5e-3, "{worst_rigid}");
 }
 
 #[test]

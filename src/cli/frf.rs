@@ -73,6 +73,11 @@ pub struct FrfArgs {
     /// Write into a non-empty directory that flexprr did not write, next to its files.
     #[arg(long)]
     pub force: bool,
+    /// Keep the coupled model's chords axially rigid at rest (the paper's pinned-pinned
+    /// idealisation of the locked machine) instead of the links' axial springs `EA / l`
+    /// with the platform free on them (the default; docs/linear.md, "Elastic chords").
+    #[arg(long)]
+    pub rigid_chords: bool,
 }
 
 /// `X,Y,PHI_DEG` as a pose (m, m, rad).
@@ -199,7 +204,8 @@ fn grid(args: &FrfArgs, plan: Option<&FrfPlan>) -> Result<Grid, Failure> {
 
 /// Runs the command.
 pub fn run(args: FrfArgs) -> Result<(), Failure> {
-    let (scene, plan, files) = scene_and_plan(&args)?;
+    let (mut scene, plan, files) = scene_and_plan(&args)?;
+    scene.rigid_chords = args.rigid_chords;
     let plan = plan.as_ref();
     let inputs: Vec<Input> = if args.inputs.is_empty() {
         plan.map(|p| p.inputs.clone()).unwrap_or_default()

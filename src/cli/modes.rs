@@ -39,6 +39,11 @@ pub struct ModesArgs {
     /// Print `{"modes": [...]}` (JSON) on standard output instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Keep the coupled model's chords axially rigid at rest (the paper's pinned-pinned
+    /// idealisation of the locked machine) instead of the links' axial springs `EA / l`
+    /// with the platform free on them (the default; docs/linear.md, "Elastic chords").
+    #[arg(long)]
+    pub rigid_chords: bool,
     /// Write `modes.json`, `modes.csv` and `modes.svg` into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -149,7 +154,8 @@ fn failure(e: RunError, args: &ModesArgs) -> Failure {
 
 /// Runs the command.
 pub fn run(args: ModesArgs) -> Result<(), Failure> {
-    let scene = Scene::load_for_analysis(&args.scene).map_err(super::run::failure)?;
+    let mut scene = Scene::load_for_analysis(&args.scene).map_err(super::run::failure)?;
+    scene.rigid_chords = args.rigid_chords;
     let at = operating_point_of(&args, &scene)?;
     let count = parse_count(args.count.as_deref())?;
     // The directory is checked before the work, so that a refusal costs nothing.
@@ -252,6 +258,9 @@ fn table(modes: &MachineModes, count: usize, out: Option<&Path>) -> String {
         modes.sliders,
         where_text(modes)
     );
+    if modes.chords.starts_with("elastic") {
+        let _ = writeln!(s, "chords {}", modes.chords);
+    }
     let _ = writeln!(
         s,
         "{:>4}  {:>14}  {:>13}  kind",

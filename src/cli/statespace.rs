@@ -43,11 +43,17 @@ pub struct StateSpaceArgs {
     /// Write into a non-empty directory that flexprr did not write, next to its files.
     #[arg(long)]
     pub force: bool,
+    /// Keep the coupled model's chords axially rigid at rest (the paper's pinned-pinned
+    /// idealisation of the locked machine) instead of the links' axial springs `EA / l`
+    /// with the platform free on them (the default; docs/linear.md, "Elastic chords").
+    #[arg(long)]
+    pub rigid_chords: bool,
 }
 
 /// Runs the command.
 pub fn run(args: StateSpaceArgs) -> Result<(), Failure> {
-    let scene = Scene::load_for_analysis(&args.scene).map_err(failure)?;
+    let mut scene = Scene::load_for_analysis(&args.scene).map_err(failure)?;
+    scene.rigid_chords = args.rigid_chords;
     let inputs: Vec<Input> = channels(&args.inputs)?;
     let outputs: Vec<Output> = channels(&args.outputs)?;
     let pose = args.pose.as_deref().map(parse_pose).transpose()?;

@@ -94,10 +94,18 @@ def test_operating_points_and_errors(root):
     scene = flexprr.Scene.load(root / "configs" / "coupled_f20.toml")
     along = flexprr.linearize(scene, t=0.01, inputs=["slider_force:1"], outputs=["deflection:1@0.5"])
     assert along.operating_point == {"kind": "time", "t": 0.01} and along.t == pytest.approx(0.01)
-    # The locked machine at rest: nine bending modes, 116.39 Hz three times first.
+    # The locked machine at rest with rigid chords: nine pinned-pinned bending modes,
+    # 116.39 Hz three times first.
+    rigid = flexprr.linearize(scene, pose=(0.0, 0.0, 45.0), rigid_chords=True)
+    assert rigid.A.shape == (18, 18) and rigid.B.shape == (18, 0) and rigid.C.shape == (0, 18)
+    assert not rigid.elastic_chords
+    np.testing.assert_allclose(rigid.modes().frequency_hz[:3], 116.3914, rtol=1e-6)
+    # By default the chords are the links' axial springs: the platform's three deviations
+    # and their rates join the state, and the first bending family moves by 1e-4 at most.
     rest = flexprr.linearize(scene, pose=(0.0, 0.0, 45.0))
-    assert rest.A.shape == (18, 18) and rest.B.shape == (18, 0) and rest.C.shape == (0, 18)
-    np.testing.assert_allclose(rest.modes().frequency_hz[:3], 116.3914, rtol=1e-6)
+    assert rest.elastic_chords and rest.A.shape == (24, 24)
+    assert sum("platform deviation" in s for s in rest.states) == 6
+    np.testing.assert_allclose(rest.modes().frequency_hz[:3], 116.3914, rtol=1e-4)
     default = flexprr.linearize(scene)
     assert default.operating_point["kind"] == "rest"
     with pytest.raises(flexprr.SceneError) as bad:

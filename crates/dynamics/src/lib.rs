@@ -45,7 +45,7 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{
-    ActuatorState, ExternalLoads, MachineSnapshot, ModelCounters, ModelEnergies,
+    ActuatorState, ChordCompliance, ExternalLoads, MachineSnapshot, ModelCounters, ModelEnergies,
     NONLINEAR_ADVICE_FRACTION, PointForce, SceneModel, SliderMotion, force_table,
     platform_deviation_table,
 };

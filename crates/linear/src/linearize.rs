@@ -41,6 +41,58 @@ pub struct Linearization {
     pub d: Mat<f64>,
     /// The outputs' values at the operating point.
     pub output_values: Vec<f64>,
+    /// Whether the model's axially rigid chords were relaxed into the links' axial springs
+    /// (a model that offers it, at rest: [`flexprr_dynamics::SceneModel::chord_compliance`]).
+    /// Then the coordinates are the model's followed by the platform's deviation `(dx, dy,
+    /// dphi)` from the pose the rigid chords impose, and the state is those coordinates,
+    /// their rates, then the control law's states.
+    pub elastic_chords: bool,
+}
+
+/// The number of coordinates the relaxed chords add (the platform deviation).
+const DEVIATION: usize = 3;
+
+impl Linearization {
+    /// The model's own state component of linear state component `k`, or `None` for a
+    /// coordinate or rate of the platform deviation that relaxed chords add.
+    pub fn model_component(&self, k: usize) -> Option<usize> {
+        if !self.elastic_chords {
+            return Some(k);
+        }
+        let total = self.coordinates;
+        let own = total - DEVIATION;
+        if k < own {
+            Some(k)
+        } else if k < total {
+            None
+        } else if k < total + own {
+            Some(k - DEVIATION)
+        } else if k < 2 * total {
+            None
+        } else {
+            Some(k - 2 * DEVIATION)
+        }
+    }
+
+    /// A reader's name of linear state component `k` that the model does not have (the
+    /// platform deviation of relaxed chords), or `None` for the model's own components.
+    pub fn added_component_name(&self, k: usize) -> Option<String> {
+        if self.model_component(k).is_some() {
+            return None;
+        }
+        let total = self.coordinates;
+        let (index, rate) = if k < total {
+            (k + DEVIATION - total, false)
+        } else {
+            (k + DEVIATION - 2 * total, true)
+        };
+        let axis = ["x", "y", "phi"][index];
+        Some(if rate {
+            format!("rate of the platform deviation {axis} on the elastic chords")
+        } else {
+            format!("platform deviation {axis} on the elastic chords")
+        })
+    }
 }
 
 /// Relative step of the central differences (with Richardson extrapolation the truncation
@@ -242,11 +294,28 @@ pub fn linearize(
             b[(i, k)] = loaded[i] - f0[i];
         }
     }
-    let (c, d, output_values) = output_matrices(model, t, y, coordinates, &a, &b, outputs)?;
+    let compliance = model.chord_compliance(t, y).map_err(LinearError::Model)?;
+    let (a, b, state, total) = match &compliance {
+        Some(cc) => {
+            let (a, b) = relax_chords(&a, &b, coordinates, cc, inputs)?;
+            let mut state = vec![0.0; n + 2 * DEVIATION];
+            for (k, v) in y.iter().enumerate() {
+                state[relaxed_index(k, coordinates)] = *v;
+            }
+            (a, b, state, coordinates + DEVIATION)
+        }
+        None => (a, b, y.to_vec(), coordinates),
+    };
+    let added = Added {
+        own: coordinates,
+        total,
+        compliance: compliance.as_ref(),
+    };
+    let (c, d, output_values) = output_matrices(model, t, y, &added, &a, &b, outputs)?;
     Ok(Linearization {
         t,
-        state: y.to_vec(),
-        coordinates,
+        state,
+        coordinates: total,
         a,
         inputs: inputs.to_vec(),
         b,
@@ -254,7 +323,122 @@ pub fn linearize(
         c,
         d,
         output_values,
+        elastic_chords: compliance.is_some(),
     })
+}
+
+/// The index in the relaxed state (coordinates, deviation, their rates, the law's states)
+/// of the model's state component `k` (`coordinates` coordinates, their rates, the law's).
+fn relaxed_index(k: usize, coordinates: usize) -> usize {
+    if k < coordinates {
+        k
+    } else if k < 2 * coordinates {
+        k + DEVIATION
+    } else {
+        k + 2 * DEVIATION
+    }
+}
+
+/// `A` and `B` of the model with its chords relaxed ([`flexprr_dynamics::ChordCompliance`]):
+/// the model's generalized forces `F = M (A, B)` on its coordinates' acceleration rows, the
+/// chords' springs and the point loads' share on the deviation, solved with the mass of
+/// the coordinates and the deviation together.
+fn relax_chords(
+    a: &Mat<f64>,
+    b: &Mat<f64>,
+    coordinates: usize,
+    cc: &flexprr_dynamics::ChordCompliance,
+    inputs: &[Input],
+) -> Result<(Mat<f64>, Mat<f64>), LinearError> {
+    use faer::linalg::solvers::Solve;
+    let (n, m, nz) = (a.nrows(), b.ncols(), coordinates);
+    let total = nz + DEVIATION;
+    let (n_new, map) = (n + 2 * DEVIATION, |k| relaxed_index(k, nz));
+    let mut forces = Mat::<f64>::zeros(total, n_new);
+    let mut load_forces = Mat::<f64>::zeros(total, m);
+    for i in 0..nz {
+        for col in 0..n {
+            forces[(i, map(col))] = (0..nz).map(|k| cc.mass[(i, k)] * a[(nz + k, col)]).sum();
+        }
+        for col in 0..m {
+            load_forces[(i, col)] = (0..nz).map(|k| cc.mass[(i, k)] * b[(nz + k, col)]).sum();
+        }
+    }
+    for q in 0..DEVIATION {
+        for r in 0..DEVIATION {
+            forces[(nz + q, nz + r)] = -cc.stiffness[(q, r)];
+        }
+        for (col, input) in inputs.iter().enumerate() {
+            if let Input::PointForce { link, xi } = *input {
+                load_forces[(nz + q, col)] = xi * cc.joint_normal[link][q];
+            }
+        }
+    }
+    let mass = Mat::from_fn(total, total, |i, j| match (i < nz, j < nz) {
+        (true, true) => cc.mass[(i, j)],
+        (true, false) => cc.coupling[(i, j - nz)],
+        (false, true) => cc.coupling[(j, i - nz)],
+        (false, false) => cc.deviation_mass[(i - nz, j - nz)],
+    });
+    let llt = mass.llt(faer::Side::Lower).map_err(|_| {
+        LinearError::Channel(
+            "the mass matrix of the machine with elastic chords is not positive definite".into(),
+        )
+    })?;
+    let accelerations = llt.solve(&forces);
+    let load_accelerations = llt.solve(&load_forces);
+    let mut relaxed = Mat::<f64>::zeros(n_new, n_new);
+    let mut relaxed_b = Mat::<f64>::zeros(n_new, m);
+    for i in 0..total {
+        relaxed[(i, total + i)] = 1.0;
+        for col in 0..n_new {
+            relaxed[(total + i, col)] = accelerations[(i, col)];
+        }
+        for col in 0..m {
+            relaxed_b[(total + i, col)] = load_accelerations[(i, col)];
+        }
+    }
+    for row in 2 * nz..n {
+        for col in 0..n {
+            relaxed[(map(row), map(col))] = a[(row, col)];
+        }
+        for col in 0..m {
+            relaxed_b[(map(row), col)] = b[(row, col)];
+        }
+    }
+    Ok((relaxed, relaxed_b))
+}
+
+/// The coordinates a relaxation added to the model's, for the outputs' gradients.
+struct Added<'a> {
+    /// The model's own coordinates (the first ones).
+    own: usize,
+    /// All coordinates (the model's and the added ones).
+    total: usize,
+    compliance: Option<&'a flexprr_dynamics::ChordCompliance>,
+}
+
+impl Added<'_> {
+    /// The gradient of `output` in the platform deviation (zero without it): the platform
+    /// pose moves with it, and a link point at `xi` moves by `xi` times its joint's motion.
+    fn gradient(&self, output: &Output) -> [f64; DEVIATION] {
+        let Some(cc) = self.compliance else {
+            return [0.0; DEVIATION];
+        };
+        match *output {
+            Output::Platform(axis) => {
+                let mut g = [0.0; DEVIATION];
+                g[match axis {
+                    Axis::X => 0,
+                    Axis::Y => 1,
+                    Axis::Phi => 2,
+                }] = 1.0;
+                g
+            }
+            Output::Acceleration { link, xi } => cc.joint_normal[link].map(|v| xi * v),
+            _ => [0.0; DEVIATION],
+        }
+    }
 }
 
 /// `C`, `D` and the outputs' values at the operating point.
@@ -263,12 +447,12 @@ fn output_matrices(
     model: &mut dyn SceneModel,
     t: f64,
     y: &[f64],
-    coordinates: usize,
+    added: &Added<'_>,
     a: &Mat<f64>,
     b: &Mat<f64>,
     outputs: &[Output],
 ) -> Result<(Mat<f64>, Mat<f64>, Vec<f64>), LinearError> {
-    let n = y.len();
+    let n = a.ncols();
     let (p, m) = (outputs.len(), b.ncols());
     let mut c = Mat::zeros(p, n);
     let mut d = Mat::zeros(p, m);
@@ -284,10 +468,13 @@ fn output_matrices(
             _ => [0.0; 2],
         };
         values.push(output_value(model, t, y, output, normal)?);
-        let mut gradient = vec![0.0; coordinates];
+        let mut gradient = vec![0.0; added.total];
+        if added.compliance.is_some() {
+            gradient[added.own..].copy_from_slice(&added.gradient(output));
+        }
         differentiate(
             y,
-            0..coordinates,
+            0..added.own,
             1,
             &mut |probe, out| {
                 out[0] = output_value(model, t, probe, output, normal)?;
@@ -299,10 +486,10 @@ fn output_matrices(
             // n . r'' = (d(n . r)/dq) q'' at rest: the acceleration rows of A x + B u.
             for (j, g) in gradient.iter().enumerate() {
                 for col in 0..n {
-                    c[(row, col)] += g * a[(coordinates + j, col)];
+                    c[(row, col)] += g * a[(added.total + j, col)];
                 }
                 for col in 0..m {
-                    d[(row, col)] += g * b[(coordinates + j, col)];
+                    d[(row, col)] += g * b[(added.total + j, col)];
                 }
             }
             values[row] = 0.0;

@@ -45,10 +45,11 @@ enum Outcome {
 /// phi_deg)` or along its motion at `t` (s); neither: at rest where its motion starts.
 /// `inputs` and `outputs` are the CLI's channel names. Returns a dict (the package wraps it
 /// in `LinearModel`): `A`, `B`, `C`, `D`, `x0`, `y0`, `inputs`, `outputs`, `states`,
-/// `input_units`, `output_units`, `operating_point`, `t`, `model`, `scene`, and the modes
-/// as `frequency_hz`, `damping_ratio`, `eigenvalue_re`, `eigenvalue_im` arrays.
+/// `input_units`, `output_units`, `operating_point`, `t`, `model`, `scene`, `elastic_chords`,
+/// and the modes as `frequency_hz`, `damping_ratio`, `eigenvalue_re`, `eigenvalue_im`
+/// arrays. `rigid_chords` keeps the coupled model's chords rigid at rest (docs/linear.md).
 #[pyfunction]
-#[pyo3(name = "_linearize", signature = (scene, pose = None, t = None, inputs = Vec::new(), outputs = Vec::new()))]
+#[pyo3(name = "_linearize", signature = (scene, pose = None, t = None, inputs = Vec::new(), outputs = Vec::new(), rigid_chords = false))]
 pub fn linearize<'py>(
     py: Python<'py>,
     scene: &Bound<'py, PyAny>,
@@ -56,6 +57,7 @@ pub fn linearize<'py>(
     t: Option<f64>,
     inputs: Vec<String>,
     outputs: Vec<String>,
+    rigid_chords: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let owned = PyScene::from_any(scene)?;
     let inputs: Vec<Input> = channels(&inputs, "inputs")?;
@@ -80,10 +82,11 @@ pub fn linearize<'py>(
         (None, None) => None,
     };
     let outcome = detached(py, None, 1.0, move |_| {
-        let scene = match owned.build() {
+        let mut scene = match owned.build() {
             Ok(s) => s,
             Err(e) => return Outcome::Invalid(e),
         };
+        scene.rigid_chords = rigid_chords;
         let at = at.unwrap_or_else(|| {
             OperatingPoint::Rest(scene.trajectory.motion(scene.output_times[0]).pose)
         });
@@ -131,6 +134,7 @@ fn to_dict<'py>(py: Python<'py>, ss: &StateSpace, scene: &str) -> PyResult<Bound
         names(lin.outputs.iter().map(ToString::to_string).collect())?,
     )?;
     d.set_item("states", names(ss.states.clone())?)?;
+    d.set_item("elastic_chords", lin.elastic_chords)?;
     d.set_item(
         "input_units",
         names(lin.inputs.iter().map(|i| i.unit().to_string()).collect())?,

@@ -49,7 +49,10 @@ pub fn state_space(
     };
     let lin = linearize(model, point.t, &point.state, inputs, outputs).map_err(failed)?;
     let states = (0..lin.a.nrows())
-        .map(|k| state_name(model, lin.coordinates, k))
+        .map(|k| match lin.model_component(k) {
+            Some(own) => state_name(model, lin.coordinates, own, k),
+            None => lin.added_component_name(k).unwrap_or_default(),
+        })
         .collect();
     let modes = modes(&lin).map_err(failed)?;
     Ok(StateSpace {
@@ -61,11 +64,17 @@ pub fn state_space(
     })
 }
 
-/// The model's name of state component `k`, or its place in the state (coordinate, rate or
-/// controller state) when the model has no name for it.
-fn state_name(model: &dyn flexprr_dynamics::SceneModel, coordinates: usize, k: usize) -> String {
-    let name = model.component_name(k);
-    if name != format!("state component {k}") {
+/// The model's name of its state component `own` (linear state component `k`), or the
+/// place of `k` in the linear state (coordinate, rate or controller state) when the model
+/// has no name for it.
+fn state_name(
+    model: &dyn flexprr_dynamics::SceneModel,
+    coordinates: usize,
+    own: usize,
+    k: usize,
+) -> String {
+    let name = model.component_name(own);
+    if name != format!("state component {own}") {
         return name;
     }
     if k < coordinates {
@@ -136,6 +145,7 @@ pub fn statespace_json(scene: &Scene, ss: &StateSpace) -> Value {
         "outputs": lin.outputs.iter().map(|o| json!({"name": o.to_string(), "unit": o.unit()})).collect::<Vec<_>>(),
         "states": ss.states,
         "coordinates": lin.coordinates,
+        "chords": crate::machine_modes::chords_description(lin),
         "A": rows(&lin.a),
         "B": rows(&lin.b),
         "C": rows(&lin.c),

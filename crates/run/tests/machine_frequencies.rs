@@ -1,6 +1,7 @@
-//! The `machine_frequencies` output (docs/linear.md): at rest with the sliders locked the
-//! coupled model's whole-machine frequencies are the pinned-pinned closed form at every
-//! instant, beside the KED first modes (the same closed form without axial load); the
+//! The `machine_frequencies` output (docs/linear.md): at rest with the sliders locked and
+//! the chords kept rigid the coupled model's whole-machine frequencies are the pinned-pinned
+//! closed form at every instant (with the chords the links' axial springs, the default, three
+//! platform modes join them), beside the KED first modes (the same closed form without axial load); the
 //! instants are decimated to at most 201 and `summary.json` says so; the progress still
 //! ends at 1; a KED scene is refused when it loads, at the request.
 
@@ -39,11 +40,22 @@ fn pinned_pinned(n: usize) -> f64 {
 
 #[test]
 fn at_rest_locked_the_whole_machine_has_the_pinned_pinned_frequencies_at_every_instant() {
-    let s = scene(
+    let mut s = scene(
         "kind = \"line\"\nfrom = [-0.05, 0.02, 30.0]\nvelocity = [0.0, 0.0, 0.0]",
         "coupling = \"coupled\"",
         "",
     );
+    let elastic = run(&s, &mut |_| {}).expect("runs");
+    assert_eq!(
+        elastic
+            .machine_frequencies
+            .as_ref()
+            .expect("the note")
+            .modes,
+        12,
+        "3 links x 3 modes and 3 platform modes on the links' axial springs"
+    );
+    s.rigid_chords = true;
     let mut fractions = Vec::new();
     let result = run(&s, &mut |f| fractions.push(f)).expect("runs");
     let table = result.table("machine_frequencies").expect("the table");

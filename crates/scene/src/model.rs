@@ -197,6 +197,7 @@ impl Scene {
     fn build_coupled(&self) -> Result<CoupledSystem, DynamicsError> {
         let options = CoupledOptions {
             axial_stiffness: Some([self.axial_stiffness; 3]),
+            elastic_chords_at_rest: !self.rigid_chords,
             collapse_deflection: Some(self.large_deflection.collapse_deflection),
             ..CoupledOptions::full()
         };

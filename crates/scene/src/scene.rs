@@ -67,6 +67,11 @@ pub struct Scene {
     pub coupling: CouplingModel,
     /// Mean axial stiffness `EA` of the links (N), for the coupled model's stretch output.
     pub axial_stiffness: f64,
+    /// Linear analyses at rest (`flexprr modes/frf/statespace --rigid-chords`) keep the
+    /// coupled model's chords axially rigid (the paper's pinned-pinned idealisation) instead
+    /// of relaxing them into the links' axial springs `EA / l` (docs/linear.md). Not a scene
+    /// key; false when loaded.
+    pub rigid_chords: bool,
     /// The nonlinear model's settings (`model.elements`, `model.collapse_deflection`,
     /// `model.axial_damping_time`; see docs/scenes.md).
     pub large_deflection: LargeDeflection,
@@ -320,6 +325,7 @@ impl Scene {
             outputs,
             coupling: model.coupling,
             axial_stiffness,
+            rigid_chords: false,
             large_deflection,
             actuator: control.actuator,
             controller: control.controller,

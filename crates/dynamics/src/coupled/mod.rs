@@ -54,6 +54,7 @@ use crate::actuation::{Actuated, Actuation};
 use crate::{DynamicsError, Machine, ModalDamping};
 use flexprr_control::SliderState;
 
+mod elastic;
 mod kinetics;
 mod links;
 mod output;
@@ -126,6 +127,11 @@ pub struct CoupledOptions {
     /// differentiation). Output only: the dynamics stay rigid-axial (the axial modes, near
     /// 2 kHz for the paper's links, are far above the foreshortening excitation).
     pub axial_stiffness: Option<[f64; 3]>,
+    /// With [`CoupledOptions::axial_stiffness`] given, linear analyses at rest relax the
+    /// chords into the links' axial springs `EA / l`
+    /// ([`crate::SceneModel::chord_compliance`]); off, they keep them rigid (the paper's
+    /// pinned-pinned idealisation of the locked machine).
+    pub elastic_chords_at_rest: bool,
     /// Stop with [`DynamicsError::Collapse`] when a link's mid-point deflection exceeds this
     /// fraction of its length (`None`: stop only at a type-II pose). The small-deflection
     /// model leaves 5 % of a geometrically exact one near 12 % (docs/coupled.md), so 0.1 is
@@ -140,6 +146,7 @@ impl CoupledOptions {
             foreshortening: true,
             elastic_reactions: true,
             axial_stiffness: None,
+            elastic_chords_at_rest: true,
             collapse_deflection: None,
         }
     }
@@ -150,6 +157,7 @@ impl CoupledOptions {
             foreshortening: false,
             elastic_reactions: false,
             axial_stiffness: None,
+            elastic_chords_at_rest: true,
             collapse_deflection: None,
         }
     }

@@ -74,6 +74,13 @@ impl SceneModel for CoupledSystem {
     fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
         CoupledSystem::set_loads(self, loads)
     }
+    fn chord_compliance(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<crate::ChordCompliance>, DynamicsError> {
+        CoupledSystem::chord_compliance(self, t, y)
+    }
     fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
         self.sample_times(t0, t1)
     }

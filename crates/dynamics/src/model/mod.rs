@@ -8,10 +8,12 @@
 //! along a link, the energies, and the model's own extra tables. Nothing above asks which
 //! model it holds.
 
+mod compliance;
 mod coupled;
 mod ked;
 mod nonlinear;
 
+pub use compliance::ChordCompliance;
 pub use coupled::NONLINEAR_ADVICE_FRACTION;
 
 use flexprr_integrators::{OdeSystem, Solution};
@@ -265,6 +267,21 @@ pub trait SceneModel: OdeSystem + Send {
             "the {} model takes no external loads (the coupled and nonlinear models do)",
             self.kind()
         )))
+    }
+    /// For a model whose chords are axially rigid, at a state at rest (no motion, straight
+    /// links): the data that relax the chords into the links' axial springs in a linear
+    /// analysis ([`ChordCompliance`]). `None` (the default) for a model whose chords already
+    /// stretch, or away from rest, where the linearisation keeps the model as it is.
+    ///
+    /// # Errors
+    /// A kinematic failure at the state.
+    fn chord_compliance(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<ChordCompliance>, DynamicsError> {
+        let _ = (t, y);
+        Ok(None)
     }
     /// Whether [`SceneModel::deflection`] is linear in the coordinates and needs no time
     /// (true for modal models). When false, the divergence guard, which tabulates the

@@ -188,6 +188,7 @@ class LinearModel:
         self.t = data["t"]
         self.model = data["model"]
         self.scene = data["scene"]
+        self.elastic_chords = bool(data["elastic_chords"])
         self._modes = Modes(
             _np.asarray(data["frequency_hz"]),
             _np.asarray(data["damping_ratio"]),
@@ -217,7 +218,7 @@ class LinearModel:
         )
 
 
-def linearize(scene, pose=None, t=None, inputs=(), outputs=()):
+def linearize(scene, pose=None, t=None, inputs=(), outputs=(), rigid_chords=False):
     """The linear model of ``scene`` (a :class:`Scene` or the path of a scene file) about an
     operating point, as :class:`LinearModel`.
 
@@ -226,6 +227,11 @@ def linearize(scene, pose=None, t=None, inputs=(), outputs=()):
     - ``t=...`` (s): the state of the scene's motion at that time (its axial loads,
       centrifugal and gyroscopic terms, its controller);
     - neither: at rest where the scene's motion starts.
+
+    At rest the coupled model's chords are the links' axial springs ``EA/l`` with the
+    platform free on them (its deviation is three more coordinates; ``elastic_chords`` is
+    then true); ``rigid_chords=True`` keeps them rigid, the paper's pinned-pinned
+    idealisation (docs/linear.md, "Elastic chords").
 
     ``inputs`` and ``outputs`` are the names of ``flexprr frf``/``flexprr statespace``:
     ``slider_force:I``, ``point_force:LINK@XI``; ``slider:I``, ``platform:x|y|phi``,
@@ -236,4 +242,13 @@ def linearize(scene, pose=None, t=None, inputs=(), outputs=()):
     """
     if isinstance(inputs, str) or isinstance(outputs, str):
         raise TypeError("inputs and outputs are lists of names, e.g. inputs=['slider_force:1']")
-    return LinearModel(_linearize(scene, pose=pose, t=t, inputs=list(inputs), outputs=list(outputs)))
+    return LinearModel(
+        _linearize(
+            scene,
+            pose=pose,
+            t=t,
+            inputs=list(inputs),
+            outputs=list(outputs),
+            rigid_chords=bool(rigid_chords),
+        )
+    )

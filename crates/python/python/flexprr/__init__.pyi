@@ -147,6 +147,7 @@ class LinearModel:
     t: float
     model: str
     scene: str
+    elastic_chords: bool
     def modes(self) -> Modes: ...
     def frequency_response(self, frequencies_hz: npt.ArrayLike) -> npt.NDArray[np.complex128]: ...
 
@@ -156,4 +157,5 @@ def linearize(
     t: Optional[float] = None,
     inputs: Sequence[str] = (),
     outputs: Sequence[str] = (),
+    rigid_chords: bool = False,
 ) -> LinearModel: ...

@@ -84,6 +84,9 @@ pub struct MachineModes {
     pub pose: Pose,
     /// The slider positions there (m).
     pub rho: [f64; 3],
+    /// How the links' chords enter: `elastic` (the links' axial springs `EA / l`, the
+    /// platform free on them: the coupled model at rest) or the model's own.
+    pub chords: String,
     /// Length of the model's state (coordinates, rates, control states).
     pub state_dimension: usize,
     /// Number of generalized coordinates.
@@ -172,6 +175,7 @@ pub fn machine_modes(
         t: point.t,
         pose: snapshot.platform.pose,
         rho: snapshot.sliders.map(|s| s.position),
+        chords: chords_description(&lin),
         state_dimension: lin.a.nrows(),
         coordinates: lin.coordinates,
         xi,
@@ -182,6 +186,17 @@ pub fn machine_modes(
             eigen_s,
         },
     })
+}
+
+/// How a linear model's chords enter it.
+pub fn chords_description(lin: &flexprr_linear::Linearization) -> String {
+    if lin.elastic_chords {
+        "elastic: the links' axial springs EA/l, the platform free on them (the model's rigid \
+         chords relaxed at rest; docs/linear.md)"
+            .to_string()
+    } else {
+        "as the model has them".to_string()
+    }
 }
 
 /// How the sliders are held in a scene's linear models.

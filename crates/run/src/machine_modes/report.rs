@@ -91,6 +91,7 @@ pub fn modes_json(modes: &MachineModes, count: usize) -> Value {
         "flexprr_version": env!("CARGO_PKG_VERSION"),
         "model": modes.model,
         "sliders": modes.sliders,
+        "chords": modes.chords,
         "operating_point": operating_point_json(modes),
         "state_dimension": modes.state_dimension,
         "coordinates": modes.coordinates,
