@@ -246,3 +246,47 @@ fn a_point_force_moves_the_platform_by_the_chords_compliance() {
     println!("static platform compliance against G^T (EA/l) G: {worst:.2e}");
     assert!(worst < 1e-8, "{worst}");
 }
+
+#[test]
+fn the_scene_key_keeps_the_chords_rigid_and_only_the_coupled_model_takes_it() {
+    let base = format!("{}/configs/coupled_f20.toml", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&base).unwrap();
+    let with = |coupling: &str, chords: &str| {
+        text.replace(
+            "coupling = \"coupled\"",
+            &format!("coupling = \"{coupling}\"\nchords = \"{chords}\""),
+        )
+    };
+    let rigid =
+        flexprr_scene::Scene::from_text("rigid.toml", "rigid", &with("coupled", "rigid")).unwrap();
+    assert!(rigid.rigid_chords);
+    let elastic =
+        flexprr_scene::Scene::from_text("elastic.toml", "elastic", &with("coupled", "elastic"))
+            .unwrap();
+    assert!(!elastic.rigid_chords);
+    let count = |scene: &flexprr_scene::Scene| {
+        flexprr_run::machine_modes::machine_modes(
+            scene,
+            flexprr_run::linear::OperatingPoint::Rest(pose()),
+            3,
+        )
+        .unwrap()
+        .modes
+        .len()
+    };
+    assert_eq!(count(&rigid), 9, "nine bending modes on rigid chords");
+    assert_eq!(
+        count(&elastic),
+        12,
+        "and three platform modes on elastic ones"
+    );
+    let refused =
+        flexprr_scene::Scene::from_text("nonlinear.toml", "nonlinear", &with("nonlinear", "rigid"))
+            .unwrap_err()
+            .to_string();
+    println!("{refused}");
+    assert!(
+        refused.contains("model.chords") && refused.contains("coupled model"),
+        "{refused}"
+    );
+}

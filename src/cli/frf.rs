@@ -205,7 +205,7 @@ fn grid(args: &FrfArgs, plan: Option<&FrfPlan>) -> Result<Grid, Failure> {
 /// Runs the command.
 pub fn run(args: FrfArgs) -> Result<(), Failure> {
     let (mut scene, plan, files) = scene_and_plan(&args)?;
-    scene.rigid_chords = args.rigid_chords;
+    scene.rigid_chords |= args.rigid_chords;
     let plan = plan.as_ref();
     let inputs: Vec<Input> = if args.inputs.is_empty() {
         plan.map(|p| p.inputs.clone()).unwrap_or_default()

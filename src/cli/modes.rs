@@ -155,7 +155,7 @@ fn failure(e: RunError, args: &ModesArgs) -> Failure {
 /// Runs the command.
 pub fn run(args: ModesArgs) -> Result<(), Failure> {
     let mut scene = Scene::load_for_analysis(&args.scene).map_err(super::run::failure)?;
-    scene.rigid_chords = args.rigid_chords;
+    scene.rigid_chords |= args.rigid_chords;
     let at = operating_point_of(&args, &scene)?;
     let count = parse_count(args.count.as_deref())?;
     // The directory is checked before the work, so that a refusal costs nothing.

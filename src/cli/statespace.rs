@@ -53,7 +53,7 @@ pub struct StateSpaceArgs {
 /// Runs the command.
 pub fn run(args: StateSpaceArgs) -> Result<(), Failure> {
     let mut scene = Scene::load_for_analysis(&args.scene).map_err(failure)?;
-    scene.rigid_chords = args.rigid_chords;
+    scene.rigid_chords |= args.rigid_chords;
     let inputs: Vec<Input> = channels(&args.inputs)?;
     let outputs: Vec<Output> = channels(&args.outputs)?;
     let pose = args.pose.as_deref().map(parse_pose).transpose()?;

@@ -279,6 +279,7 @@ mod tests {
             d: Mat::zeros(2, 1),
             output_values: vec![0.0; 2],
             elastic_chords: false,
+            derivatives: crate::Derivatives::Differences,
         };
         for f in [0.0, 3.0, 9.9, 10.1, 250.0] {
             let h = frequency_response_direct(&lin, &[f]).unwrap();

@@ -1,7 +1,10 @@
 //! The linearisation of any scene model about a state: `x' = A x + B u`, `y = C x + D u`
 //! with `x` the deviation of the model's state from the operating point.
 //!
-//! * `A = df/dy` by central differences with one Richardson extrapolation (error of fourth
+//! * `A` from the model's mechanical form `M`, `C`, `K` where the model says they are the
+//!   exact derivatives there ([`flexprr_dynamics::SceneModel::exact_mechanical_form`]: the
+//!   nonlinear model at rest without actuators or patches), `A = [0 I; -M^-1 K  -M^-1 C]`;
+//! * elsewhere `A = df/dy` by central differences with one Richardson extrapolation (error of fourth
 //!   order in the step; exact for the models' quadratic terms, Dahlquist & Bjorck,
 //!   *Numerical Methods in Scientific Computing*, 2008, 3.3.4);
 //! * `B`: the right-hand side is affine in the external loads
@@ -47,6 +50,8 @@ pub struct Linearization {
     /// dphi)` from the pose the rigid chords impose, and the state is those coordinates,
     /// their rates, then the control law's states.
     pub elastic_chords: bool,
+    /// How `A` was obtained.
+    pub derivatives: Derivatives,
 }
 
 /// The number of coordinates the relaxed chords add (the platform deviation).
@@ -177,62 +182,59 @@ fn unit_load(input: &Input) -> ExternalLoads {
     }
 }
 
-/// The value of an output that is a function of the coordinates (all but accelerations),
-/// or for an acceleration, the position of the link point projected on `normal`.
-fn output_value(
+/// Every output's value at `(t, y)` into `out`: those that are functions of the coordinates
+/// (all but accelerations) as they are, an acceleration as the position of its link point
+/// projected on its fixed normal `normals[k]`. The model's snapshot is taken once.
+fn output_values(
     model: &mut dyn SceneModel,
     t: f64,
     y: &[f64],
-    output: &Output,
-    normal: [f64; 2],
-) -> Result<f64, LinearError> {
-    Ok(match *output {
-        Output::SliderPosition(i) => model.snapshot(t, y)?.sliders[i].position,
-        Output::Platform(axis) => {
-            let pose = model.snapshot(t, y)?.platform.pose;
-            match axis {
-                Axis::X => pose.x,
-                Axis::Y => pose.y,
-                Axis::Phi => pose.phi,
+    outputs: &[Output],
+    normals: &[[f64; 2]],
+    out: &mut [f64],
+) -> Result<(), LinearError> {
+    let needs_snapshot = outputs
+        .iter()
+        .any(|o| !matches!(o, Output::Deflection { .. } | Output::Slope { .. }));
+    let snapshot = if needs_snapshot {
+        Some(model.snapshot(t, y)?)
+    } else {
+        None
+    };
+    for (k, output) in outputs.iter().enumerate() {
+        let machine = snapshot.as_ref();
+        out[k] = match (*output, machine) {
+            (Output::SliderPosition(i), Some(s)) => s.sliders[i].position,
+            (Output::Platform(axis), Some(s)) => match axis {
+                Axis::X => s.platform.pose.x,
+                Axis::Y => s.platform.pose.y,
+                Axis::Phi => s.platform.pose.phi,
+            },
+            (Output::Deflection { link, xi }, _) => model.deflection(t, link, xi, y)?,
+            (Output::Slope { link, xi }, _) => model.slope(t, link, xi, y)?,
+            (Output::Acceleration { link, xi }, Some(s)) => {
+                let (b, c) = chord_of(model, s, link);
+                let w = model.deflection(t, link, xi, y)?;
+                let (dx, dy) = (c[0] - b[0], c[1] - b[1]);
+                let length = dx.hypot(dy);
+                let point = [
+                    b[0] + xi * dx - w * dy / length,
+                    b[1] + xi * dy + w * dx / length,
+                ];
+                point[0] * normals[k][0] + point[1] * normals[k][1]
             }
-        }
-        Output::Deflection { link, xi } => model.deflection(t, link, xi, y)?,
-        Output::Slope { link, xi } => model.slope(t, link, xi, y)?,
-        Output::Acceleration { link, xi } => {
-            let point = link_point(model, t, y, link, xi)?;
-            point[0] * normal[0] + point[1] * normal[1]
-        }
-    })
+            _ => unreachable!("the snapshot is taken for these outputs"),
+        };
+    }
+    Ok(())
 }
 
-/// The position of the point of link `link` at `xi`: `B + xi (C - B) + w n` with the chord
-/// `B -> C` from the model's sliders and platform.
-fn link_point(
-    model: &mut dyn SceneModel,
-    t: f64,
-    y: &[f64],
+/// The chord `B_i`, `C_i` of link `link` in the machine `snapshot`.
+fn chord_of(
+    model: &dyn SceneModel,
+    snapshot: &flexprr_dynamics::MachineSnapshot,
     link: usize,
-    xi: f64,
-) -> Result<[f64; 2], LinearError> {
-    let (b, c) = chord(model, t, y, link)?;
-    let w = model.deflection(t, link, xi, y)?;
-    let (dx, dy) = (c[0] - b[0], c[1] - b[1]);
-    let length = dx.hypot(dy);
-    let normal = [-dy / length, dx / length];
-    Ok([
-        b[0] + xi * dx + w * normal[0],
-        b[1] + xi * dy + w * normal[1],
-    ])
-}
-
-/// The chord `B_i`, `C_i` of link `link` at `(t, y)`.
-fn chord(
-    model: &mut dyn SceneModel,
-    t: f64,
-    y: &[f64],
-    link: usize,
-) -> Result<([f64; 2], [f64; 2]), LinearError> {
-    let snapshot = model.snapshot(t, y)?;
+) -> ([f64; 2], [f64; 2]) {
     let leg = &model.machine().geometry.legs[link];
     let u = leg.guide.direction.into_inner();
     let rho = snapshot.sliders[link].position;
@@ -244,10 +246,21 @@ fn chord(
         pose.x + cos * a.x - sin * a.y,
         pose.y + sin * a.x + cos * a.y,
     ];
-    Ok(([b.x, b.y], c))
+    ([b.x, b.y], c)
 }
 
-/// Linearises `model` about its state `y` at `t` for `inputs` and `outputs`.
+/// How `A` was (or is to be) obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Derivatives {
+    /// Central differences of the right-hand side with one Richardson extrapolation.
+    Differences,
+    /// From the model's exact mechanical form (`M`, `C`, `K`;
+    /// [`flexprr_dynamics::SceneModel::exact_mechanical_form`]).
+    Analytic,
+}
+
+/// Linearises `model` about its state `y` at `t` for `inputs` and `outputs`: `A` from the
+/// model's mechanical form where it is exact there, else by differences.
 ///
 /// # Errors
 /// The model fails near the operating point (kinematics, a singular pose), an input the
@@ -258,6 +271,82 @@ pub fn linearize(
     y: &[f64],
     inputs: &[Input],
     outputs: &[Output],
+) -> Result<Linearization, LinearError> {
+    linearize_with(model, t, y, inputs, outputs, Derivatives::Analytic)
+}
+
+/// [`linearize`] with `A` by differences even where the model's mechanical form is exact:
+/// the check of the analytic path (and of a model's claim that its form is exact).
+///
+/// # Errors
+/// As [`linearize`].
+pub fn linearize_by_differences(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    inputs: &[Input],
+    outputs: &[Output],
+) -> Result<Linearization, LinearError> {
+    linearize_with(model, t, y, inputs, outputs, Derivatives::Differences)
+}
+
+/// `A = [0 I; -M^-1 K  -M^-1 C]` from the model's exact mechanical form into `a`, or
+/// `false` (nothing written) when the model has none at `(t, y)`.
+fn mechanical_a(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    a: &mut Mat<f64>,
+) -> Result<bool, LinearError> {
+    use faer::linalg::solvers::Solve;
+    if !model.exact_mechanical_form(t, y) {
+        return Ok(false);
+    }
+    let Some(form) = model.second_order_form() else {
+        return Ok(false);
+    };
+    let n = form.coordinates();
+    if 2 * n != y.len() {
+        return Ok(false);
+    }
+    let (mut m, mut c, mut k) = (Mat::zeros(n, n), Mat::zeros(n, n), Mat::zeros(n, n));
+    form.matrices(t, y, m.as_mut(), c.as_mut(), k.as_mut());
+    let finite = |x: &Mat<f64>| (0..n).all(|j| x.col_as_slice(j).iter().all(|v| v.is_finite()));
+    if !(finite(&m) && finite(&c) && finite(&k)) {
+        return Err(LinearError::Channel(
+            "the model's mass, damping or stiffness matrix is not finite at the operating point"
+                .into(),
+        ));
+    }
+    let lu = m.partial_piv_lu();
+    let (mk, mc) = (lu.solve(&k), lu.solve(&c));
+    for i in 0..n {
+        a[(i, n + i)] = 1.0;
+        for j in 0..n {
+            a[(n + i, j)] = -mk[(i, j)];
+            a[(n + i, n + j)] = -mc[(i, j)];
+        }
+    }
+    let solved = (0..n).all(|j| {
+        a.col_as_slice(j).iter().all(|v| v.is_finite())
+            && a.col_as_slice(n + j).iter().all(|v| v.is_finite())
+    });
+    if !solved {
+        return Err(LinearError::Channel(
+            "the model's mass matrix is singular at the operating point".into(),
+        ));
+    }
+    Ok(true)
+}
+
+/// [`linearize`] with the derivatives asked for.
+fn linearize_with(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    inputs: &[Input],
+    outputs: &[Output],
+    wanted: Derivatives,
 ) -> Result<Linearization, LinearError> {
     let n = model.dim();
     if y.len() != n {
@@ -270,17 +359,20 @@ pub fn linearize(
     let coordinates = model.modes();
     let mut a = Mat::zeros(n, n);
     model.set_loads(&ExternalLoads::default()).ok();
-    differentiate(
-        y,
-        0..n,
-        n,
-        &mut |probe, out| rhs(model, t, probe, out),
-        &mut |j, column| {
-            for (k, v) in column.iter().enumerate() {
-                a[(k, j)] = *v;
-            }
-        },
-    )?;
+    let analytic = wanted == Derivatives::Analytic && mechanical_a(model, t, y, &mut a)?;
+    if !analytic {
+        differentiate(
+            y,
+            0..n,
+            n,
+            &mut |probe, out| rhs(model, t, probe, out),
+            &mut |j, column| {
+                for (k, v) in column.iter().enumerate() {
+                    a[(k, j)] = *v;
+                }
+            },
+        )?;
+    }
     let mut f0 = vec![0.0; n];
     rhs(model, t, y, &mut f0)?;
     let mut b = Mat::zeros(n, inputs.len());
@@ -324,6 +416,11 @@ pub fn linearize(
         d,
         output_values,
         elastic_chords: compliance.is_some(),
+        derivatives: if analytic {
+            Derivatives::Analytic
+        } else {
+            Derivatives::Differences
+        },
     })
 }
 
@@ -441,8 +538,10 @@ impl Added<'_> {
     }
 }
 
+/// `C`, `D` and the outputs' values.
+type OutputRows = (Mat<f64>, Mat<f64>, Vec<f64>);
+
 /// `C`, `D` and the outputs' values at the operating point.
-#[allow(clippy::type_complexity)]
 fn output_matrices(
     model: &mut dyn SceneModel,
     t: f64,
@@ -451,40 +550,55 @@ fn output_matrices(
     a: &Mat<f64>,
     b: &Mat<f64>,
     outputs: &[Output],
-) -> Result<(Mat<f64>, Mat<f64>, Vec<f64>), LinearError> {
+) -> Result<OutputRows, LinearError> {
     let n = a.ncols();
     let (p, m) = (outputs.len(), b.ncols());
     let mut c = Mat::zeros(p, n);
     let mut d = Mat::zeros(p, m);
-    let mut values = Vec::with_capacity(p);
-    for (row, output) in outputs.iter().enumerate() {
-        let normal = match *output {
+    let mut values = vec![0.0; p];
+    if p == 0 {
+        return Ok((c, d, values));
+    }
+    let snapshot = model.snapshot(t, y)?;
+    let normals: Vec<[f64; 2]> = outputs
+        .iter()
+        .map(|o| match *o {
             Output::Acceleration { link, .. } => {
-                let (b, c) = chord(model, t, y, link)?;
+                let (b, c) = chord_of(model, &snapshot, link);
                 let (dx, dy) = (c[0] - b[0], c[1] - b[1]);
                 let length = dx.hypot(dy);
                 [-dy / length, dx / length]
             }
             _ => [0.0; 2],
-        };
-        values.push(output_value(model, t, y, output, normal)?);
-        let mut gradient = vec![0.0; added.total];
-        if added.compliance.is_some() {
-            gradient[added.own..].copy_from_slice(&added.gradient(output));
+        })
+        .collect();
+    output_values(model, t, y, outputs, &normals, &mut values)?;
+    // The gradients of every output in the model's coordinates, one difference per
+    // coordinate for all outputs at once, then those in the added coordinates.
+    let mut gradient = Mat::<f64>::zeros(p, added.total);
+    differentiate(
+        y,
+        0..added.own,
+        p,
+        &mut |probe, out| output_values(model, t, probe, outputs, &normals, out),
+        &mut |j, column| {
+            for (row, v) in column.iter().enumerate() {
+                gradient[(row, j)] = *v;
+            }
+        },
+    )?;
+    if added.compliance.is_some() {
+        for (row, output) in outputs.iter().enumerate() {
+            for (k, g) in added.gradient(output).into_iter().enumerate() {
+                gradient[(row, added.own + k)] = g;
+            }
         }
-        differentiate(
-            y,
-            0..added.own,
-            1,
-            &mut |probe, out| {
-                out[0] = output_value(model, t, probe, output, normal)?;
-                Ok(())
-            },
-            &mut |j, column| gradient[j] = column[0],
-        )?;
+    }
+    for (row, output) in outputs.iter().enumerate() {
         if let Output::Acceleration { .. } = output {
             // n . r'' = (d(n . r)/dq) q'' at rest: the acceleration rows of A x + B u.
-            for (j, g) in gradient.iter().enumerate() {
+            for j in 0..added.total {
+                let g = gradient[(row, j)];
                 for col in 0..n {
                     c[(row, col)] += g * a[(added.total + j, col)];
                 }
@@ -494,8 +608,8 @@ fn output_matrices(
             }
             values[row] = 0.0;
         } else {
-            for (j, g) in gradient.iter().enumerate() {
-                c[(row, j)] = *g;
+            for j in 0..added.total {
+                c[(row, j)] = gradient[(row, j)];
             }
         }
     }

@@ -86,7 +86,7 @@ pub fn linearize<'py>(
             Ok(s) => s,
             Err(e) => return Outcome::Invalid(e),
         };
-        scene.rigid_chords = rigid_chords;
+        scene.rigid_chords |= rigid_chords;
         let at = at.unwrap_or_else(|| {
             OperatingPoint::Rest(scene.trajectory.motion(scene.output_times[0]).pose)
         });

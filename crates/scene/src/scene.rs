@@ -67,10 +67,10 @@ pub struct Scene {
     pub coupling: CouplingModel,
     /// Mean axial stiffness `EA` of the links (N), for the coupled model's stretch output.
     pub axial_stiffness: f64,
-    /// Linear analyses at rest (`flexprr modes/frf/statespace --rigid-chords`) keep the
-    /// coupled model's chords axially rigid (the paper's pinned-pinned idealisation) instead
-    /// of relaxing them into the links' axial springs `EA / l` (docs/linear.md). Not a scene
-    /// key; false when loaded.
+    /// Linear analyses at rest keep the coupled model's chords axially rigid (the paper's
+    /// pinned-pinned idealisation) instead of relaxing them into the links' axial springs
+    /// `EA / l` (docs/linear.md): `model.chords = "rigid"`, or `--rigid-chords` of
+    /// `flexprr modes/frf/statespace`.
     pub rigid_chords: bool,
     /// The nonlinear model's settings (`model.elements`, `model.collapse_deflection`,
     /// `model.axial_damping_time`; see docs/scenes.md).
@@ -289,6 +289,7 @@ impl Scene {
         let trajectory = build_trajectory_checked(&c, &raw.trajectory, &machine, &output_times)?;
         let model = build_model_section(&c, registry, &raw.model, machine.links[0].modes())?;
         let large_deflection = build_large_deflection(&c, &raw.model, &raw.links)?;
+        let rigid_chords = rigid_chords(&c, &raw.model)?;
         let control = build_control(&c, registry, &raw, model.coupling)?;
         let piezo = crate::piezo::build_piezo(&c, registry, &raw, &machine)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
@@ -325,7 +326,7 @@ impl Scene {
             outputs,
             coupling: model.coupling,
             axial_stiffness,
-            rigid_chords: false,
+            rigid_chords,
             large_deflection,
             actuator: control.actuator,
             controller: control.controller,
@@ -676,6 +677,19 @@ pub const DEFAULT_ELEMENTS: usize = 32;
 /// Default collapse limit: 10 % of the link length, the external model's criterion
 /// (validation/data/collapse_speeds.json) and where the coupled model is still within 2 % of it.
 pub const DEFAULT_COLLAPSE_DEFLECTION: f64 = 0.1;
+
+/// `model.chords`: whether linear analyses at rest keep the coupled model's chords rigid;
+/// refused for the other models.
+fn rigid_chords(c: &Checker<'_>, mo: &ModelConfig) -> Result<bool, ScenarioError> {
+    match mo.chords {
+        None => Ok(false),
+        Some(_) if mo.coupling != CouplingChoice::Coupled => Err(c.error(
+            "model.chords",
+            "the chords of linear analyses at rest are a setting of the coupled model (the nonlinear model's links stretch): set model.coupling = \"coupled\" or remove the key",
+        )),
+        Some(choice) => Ok(choice == crate::schema::ChordsChoice::Rigid),
+    }
+}
 
 /// `model.elements`, `model.collapse_deflection`, `model.axial_damping_time`: checked, and
 /// refused where the scene's model does not use them.

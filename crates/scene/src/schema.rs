@@ -408,6 +408,17 @@ pub enum CouplingChoice {
     Nonlinear,
 }
 
+/// How the coupled model's chords enter linear analyses at rest.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ChordsChoice {
+    /// The links' axial springs `EA / l`, the platform free on them.
+    #[default]
+    Elastic,
+    /// Axially rigid: the paper's pinned-pinned idealisation of the locked machine.
+    Rigid,
+}
+
 /// Formulation (named preset plus optional overrides) and damping.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -444,6 +455,10 @@ pub struct ModelConfig {
     /// Nonlinear model only: Kelvin-Voigt time of the axial strain-rate damping (s, default 0).
     #[serde(default)]
     pub axial_damping_time: Option<f64>,
+    /// Coupled model only: its chords in linear analyses at rest, `"elastic"` (default) or
+    /// `"rigid"` (docs/linear.md, "Elastic chords").
+    #[serde(default)]
+    pub chords: Option<ChordsChoice>,
 }
 
 impl Default for ModelConfig {
@@ -459,6 +474,7 @@ impl Default for ModelConfig {
             elements: None,
             collapse_deflection: None,
             axial_damping_time: None,
+            chords: None,
         }
     }
 }

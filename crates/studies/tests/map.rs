@@ -50,6 +50,8 @@ fn the_locked_coupled_map_is_the_pinned_pinned_frequency_and_marks_what_it_canno
     let s = study(
         r#"
 base = "coupled_f20.toml"
+[set.model]
+chords = "rigid"              # the pinned-pinned idealisation: the closed form exactly
 [map]
 x = { start = -0.2, end = 0.2, count = 9 }
 y = { start = -0.2, end = 0.2, count = 9 }
@@ -158,6 +160,8 @@ fn the_lowest_frequency_quantity_follows_the_link_thickness() {
         r#"
 base = "coupled_f20.toml"
 quantities = [{ kind = "lowest_frequency" }]
+[set.model]
+chords = "rigid"
 [set.output]
 requests = ["machine"]
 [[axis]]

@@ -283,6 +283,15 @@ pub trait SceneModel: OdeSystem + Send {
         let _ = (t, y);
         Ok(None)
     }
+    /// Whether the matrices `M`, `C`, `K` of the model's mechanical form
+    /// ([`OdeSystem::second_order_form`]) are the exact derivatives of its right-hand side at
+    /// `(t, y)`: `A = [0 I; -M^-1 K  -M^-1 C]`. Then a linearisation takes `A` from them
+    /// instead of differences. False by default (and wherever a model's tangents are only
+    /// good enough for Newton iterations).
+    fn exact_mechanical_form(&mut self, t: f64, y: &[f64]) -> bool {
+        let _ = (t, y);
+        false
+    }
     /// Whether [`SceneModel::deflection`] is linear in the coordinates and needs no time
     /// (true for modal models). When false, the divergence guard, which tabulates the
     /// deflection once per coordinate, does not apply; such a model checks its own limits.

@@ -73,6 +73,30 @@ impl SceneModel for NonlinearSystem {
     fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
         NonlinearSystem::patch_states(self, t, y)
     }
+    /// At rest without actuation or patches: the tangents leave out only terms that vanish
+    /// there (the platform's centripetal acceleration, the damping forces' change with the
+    /// element rotations, the inertia forces' derivatives at zero acceleration), while the
+    /// actuators' derivatives are differences of the control law and the patches' feedback
+    /// is not in them (crates/dynamics/src/nonlinear/tangent.rs).
+    fn exact_mechanical_form(&mut self, t: f64, y: &[f64]) -> bool {
+        let n = self.coordinates();
+        if self.actuation().is_some() || y.len() != 2 * n {
+            return false;
+        }
+        if y[n..].iter().any(|v| *v != 0.0) {
+            return false;
+        }
+        let motion = self.trajectory().motion(t);
+        if motion
+            .velocity
+            .iter()
+            .chain(motion.acceleration.iter())
+            .any(|v| *v != 0.0)
+        {
+            return false;
+        }
+        self.patch_states(t, y).is_ok_and(|p| p.is_empty())
+    }
     fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
         NonlinearSystem::set_loads(self, loads)
     }

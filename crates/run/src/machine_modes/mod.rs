@@ -161,7 +161,7 @@ pub fn machine_modes(
                 eigenvalue: m.eigenvalue,
                 frequency_hz: m.frequency_hz,
                 damping_ratio: m.damping_ratio,
-                kind: shape.kind(),
+                kind: shape.kind(&scene.machine),
                 shape,
             }
         })

@@ -101,7 +101,7 @@ pub fn modes_json(modes: &MachineModes, count: usize) -> Value {
             "frequency_hz": "|lambda| / (2 pi), the undamped natural frequency of the eigenvalue lambda of A",
             "damping_ratio": "-Re(lambda) / |lambda| (MATLAB's damp)",
             "shape": "real, scaled so that the largest displacement (a slider, a platform coordinate, the platform's rotation times its radius, or a link's deflection) is 1; sliders along their guides, platform x, y and phi (rad per unit), each platform joint's motion, each link's deflection from its chord at xi; imaginary: the largest imaginary part left (0 for an undamped mode)",
-            "kind": "servo (the sliders move at least half as much as anything else), platform (the platform joints move more than any link bends), or bending of the links that bend by at least a quarter of the largest deflection, with the half-waves of the most deflected one",
+            "kind": "servo (the sliders move at least half as much as anything else), platform (the platform's kinetic energy exceeds the links' bending kinetic energy), or bending of the links that bend by at least a quarter of the largest deflection, with the half-waves of the most deflected one",
         },
         "timing_s": {
             "model": modes.timing.model_s,

@@ -1,6 +1,7 @@
 //! A mode's shape in physical terms, from its eigenvector seen at the shape outputs (sliders,
 //! platform pose, link deflections), and a short classification of it.
 
+use flexprr_dynamics::Machine;
 use flexprr_kinematics::{Geometry, Pose};
 use flexprr_linear::Complex;
 
@@ -94,17 +95,36 @@ impl ModeShape {
         l.iter().fold(s.max(p), |m, v| m.max(*v))
     }
 
+    /// The kinetic energies (per unit of `omega^2 / 2`) of the platform,
+    /// `m_p (dx^2 + dy^2) + I_p dphi^2`, and of the links' bending, `sum m_k mean(w_k^2)`.
+    fn kinetic(&self, machine: &Machine) -> (f64, f64) {
+        let [dx, dy, dphi] = self.platform;
+        let platform =
+            machine.platform_mass * (dx * dx + dy * dy) + machine.platform_inertia * dphi * dphi;
+        let bending = (0..3)
+            .map(|k| {
+                let w = &self.links[k];
+                let mean = w.iter().map(|v| v * v).sum::<f64>() / w.len().max(1) as f64;
+                machine.links[k].mass() * mean
+            })
+            .sum();
+        (platform, bending)
+    }
+
     /// What moves most: `servo` when the sliders move at least half as much as anything
-    /// else, `platform` when the platform joints move more than any link bends, else
-    /// `bending link k` (or `bending links i, j` when several links bend by at least a
-    /// quarter of the largest deflection) with the half-waves of the most deflected link.
-    pub(crate) fn kind(&self) -> String {
+    /// else, `platform` when the platform's kinetic energy exceeds the links' bending
+    /// kinetic energy (a heavy platform on the links' axial springs: the light links may
+    /// swing more than it moves), else `bending link k` (or `bending links i, j` when
+    /// several links bend by at least a quarter of the largest deflection) with the
+    /// half-waves of the most deflected link.
+    pub(crate) fn kind(&self, machine: &Machine) -> String {
         let (sliders, platform, links) = self.amplitudes();
         let bending = links.iter().fold(0.0_f64, |m, v| m.max(*v));
         if sliders >= 0.5 * platform.max(bending) && sliders > 0.0 {
             return "servo".to_string();
         }
-        if platform > bending {
+        let (platform_energy, bending_energy) = self.kinetic(machine);
+        if platform_energy > bending_energy {
             return "platform".to_string();
         }
         if bending <= 0.0 {
