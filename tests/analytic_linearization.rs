@@ -1,15 +1,16 @@
 //! The linearisation's analytic path (`A = [0 I; -M^-1 K  -M^-1 C]` from the nonlinear
 //! model's co-rotational tangents, crates/dynamics/src/nonlinear/tangent.rs) against central
 //! differences of the right-hand side with Richardson extrapolation
-//! (`linearize_by_differences`), at rest where the model says its form is exact, and the
-//! differences kept where it is not (actuated sliders, a moving platform).
+//! (`linearize_with(.., Derivatives::Differences)`), at rest where the model says its form
+//! is exact, and the differences kept where it is not (actuated sliders, a moving
+//! platform).
 
 use std::sync::Arc;
 
 use flexprr_control::{Actuator, IdealForce, Pid};
 use flexprr_dynamics::{Actuation, NonlinearOptions, NonlinearSystem, SceneModel, paper};
 use flexprr_kinematics::{Circle, Line, Pose, Trajectory};
-use flexprr_linear::{Derivatives, Input, Output, linearize, linearize_by_differences, modes};
+use flexprr_linear::{Derivatives, Input, Output, linearize, linearize_with, modes};
 use nalgebra::{Point2, Vector3};
 
 fn nonlinear(trajectory: Arc<dyn Trajectory + Send + Sync>, elements: usize) -> NonlinearSystem {
@@ -44,7 +45,15 @@ fn the_tangents_are_the_derivatives_at_rest() {
         let mut model = nonlinear(at_rest(pose), elements);
         let y = SceneModel::initial_state(&model);
         let analytic = linearize(&mut model, 0.0, &y, &inputs, &outputs).unwrap();
-        let differences = linearize_by_differences(&mut model, 0.0, &y, &inputs, &outputs).unwrap();
+        let differences = linearize_with(
+            &mut model,
+            0.0,
+            &y,
+            &inputs,
+            &outputs,
+            Derivatives::Differences,
+        )
+        .unwrap();
         assert_eq!(analytic.derivatives, Derivatives::Analytic);
         assert_eq!(differences.derivatives, Derivatives::Differences);
         // Entry by entry, relative to the largest entry of each row of A.

@@ -18,5 +18,5 @@ pub use channel::{Axis, Input, Output};
 pub use direct::frequency_response_direct;
 pub use error::LinearError;
 pub use frf::{Complex, frequency_response};
-pub use linearize::{Derivatives, Linearization, linearize, linearize_by_differences};
+pub use linearize::{Derivatives, Linearization, linearize, linearize_with};
 pub use modes::{Mode, modes};

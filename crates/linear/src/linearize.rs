@@ -275,21 +275,6 @@ pub fn linearize(
     linearize_with(model, t, y, inputs, outputs, Derivatives::Analytic)
 }
 
-/// [`linearize`] with `A` by differences even where the model's mechanical form is exact:
-/// the check of the analytic path (and of a model's claim that its form is exact).
-///
-/// # Errors
-/// As [`linearize`].
-pub fn linearize_by_differences(
-    model: &mut dyn SceneModel,
-    t: f64,
-    y: &[f64],
-    inputs: &[Input],
-    outputs: &[Output],
-) -> Result<Linearization, LinearError> {
-    linearize_with(model, t, y, inputs, outputs, Derivatives::Differences)
-}
-
 /// `A = [0 I; -M^-1 K  -M^-1 C]` from the model's exact mechanical form into `a`, or
 /// `false` (nothing written) when the model has none at `(t, y)`.
 fn mechanical_a(
@@ -339,8 +324,13 @@ fn mechanical_a(
     Ok(true)
 }
 
-/// [`linearize`] with the derivatives asked for.
-fn linearize_with(
+/// [`linearize`] with the derivatives asked for: [`Derivatives::Differences`] everywhere
+/// (the check of the analytic path, and of a model's claim that its form is exact), or
+/// [`Derivatives::Analytic`] where the model's form is exact (what [`linearize`] does).
+///
+/// # Errors
+/// As [`linearize`].
+pub fn linearize_with(
     model: &mut dyn SceneModel,
     t: f64,
     y: &[f64],
