@@ -2,7 +2,7 @@
 
 use faer::MatMut;
 
-use crate::LinearSecondOrder;
+use crate::{BlockBanded, LinearSecondOrder};
 
 /// A first-order ODE system `y' = f(t, y)` of fixed dimension.
 ///
@@ -190,6 +190,32 @@ pub trait SecondOrderForm {
         damping: MatMut<'_, f64>,
         stiffness: MatMut<'_, f64>,
     );
+
+    /// The sparsity of `M`, `C` and `K`, when they have one: banded blocks of coordinates
+    /// joined by a dense border ([`BlockBanded`]). [`crate::GeneralizedAlpha`] then factors
+    /// its iteration matrix block by block (`O(n p^2)` instead of `n^3 / 3`) and multiplies
+    /// by `M` in the structure; it refuses matrices with a non-zero entry outside it. Asked
+    /// once, at the start of an integration. `None` (the default): dense matrices.
+    fn structure(&self) -> Option<BlockBanded> {
+        None
+    }
+
+    /// Whether [`SecondOrderForm::residual`] is provided (`false` by default).
+    fn has_residual(&self) -> bool {
+        false
+    }
+
+    /// Writes the residual of the equations of motion for the accelerations `acc`,
+    /// `r = M(t, q) acc - F(t, q, v)` at `y = (q, v)`, into `residual` (`n` entries), with
+    /// non-finite entries where the system cannot be evaluated (as [`OdeSystem::rhs`]).
+    /// Implicit methods then iterate on `M a - F` without solving with `M` in every
+    /// iteration. Only called when [`SecondOrderForm::has_residual`] is `true`; like the
+    /// right-hand side it is called in every iteration and must not allocate. The default
+    /// writes NaN.
+    fn residual(&mut self, t: f64, y: &[f64], acc: &[f64], residual: &mut [f64]) {
+        let _ = (t, y, acc);
+        residual.fill(f64::NAN);
+    }
 }
 
 /// Forward-difference Jacobian `J[:, j] = (f(y + d_j e_j) - f(y)) / d_j` with

@@ -222,6 +222,31 @@ impl NonlinearSystem {
         Ok(())
     }
 
+    /// The residual `M acc - F` of the equations of motion (after
+    /// [`NonlinearSystem::assemble_equations`], before a solve) into `out`.
+    pub(super) fn equations_residual(&self, acc: &[f64], out: &mut [f64]) {
+        let links = 3 * self.per_link;
+        let k = self.mass.border_size();
+        let (mut border_x, mut border_out) = ([0.0; 6], [0.0; 6]);
+        border_x[..3].copy_from_slice(&acc[..3]);
+        if k > 3 {
+            border_x[3..k].copy_from_slice(&acc[3 + links..3 + links + 3]);
+        }
+        self.mass.multiply(
+            &acc[3..3 + links],
+            &border_x[..k],
+            &mut out[3..3 + links],
+            &mut border_out[..k],
+        );
+        out[..3].copy_from_slice(&border_out[..3]);
+        if k > 3 {
+            out[3 + links..3 + links + 3].copy_from_slice(&border_out[3..k]);
+        }
+        for (r, f) in out.iter_mut().zip(&self.generalized) {
+            *r -= f;
+        }
+    }
+
     /// The accelerations `x_e''` of element `e` of link `i` from the generalized `acc`.
     pub(super) fn element_acceleration(
         &self,

@@ -26,10 +26,10 @@
 //! damping forces' change with the element rotations (`dC/dz z'`).
 
 use faer::MatMut;
-use flexprr_integrators::SecondOrderForm;
+use flexprr_integrators::{BlockBanded, SecondOrderForm};
 
 use super::equations::NONE;
-use super::system::NonlinearSystem;
+use super::system::{MASS_BANDWIDTH, NonlinearSystem};
 
 impl NonlinearSystem {
     /// Adds `A^T E A` of one element (its 6x6 matrix `e` and map `map`) into `out`.
@@ -209,6 +209,22 @@ impl SecondOrderForm for NonlinearSystem {
         stiffness: MatMut<'_, f64>,
     ) {
         self.mechanical_matrices(t, y, mass, damping, stiffness);
+    }
+
+    /// One banded block per link (half-bandwidth 5: an element couples its two nodes' six
+    /// consecutive coordinates), the platform's and the sliders' coordinates the border.
+    fn structure(&self) -> Option<BlockBanded> {
+        let blocks = (0..3).map(|i| self.link_range(i)).collect();
+        BlockBanded::new(NonlinearSystem::coordinates(self), blocks, MASS_BANDWIDTH).ok()
+    }
+
+    fn has_residual(&self) -> bool {
+        true
+    }
+
+    /// `M a - F` with the banded mass the right-hand side assembles, without its solve.
+    fn residual(&mut self, t: f64, y: &[f64], acc: &[f64], residual: &mut [f64]) {
+        self.motion_residual(t, y, acc, residual);
     }
 }
 
