@@ -327,7 +327,7 @@ impl GeneralizedAlphaStepper {
             }
         }
         if let Algebra::Structured { mass, .. } = &mut self.algebra {
-            mass.load(&[(1.0, self.mass.as_ref())]);
+            mass.load(&[(1.0, &self.mass)]);
         }
         Ok(())
     }
@@ -363,9 +363,9 @@ impl GeneralizedAlphaStepper {
             }
             Algebra::Structured { lu, .. } => {
                 lu.load(&[
-                    (1.0, self.mass.as_ref()),
-                    (cc, self.damping.as_ref()),
-                    (ck, self.stiffness.as_ref()),
+                    (1.0, &self.mass),
+                    (cc, &self.damping),
+                    (ck, &self.stiffness),
                 ]);
                 lu.factor()
             }

@@ -28,7 +28,7 @@
 
 use std::ops::Range;
 
-use faer::MatRef;
+use faer::Mat;
 
 use crate::IntegratorError;
 
@@ -222,25 +222,44 @@ impl BandedBordered {
 
     /// `sum_t c_t A_t[(i, j)]` of the dense terms.
     #[inline]
-    fn combined(terms: &[(f64, MatRef<'_, f64>)], i: usize, j: usize) -> f64 {
+    fn combined(terms: &[(f64, &Mat<f64>)], i: usize, j: usize) -> f64 {
         terms.iter().map(|(c, a)| c * a[(i, j)]).sum()
+    }
+
+    /// `out[r] = sum_t c_t A_t[(rows.start + r, j)]` over a range of rows of column `j`.
+    #[inline]
+    fn combined_column(terms: &[(f64, &Mat<f64>)], rows: Range<usize>, j: usize, out: &mut [f64]) {
+        out.fill(0.0);
+        for (c, a) in terms {
+            let column = &a.col_as_slice(j)[rows.clone()];
+            for (o, v) in out.iter_mut().zip(column) {
+                *o += c * v;
+            }
+        }
     }
 
     /// Loads `sum_t c_t A_t` of dense `n x n` matrices, reading only the entries of the
     /// structure.
-    pub(crate) fn load(&mut self, terms: &[(f64, MatRef<'_, f64>)]) {
+    pub(crate) fn load(&mut self, terms: &[(f64, &Mat<f64>)]) {
         let (p, ld, k) = (self.p, self.ld, self.k());
-        self.band.fill(0.0);
         for &(first, len, o) in &self.blocks {
             for j in 0..len {
                 let col = &mut self.band[(o + j) * ld..(o + j + 1) * ld];
-                for i in j.saturating_sub(p)..(j + p + 1).min(len) {
-                    col[i + 2 * p - j] = Self::combined(terms, first + i, first + j);
-                }
+                let (i0, i1) = (j.saturating_sub(p), (j + p + 1).min(len));
+                col[..i0 + 2 * p - j].fill(0.0);
+                col[i1 + 2 * p - j..].fill(0.0);
+                let rows = first + i0..first + i1;
+                Self::combined_column(
+                    terms,
+                    rows,
+                    first + j,
+                    &mut col[i0 + 2 * p - j..i1 + 2 * p - j],
+                );
             }
             for (c, &d) in self.border.iter().enumerate() {
+                let out = &mut self.right[o * k + c * len..o * k + (c + 1) * len];
+                Self::combined_column(terms, first..first + len, d, out);
                 for i in 0..len {
-                    self.right[o * k + c * len + i] = Self::combined(terms, first + i, d);
                     self.bottom[c * self.nb + o + i] = Self::combined(terms, d, first + i);
                 }
             }
@@ -351,14 +370,21 @@ impl BandedBordered {
                 }
             }
             let inv = 1.0 / a[at(j, j)];
-            for i in j + 1..=last {
-                a[at(i, j)] *= inv;
+            // Column j's multipliers (rows j+1..=last) and each later column's rows
+            // j+1..=last are contiguous in the band storage.
+            let (head, tail) = a.split_at_mut((j + 1) * ld);
+            let below = j * ld + 2 * p + 1;
+            let multipliers = &mut head[below..below + (last - j)];
+            for l in multipliers.iter_mut() {
+                *l *= inv;
             }
             for c in j + 1..=cmax {
-                let u = a[at(j, c)];
+                let col = &mut tail[(c - j - 1) * ld..(c - j) * ld];
+                let u = col[j + 2 * p - c];
                 if u != 0.0 {
-                    for i in j + 1..=last {
-                        a[at(i, c)] -= a[at(i, j)] * u;
+                    let rows = &mut col[j + 1 + 2 * p - c..=last + 2 * p - c];
+                    for (x, l) in rows.iter_mut().zip(multipliers.iter()) {
+                        *x -= l * u;
                     }
                 }
             }
@@ -416,7 +442,6 @@ impl BandedBordered {
 /// [`BandedBordered::factor_block`], `3p + 1` rows per column) and row interchanges `pivots`.
 fn solve_band(a: &[f64], pivots: &[usize], p: usize, r: &mut [f64]) {
     let (len, ld) = (r.len(), 3 * p + 1);
-    let at = |i: usize, j: usize| j * ld + i + 2 * p - j;
     for j in 0..len {
         let ip = pivots[j];
         if ip != j {
@@ -424,17 +449,24 @@ fn solve_band(a: &[f64], pivots: &[usize], p: usize, r: &mut [f64]) {
         }
         let rj = r[j];
         if rj != 0.0 {
-            for i in j + 1..(j + p + 1).min(len) {
-                r[i] -= a[at(i, j)] * rj;
+            // Column j's multipliers, rows j+1..j+p+1, are contiguous.
+            let end = (j + p + 1).min(len);
+            let l = &a[j * ld + 2 * p + 1..j * ld + 2 * p + 1 + (end - j - 1)];
+            for (x, l) in r[j + 1..end].iter_mut().zip(l) {
+                *x -= l * rj;
             }
         }
     }
     for j in (0..len).rev() {
-        r[j] /= a[at(j, j)];
+        let col = &a[j * ld..(j + 1) * ld];
+        r[j] /= col[2 * p];
         let rj = r[j];
         if rj != 0.0 {
-            for i in j.saturating_sub(2 * p)..j {
-                r[i] -= a[at(i, j)] * rj;
+            // Column j of U, rows first..j, at offsets first + 2p - j .. 2p.
+            let first = j.saturating_sub(2 * p);
+            let u = &col[first + 2 * p - j..2 * p];
+            for (x, u) in r[first..j].iter_mut().zip(u) {
+                *x -= u * rj;
             }
         }
     }
@@ -495,8 +527,6 @@ fn dense_solve(a: &[f64], pivots: &[usize], k: usize, r: &mut [f64]) {
 
 #[cfg(test)]
 mod tests {
-    use faer::Mat;
-
     use super::*;
     use crate::common::DenseLu;
 
@@ -558,7 +588,7 @@ mod tests {
                 let a = random_matrix(&s, &mut seed);
                 let b: Vec<f64> = (0..n).map(|_| random(&mut seed)).collect();
                 let mut structured = BandedBordered::new(&s);
-                structured.load(&[(1.0, a.as_ref())]);
+                structured.load(&[(1.0, &a)]);
                 let mut product = vec![0.0; n];
                 structured.multiply(&b, -2.0, &mut product);
                 for i in 0..n {
@@ -593,14 +623,14 @@ mod tests {
         }
         let mut m = BandedBordered::new(&s);
         a[(2, 2)] = 0.0;
-        m.load(&[(1.0, a.as_ref())]);
+        m.load(&[(1.0, &a)]);
         assert!(!m.factor());
         // The block regular, the whole singular: rows 3 and 4 equal.
         a[(2, 2)] = 1.0;
         a[(3, 4)] = 1.0;
         a[(4, 3)] = 1.0;
         a[(4, 4)] = 1.0;
-        m.load(&[(1.0, a.as_ref())]);
+        m.load(&[(1.0, &a)]);
         assert!(!m.factor());
     }
 }

@@ -30,6 +30,17 @@ pub(super) type CoordinateMap = [(usize, f64); 2];
 /// No generalized coordinate.
 pub(super) const NONE: usize = usize::MAX;
 
+/// Where a generalized coordinate sits in the [`BorderedBanded`] mass.
+#[derive(Debug, Clone, Copy)]
+enum MassPlace {
+    /// No coordinate.
+    None,
+    /// Row `j` of link block `b`.
+    Block(usize, usize),
+    /// Border index.
+    Border(usize),
+}
+
 impl NonlinearSystem {
     /// Generalized index of link `i`'s local coordinate `j`.
     #[inline]
@@ -94,20 +105,32 @@ impl NonlinearSystem {
         }
     }
 
-    /// Adds `v` at `(g1, g2)` of the symmetric generalized matrix `mass` (every ordered pair is
-    /// offered by the caller; each stored entry is taken once).
+    /// [`NonlinearSystem::mass_position`] of `g`, [`MassPlace::None`] for [`NONE`].
     #[inline]
-    fn add_mass(&self, mass: &mut BorderedBanded, g1: usize, g2: usize, v: f64) {
-        match (self.mass_position(g1), self.mass_position(g2)) {
-            (Ok((b1, j1)), Ok((b2, j2))) => {
+    fn mass_place(&self, g: usize) -> MassPlace {
+        if g == NONE {
+            return MassPlace::None;
+        }
+        match self.mass_position(g) {
+            Ok((b, j)) => MassPlace::Block(b, j),
+            Err(c) => MassPlace::Border(c),
+        }
+    }
+
+    /// Adds `v` at `(p1, p2)` of the symmetric generalized matrix `mass` (every ordered pair
+    /// is offered by the caller; each stored entry is taken once).
+    #[inline]
+    fn add_mass(mass: &mut BorderedBanded, p1: MassPlace, p2: MassPlace, v: f64) {
+        match (p1, p2) {
+            (MassPlace::Block(b1, j1), MassPlace::Block(b2, j2)) => {
                 debug_assert_eq!(b1, b2, "links are not coupled directly");
                 if j1 >= j2 {
                     mass.add_block(b1, j1, j2, v);
                 }
             }
-            (Ok((b, j)), Err(c)) => mass.add_coupling(b, j, c, v),
-            (Err(_), Ok(_)) => {}
-            (Err(c1), Err(c2)) => mass.add_border(c1, c2, v),
+            (MassPlace::Block(b, j), MassPlace::Border(c)) => mass.add_coupling(b, j, c, v),
+            (MassPlace::Border(c1), MassPlace::Border(c2)) => mass.add_border(c1, c2, v),
+            _ => {}
         }
     }
 
@@ -164,15 +187,17 @@ impl NonlinearSystem {
                         rhs[g] -= coef * known_force[c];
                     }
                 }
-                for (c1, m1) in map.iter().enumerate() {
-                    for (c2, m2) in map.iter().enumerate() {
+                // Where each slot's coordinates sit in the mass, found once per element.
+                let places = map.map(|m| m.map(|(g, a)| (self.mass_place(g), a)));
+                for (c1, m1) in places.iter().enumerate() {
+                    for (c2, m2) in places.iter().enumerate() {
                         let v = inertia.mass[c1][c2];
                         if v == 0.0 {
                             continue;
                         }
-                        for &(g1, a1) in m1.iter().filter(|(g, _)| *g != NONE) {
-                            for &(g2, a2) in m2.iter().filter(|(g, _)| *g != NONE) {
-                                self.add_mass(&mut mass, g1, g2, a1 * a2 * v);
+                        for &(p1, a1) in m1 {
+                            for &(p2, a2) in m2 {
+                                Self::add_mass(&mut mass, p1, p2, a1 * a2 * v);
                             }
                         }
                     }
