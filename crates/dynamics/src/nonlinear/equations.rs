@@ -30,6 +30,19 @@ pub(super) type CoordinateMap = [(usize, f64); 2];
 /// No generalized coordinate.
 pub(super) const NONE: usize = usize::MAX;
 
+/// The block rows of an element's six coordinates when each is one link coordinate with
+/// coefficient 1 (an element between two free nodes), `None` otherwise.
+fn interior_rows(places: &[[(MassPlace, f64); 2]; 6]) -> Option<[usize; 6]> {
+    let mut rows = [0; 6];
+    for (row, slot) in rows.iter_mut().zip(places) {
+        match slot {
+            [(MassPlace::Block(_, j), a), (MassPlace::None, _)] if *a == 1.0 => *row = *j,
+            _ => return None,
+        }
+    }
+    Some(rows)
+}
+
 /// Where a generalized coordinate sits in the [`BorderedBanded`] mass.
 #[derive(Debug, Clone, Copy)]
 enum MassPlace {
@@ -91,29 +104,20 @@ impl NonlinearSystem {
         (map, known)
     }
 
-    /// Where generalized coordinate `g` sits in the mass matrix: `Ok((block, row))` for a
-    /// link's coordinate, `Err(border index)` for the platform's and the sliders'.
+    /// Where coordinate `g` of an element of link `i` sits in the mass: a row of the link's
+    /// block, or the border (the platform's three coordinates, then the sliders');
+    /// [`MassPlace::None`] for [`NONE`].
     #[inline]
-    pub(super) fn mass_position(&self, g: usize) -> Result<(usize, usize), usize> {
-        if g < 3 {
-            Err(g)
-        } else if g < 3 + 3 * self.per_link {
-            let j = g - 3;
-            Ok((j / self.per_link, j % self.per_link))
-        } else {
-            Err(3 + (g - 3 - 3 * self.per_link))
-        }
-    }
-
-    /// [`NonlinearSystem::mass_position`] of `g`, [`MassPlace::None`] for [`NONE`].
-    #[inline]
-    fn mass_place(&self, g: usize) -> MassPlace {
+    fn mass_place(&self, i: usize, g: usize) -> MassPlace {
+        let links_end = 3 + 3 * self.per_link;
         if g == NONE {
-            return MassPlace::None;
-        }
-        match self.mass_position(g) {
-            Ok((b, j)) => MassPlace::Block(b, j),
-            Err(c) => MassPlace::Border(c),
+            MassPlace::None
+        } else if g < 3 {
+            MassPlace::Border(g)
+        } else if g < links_end {
+            MassPlace::Block(i, g - self.link_index(i, 0))
+        } else {
+            MassPlace::Border(3 + g - links_end)
         }
     }
 
@@ -188,7 +192,23 @@ impl NonlinearSystem {
                     }
                 }
                 // Where each slot's coordinates sit in the mass, found once per element.
-                let places = map.map(|m| m.map(|(g, a)| (self.mass_place(g), a)));
+                let mut places = [[(MassPlace::None, 0.0); 2]; 6];
+                for (slot, m) in places.iter_mut().zip(&map) {
+                    for (place, &(g, a)) in slot.iter_mut().zip(m) {
+                        *place = (self.mass_place(i, g), a);
+                    }
+                }
+                if let Some(rows) = interior_rows(&places) {
+                    // An element inside the link: its coordinates are rows of the block.
+                    for (c1, &j1) in rows.iter().enumerate() {
+                        for (c2, &j2) in rows.iter().enumerate() {
+                            if j1 >= j2 {
+                                mass.add_block(i, j1, j2, inertia.mass[c1][c2]);
+                            }
+                        }
+                    }
+                    continue;
+                }
                 for (c1, m1) in places.iter().enumerate() {
                     for (c2, m2) in places.iter().enumerate() {
                         let v = inertia.mass[c1][c2];
