@@ -33,15 +33,24 @@
 //!
 //! The unknown of a step is `x = a_dd_{n+1}`; `q_{n+1} = q* + beta' h^2 x`,
 //! `v_{n+1} = v* + gamma' h x` with `beta' = beta (1 - alpha_f)/(1 - alpha_m)`,
-//! `gamma' = gamma (1 - alpha_f)/(1 - alpha_m)`. The residual `r(x) = x - M^-1 F` is what
-//! [`OdeSystem::rhs`] gives; Newton's matrix `dr/dx = M^-1 (M + gamma' h C + beta' h^2 K)`
-//! gives the corrections `(M + gamma' h C + beta' h^2 K) dx = -M r`, with the `M`, `C` and
-//! `K` of [`SecondOrderForm::matrices`](crate::SecondOrderForm::matrices). The iteration is modified Newton after CVODE
-//! (Hindmarsh et al., ACM TOMS 31, 2005): the matrices are kept for [`MATRIX_MAX_AGE`]
-//! accepted steps, renewed when an iteration converges slowly or fails, and the
-//! factorisation (dense LU with partial pivoting, faer's `lu_in_place` into preallocated
-//! storage) is kept while the step size stays within [`REFACTOR_RATIO`] of the one it was
-//! made for. The convergence test is CVODE's: the rate `R` from successive corrections and
+//! `gamma' = gamma (1 - alpha_f)/(1 - alpha_m)`. The residual is the form's
+//! `r(x) = M(q) x - F` ([`SecondOrderForm::residual`](crate::SecondOrderForm::residual)) when
+//! it offers one, with the corrections `(M + gamma' h C + beta' h^2 K) dx = -r`; otherwise
+//! `r(x) = x - M^-1 F` from [`OdeSystem::rhs`], whose Newton matrix
+//! `M^-1 (M + gamma' h C + beta' h^2 K)` gives `(M + gamma' h C + beta' h^2 K) dx = -M r`;
+//! `M`, `C` and `K` are those of [`SecondOrderForm::matrices`](crate::SecondOrderForm::matrices).
+//! Both have the same solution; the first needs no solve with `M` per iteration. The
+//! iteration is modified Newton after CVODE (Hindmarsh et al., ACM TOMS 31, 2005): the
+//! matrices are kept for [`MATRIX_MAX_AGE`] accepted steps, renewed when an iteration
+//! converges slowly or fails, and the factorisation is kept while the step size stays within
+//! [`REFACTOR_RATIO`] of the one it was made for. The factorisation is the banded-bordered
+//! LU of [`crate::structured`] (a banded LU with partial pivoting per block, the Schur
+//! complement of the border) when the form declares a
+//! [`BlockBanded`](crate::BlockBanded) structure
+//! ([`SecondOrderForm::structure`](crate::SecondOrderForm::structure)), and the products with
+//! `M` use the same storage; otherwise dense LU with partial pivoting (faer's `lu_in_place`
+//! into preallocated storage) and dense products. A form whose matrices have a non-zero
+//! entry outside the structure it declared is refused. The convergence test is CVODE's: the rate `R` from successive corrections and
 //! `min(1, R) |dx|_w <= 0.01`, where `|.|_w` is the weighted RMS norm of the position
 //! corrections `beta' h^2 dx` with the error test's weights (velocities are not tested: an
 //! unresolved mode's velocity is `omega` times its position), at most

@@ -292,10 +292,8 @@ impl BandedBordered {
                     *o_i += a * xd;
                 }
             }
-            if sign != 1.0 {
-                for v in ob.iter_mut() {
-                    *v *= sign;
-                }
+            for v in ob.iter_mut() {
+                *v *= sign;
             }
         }
         for (r, &dr) in self.border.iter().enumerate() {
@@ -526,6 +524,10 @@ fn dense_solve(a: &[f64], pivots: &[usize], k: usize, r: &mut [f64]) {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::single_range_in_vec_init,
+    reason = "structures of one block are lists of one range"
+)]
 mod tests {
     use super::*;
     use crate::common::DenseLu;

@@ -137,10 +137,14 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
 /// [`crate::GeneralizedAlpha`] builds its `n x n` iteration matrix `M + c_C C + c_K K`
 /// (instead of the `2n x 2n` `I - c J` of the first-order form). `K` and `C` may be
 /// approximations (Newton's iteration converges to the same solution, a poorer matrix only
-/// costs iterations); `M` should be the mass the right-hand side divides by.
+/// costs iterations); `M` should be the mass the right-hand side divides by. Two optional
+/// parts make the iterations cheaper: the matrices' sparsity ([`SecondOrderForm::structure`])
+/// and the residual `M a - F` ([`SecondOrderForm::residual`]).
 ///
 /// ```
-/// use flexprr_integrators::{GeneralizedAlpha, Integrator, OdeSystem, Options, SecondOrderForm};
+/// use flexprr_integrators::{
+///     BlockBanded, GeneralizedAlpha, Integrator, OdeSystem, Options, SecondOrderForm,
+/// };
 ///
 /// /// Two masses on springs, `m q1'' = -k (2 q1 - q2)`, `m q2'' = -k (2 q2 - q1)`.
 /// struct Chain { m: f64, k: f64 }
@@ -166,6 +170,16 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
 ///         }
 ///         k[(0, 1)] = -self.k;
 ///         k[(1, 0)] = -self.k;
+///     }
+///     // Optional: the matrices are one tridiagonal block (a chain: banded LU, no border).
+///     fn structure(&self) -> Option<BlockBanded> {
+///         BlockBanded::new(2, vec![0..2], 1).ok()
+///     }
+///     // Optional: Newton's residual M a - F without dividing by M.
+///     fn has_residual(&self) -> bool { true }
+///     fn residual(&mut self, _t: f64, y: &[f64], acc: &[f64], r: &mut [f64]) {
+///         r[0] = self.m * acc[0] + self.k * (2.0 * y[0] - y[1]);
+///         r[1] = self.m * acc[1] + self.k * (2.0 * y[1] - y[0]);
 ///     }
 /// }
 ///

@@ -162,8 +162,8 @@ impl SecondOrderForm for Chains {
 fn start(s: &Chains) -> Vec<f64> {
     let n = s.n();
     let mut y = vec![0.0; 2 * n];
-    for i in 0..n {
-        y[i] = 0.02 * ((i as f64) * 0.9).sin();
+    for (i, q) in y[..n].iter_mut().enumerate() {
+        *q = 0.02 * ((i as f64) * 0.9).sin();
     }
     y[n] = 1.0;
     y

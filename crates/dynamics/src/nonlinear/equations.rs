@@ -32,6 +32,10 @@ pub(super) const NONE: usize = usize::MAX;
 
 /// The block rows of an element's six coordinates when each is one link coordinate with
 /// coefficient 1 (an element between two free nodes), `None` otherwise.
+#[allow(
+    clippy::float_cmp,
+    reason = "a free node's coordinates enter element_map with the exact coefficient 1"
+)]
 fn interior_rows(places: &[[(MassPlace, f64); 2]; 6]) -> Option<[usize; 6]> {
     let mut rows = [0; 6];
     for (row, slot) in rows.iter_mut().zip(places) {
