@@ -18,8 +18,9 @@
 //! dense LU with partial pivoting; a solve is `z_b = A_b^-1 r_b`,
 //! `x_d = S^-1 (r_d - sum_b R_b z_b)`, `x_b = z_b - Y_b x_d`. The work is
 //! `O(n p^2 + n p k + k^3)` for `n` coordinates and a border of `k` (dense LU: `n^3 / 3`),
-//! and nothing is allocated after [`BandedBordered::new`]. Pivoting is within each block
-//! only, so the blocks themselves must be regular: for the iteration matrix of a mechanical
+//! and nothing is allocated after the storage is made (at the start of an integration).
+//! Pivoting is within each block only, so the blocks themselves must be regular (a singular
+//! block is reported like a singular matrix): for the iteration matrix of a mechanical
 //! system, `M_b + gamma' h C_b + beta' h^2 K_b` of a chain with its border held, whose mass
 //! part is positive definite.
 
