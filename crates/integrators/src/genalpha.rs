@@ -50,11 +50,11 @@
 //! ([`SecondOrderForm::structure`](crate::SecondOrderForm::structure)), and the products with
 //! `M` use the same storage; otherwise dense LU with partial pivoting (faer's `lu_in_place`
 //! into preallocated storage) and dense products. A form whose matrices have a non-zero
-//! entry outside the structure it declared is refused. The convergence test is CVODE's: the rate `R` from successive corrections and
-//! `min(1, R) |dx|_w <= 0.002`, where `|.|_w` is the weighted RMS norm of the position
-//! corrections `beta' h^2 dx` with the error test's weights (velocities are not tested: an
-//! unresolved mode's velocity is `omega` times its position), at most
-//! [`NEWTON_MAX_ITERATIONS`] iterations.
+//! entry outside the structure it declared is refused. The convergence test is CVODE's: the
+//! rate `R` from successive corrections and `min(1, R) |dx|_w <= 0.002`, where `|.|_w` is
+//! the weighted RMS norm of the position corrections `beta' h^2 dx` with the error test's
+//! weights (velocities are not tested: an unresolved mode's velocity is `omega` times its
+//! position), at most [`NEWTON_MAX_ITERATIONS`] iterations.
 //!
 //! # Error control and dense output
 //!
