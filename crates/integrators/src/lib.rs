@@ -51,6 +51,7 @@ pub mod bdf;
 pub mod exponential;
 pub mod genalpha;
 pub mod rk45;
+pub mod structured;
 #[cfg(feature = "test-problems")]
 pub mod test_problems;
 
@@ -66,6 +67,7 @@ pub use observe::{DynIntegrator, Flow, Interrupted, Interruption, Observer, OnSt
 pub use options::{Options, Tolerance};
 pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};
 pub use solution::{Solution, Stats};
+pub use structured::BlockBanded;
 pub use system::{OdeSystem, SecondOrderForm, finite_difference_jacobian};
 
 /// An integration in progress: the method's state between steps.

@@ -2,7 +2,7 @@
 
 use faer::MatMut;
 
-use crate::LinearSecondOrder;
+use crate::{BlockBanded, LinearSecondOrder};
 
 /// A first-order ODE system `y' = f(t, y)` of fixed dimension.
 ///
@@ -137,10 +137,14 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
 /// [`crate::GeneralizedAlpha`] builds its `n x n` iteration matrix `M + c_C C + c_K K`
 /// (instead of the `2n x 2n` `I - c J` of the first-order form). `K` and `C` may be
 /// approximations (Newton's iteration converges to the same solution, a poorer matrix only
-/// costs iterations); `M` should be the mass the right-hand side divides by.
+/// costs iterations); `M` should be the mass the right-hand side divides by. Two optional
+/// parts make the iterations cheaper: the matrices' sparsity ([`SecondOrderForm::structure`])
+/// and the residual `M a - F` ([`SecondOrderForm::residual`]).
 ///
 /// ```
-/// use flexprr_integrators::{GeneralizedAlpha, Integrator, OdeSystem, Options, SecondOrderForm};
+/// use flexprr_integrators::{
+///     BlockBanded, GeneralizedAlpha, Integrator, OdeSystem, Options, SecondOrderForm,
+/// };
 ///
 /// /// Two masses on springs, `m q1'' = -k (2 q1 - q2)`, `m q2'' = -k (2 q2 - q1)`.
 /// struct Chain { m: f64, k: f64 }
@@ -167,6 +171,16 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
 ///         k[(0, 1)] = -self.k;
 ///         k[(1, 0)] = -self.k;
 ///     }
+///     // Optional: the matrices are one tridiagonal block (a chain: banded LU, no border).
+///     fn structure(&self) -> Option<BlockBanded> {
+///         BlockBanded::new(2, vec![0..2], 1).ok()
+///     }
+///     // Optional: Newton's residual M a - F without dividing by M.
+///     fn has_residual(&self) -> bool { true }
+///     fn residual(&mut self, _t: f64, y: &[f64], acc: &[f64], r: &mut [f64]) {
+///         r[0] = self.m * acc[0] + self.k * (2.0 * y[0] - y[1]);
+///         r[1] = self.m * acc[1] + self.k * (2.0 * y[1] - y[0]);
+///     }
 /// }
 ///
 /// // The in-phase mode q1 = q2 = cos(w t), w^2 = k / m = 25.
@@ -190,6 +204,32 @@ pub trait SecondOrderForm {
         damping: MatMut<'_, f64>,
         stiffness: MatMut<'_, f64>,
     );
+
+    /// The sparsity of `M`, `C` and `K`, when they have one: banded blocks of coordinates
+    /// joined by a dense border ([`BlockBanded`]). [`crate::GeneralizedAlpha`] then factors
+    /// its iteration matrix block by block (`O(n p^2)` instead of `n^3 / 3`) and multiplies
+    /// by `M` in the structure; it refuses matrices with a non-zero entry outside it. Asked
+    /// once, at the start of an integration. `None` (the default): dense matrices.
+    fn structure(&self) -> Option<BlockBanded> {
+        None
+    }
+
+    /// Whether [`SecondOrderForm::residual`] is provided (`false` by default).
+    fn has_residual(&self) -> bool {
+        false
+    }
+
+    /// Writes the residual of the equations of motion for the accelerations `acc`,
+    /// `r = M(t, q) acc - F(t, q, v)` at `y = (q, v)`, into `residual` (`n` entries), with
+    /// non-finite entries where the system cannot be evaluated (as [`OdeSystem::rhs`]).
+    /// Implicit methods then iterate on `M a - F` without solving with `M` in every
+    /// iteration. Only called when [`SecondOrderForm::has_residual`] is `true`; like the
+    /// right-hand side it is called in every iteration and must not allocate. The default
+    /// writes NaN.
+    fn residual(&mut self, t: f64, y: &[f64], acc: &[f64], residual: &mut [f64]) {
+        let _ = (t, y, acc);
+        residual.fill(f64::NAN);
+    }
 }
 
 /// Forward-difference Jacobian `J[:, j] = (f(y + d_j e_j) - f(y)) / d_j` with

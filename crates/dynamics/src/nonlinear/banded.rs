@@ -84,6 +84,46 @@ impl BorderedBanded {
         self.border[r * self.k + c] += v;
     }
 
+    /// `A x` before factorization: `blocks_x` holds `x_1 .. x_B` (`blocks n` values),
+    /// `border_x` holds `x_d` (`k` values); the product into `blocks_out`, `border_out`.
+    pub(crate) fn multiply(
+        &self,
+        blocks_x: &[f64],
+        border_x: &[f64],
+        blocks_out: &mut [f64],
+        border_out: &mut [f64],
+    ) {
+        let (n, w, k) = (self.n, self.w, self.k);
+        for (r, out) in border_out.iter_mut().enumerate() {
+            *out = (0..k).map(|c| self.border[r * k + c] * border_x[c]).sum();
+        }
+        for b in 0..self.blocks {
+            let band = &self.band[b * n * (w + 1)..(b + 1) * n * (w + 1)];
+            let c = &self.coupling[b * n * k..(b + 1) * n * k];
+            let x = &blocks_x[b * n..(b + 1) * n];
+            let out = &mut blocks_out[b * n..(b + 1) * n];
+            for i in 0..n {
+                // The diagonal and the lower band of row i, and the lower band's transpose.
+                let mut sum = band[i * (w + 1)] * x[i];
+                for d in 1..=w.min(i) {
+                    let a = band[i * (w + 1) + d];
+                    sum += a * x[i - d];
+                    out[i - d] += a * x[i];
+                }
+                let coupling = &c[i * k..(i + 1) * k];
+                out[i] = sum
+                    + coupling
+                        .iter()
+                        .zip(border_x)
+                        .map(|(a, y)| a * y)
+                        .sum::<f64>();
+                for (o, a) in border_out.iter_mut().zip(coupling) {
+                    *o += a * x[i];
+                }
+            }
+        }
+    }
+
     /// Factorizes in place.
     pub(crate) fn factor(&mut self) -> Result<(), NotPositiveDefinite> {
         let (n, w, k) = (self.n, self.w, self.k);
@@ -262,6 +302,17 @@ mod tests {
             }
         }
         let rhs: Vec<f64> = (0..size).map(|i| (i as f64).sin()).collect();
+        let (mut p_blocks, mut p_border) = (vec![0.0; blocks * n], vec![0.0; k]);
+        m.multiply(
+            &rhs[..blocks * n],
+            &rhs[blocks * n..],
+            &mut p_blocks,
+            &mut p_border,
+        );
+        for (i, p) in p_blocks.iter().chain(&p_border).enumerate() {
+            let dense: f64 = (0..size).map(|j| dense[i][j] * rhs[j]).sum();
+            assert!((p - dense).abs() < 1e-14, "product row {i}: {p} vs {dense}");
+        }
         m.factor().unwrap();
         let (mut x_blocks, mut x_border) = (rhs[..blocks * n].to_vec(), rhs[blocks * n..].to_vec());
         m.solve(&mut x_blocks, &mut x_border);

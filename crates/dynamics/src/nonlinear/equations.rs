@@ -30,6 +30,34 @@ pub(super) type CoordinateMap = [(usize, f64); 2];
 /// No generalized coordinate.
 pub(super) const NONE: usize = usize::MAX;
 
+/// The block rows of an element's six coordinates when each is one link coordinate with
+/// coefficient 1 (an element between two free nodes), `None` otherwise.
+#[allow(
+    clippy::float_cmp,
+    reason = "a free node's coordinates enter element_map with the exact coefficient 1"
+)]
+fn interior_rows(places: &[[(MassPlace, f64); 2]; 6]) -> Option<[usize; 6]> {
+    let mut rows = [0; 6];
+    for (row, slot) in rows.iter_mut().zip(places) {
+        match slot {
+            [(MassPlace::Block(_, j), a), (MassPlace::None, _)] if *a == 1.0 => *row = *j,
+            _ => return None,
+        }
+    }
+    Some(rows)
+}
+
+/// Where a generalized coordinate sits in the [`BorderedBanded`] mass.
+#[derive(Debug, Clone, Copy)]
+enum MassPlace {
+    /// No coordinate.
+    None,
+    /// Row `j` of link block `b`.
+    Block(usize, usize),
+    /// Border index.
+    Border(usize),
+}
+
 impl NonlinearSystem {
     /// Generalized index of link `i`'s local coordinate `j`.
     #[inline]
@@ -80,34 +108,37 @@ impl NonlinearSystem {
         (map, known)
     }
 
-    /// Where generalized coordinate `g` sits in the mass matrix: `Ok((block, row))` for a
-    /// link's coordinate, `Err(border index)` for the platform's and the sliders'.
+    /// Where coordinate `g` of an element of link `i` sits in the mass: a row of the link's
+    /// block, or the border (the platform's three coordinates, then the sliders');
+    /// [`MassPlace::None`] for [`NONE`].
     #[inline]
-    pub(super) fn mass_position(&self, g: usize) -> Result<(usize, usize), usize> {
-        if g < 3 {
-            Err(g)
-        } else if g < 3 + 3 * self.per_link {
-            let j = g - 3;
-            Ok((j / self.per_link, j % self.per_link))
+    fn mass_place(&self, i: usize, g: usize) -> MassPlace {
+        let links_end = 3 + 3 * self.per_link;
+        if g == NONE {
+            MassPlace::None
+        } else if g < 3 {
+            MassPlace::Border(g)
+        } else if g < links_end {
+            MassPlace::Block(i, g - self.link_index(i, 0))
         } else {
-            Err(3 + (g - 3 - 3 * self.per_link))
+            MassPlace::Border(3 + g - links_end)
         }
     }
 
-    /// Adds `v` at `(g1, g2)` of the symmetric generalized matrix `mass` (every ordered pair is
-    /// offered by the caller; each stored entry is taken once).
+    /// Adds `v` at `(p1, p2)` of the symmetric generalized matrix `mass` (every ordered pair
+    /// is offered by the caller; each stored entry is taken once).
     #[inline]
-    fn add_mass(&self, mass: &mut BorderedBanded, g1: usize, g2: usize, v: f64) {
-        match (self.mass_position(g1), self.mass_position(g2)) {
-            (Ok((b1, j1)), Ok((b2, j2))) => {
+    fn add_mass(mass: &mut BorderedBanded, p1: MassPlace, p2: MassPlace, v: f64) {
+        match (p1, p2) {
+            (MassPlace::Block(b1, j1), MassPlace::Block(b2, j2)) => {
                 debug_assert_eq!(b1, b2, "links are not coupled directly");
                 if j1 >= j2 {
                     mass.add_block(b1, j1, j2, v);
                 }
             }
-            (Ok((b, j)), Err(c)) => mass.add_coupling(b, j, c, v),
-            (Err(_), Ok(_)) => {}
-            (Err(c1), Err(c2)) => mass.add_border(c1, c2, v),
+            (MassPlace::Block(b, j), MassPlace::Border(c)) => mass.add_coupling(b, j, c, v),
+            (MassPlace::Border(c1), MassPlace::Border(c2)) => mass.add_border(c1, c2, v),
+            _ => {}
         }
     }
 
@@ -164,15 +195,33 @@ impl NonlinearSystem {
                         rhs[g] -= coef * known_force[c];
                     }
                 }
-                for (c1, m1) in map.iter().enumerate() {
-                    for (c2, m2) in map.iter().enumerate() {
+                // Where each slot's coordinates sit in the mass, found once per element.
+                let mut places = [[(MassPlace::None, 0.0); 2]; 6];
+                for (slot, m) in places.iter_mut().zip(&map) {
+                    for (place, &(g, a)) in slot.iter_mut().zip(m) {
+                        *place = (self.mass_place(i, g), a);
+                    }
+                }
+                if let Some(rows) = interior_rows(&places) {
+                    // An element inside the link: its coordinates are rows of the block.
+                    for (c1, &j1) in rows.iter().enumerate() {
+                        for (c2, &j2) in rows.iter().enumerate() {
+                            if j1 >= j2 {
+                                mass.add_block(i, j1, j2, inertia.mass[c1][c2]);
+                            }
+                        }
+                    }
+                    continue;
+                }
+                for (c1, m1) in places.iter().enumerate() {
+                    for (c2, m2) in places.iter().enumerate() {
                         let v = inertia.mass[c1][c2];
                         if v == 0.0 {
                             continue;
                         }
-                        for &(g1, a1) in m1.iter().filter(|(g, _)| *g != NONE) {
-                            for &(g2, a2) in m2.iter().filter(|(g, _)| *g != NONE) {
-                                self.add_mass(&mut mass, g1, g2, a1 * a2 * v);
+                        for &(p1, a1) in m1 {
+                            for &(p2, a2) in m2 {
+                                Self::add_mass(&mut mass, p1, p2, a1 * a2 * v);
                             }
                         }
                     }
@@ -220,6 +269,31 @@ impl NonlinearSystem {
             acc[3 + links..3 + links + 3].copy_from_slice(&border[3..k]);
         }
         Ok(())
+    }
+
+    /// The residual `M acc - F` of the equations of motion (after
+    /// [`NonlinearSystem::assemble_equations`], before a solve) into `out`.
+    pub(super) fn equations_residual(&self, acc: &[f64], out: &mut [f64]) {
+        let links = 3 * self.per_link;
+        let k = self.mass.border_size();
+        let (mut border_x, mut border_out) = ([0.0; 6], [0.0; 6]);
+        border_x[..3].copy_from_slice(&acc[..3]);
+        if k > 3 {
+            border_x[3..k].copy_from_slice(&acc[3 + links..3 + links + 3]);
+        }
+        self.mass.multiply(
+            &acc[3..3 + links],
+            &border_x[..k],
+            &mut out[3..3 + links],
+            &mut border_out[..k],
+        );
+        out[..3].copy_from_slice(&border_out[..3]);
+        if k > 3 {
+            out[3 + links..3 + links + 3].copy_from_slice(&border_out[3..k]);
+        }
+        for (r, f) in out.iter_mut().zip(&self.generalized) {
+            *r -= f;
+        }
     }
 
     /// The accelerations `x_e''` of element `e` of link `i` from the generalized `acc`.

@@ -44,7 +44,7 @@ use flexprr_kinematics::MachineState;
 
 /// Half-bandwidth of a link's block of the generalized mass: an element couples the six
 /// consecutive coordinates of its two nodes.
-const MASS_BANDWIDTH: usize = 5;
+pub(super) const MASS_BANDWIDTH: usize = 5;
 
 /// Elements per link of [`NonlinearOptions::paper`]: with the default element
 /// ([`LocalStrain::ShallowArch`], [`NodalMass::Consistent`]) within 0.25 % of the converged
@@ -1068,6 +1068,27 @@ impl NonlinearSystem {
             )));
         }
         Ok(())
+    }
+
+    /// The residual `M(z) acc - F(t, z, z')` of the equations of motion at `(t, y)` into
+    /// `out` (the mechanical form's residual: no solve with the mass); NaN and a recorded
+    /// failure where the right-hand side would fail.
+    pub(super) fn motion_residual(&mut self, t: f64, y: &[f64], acc: &[f64], out: &mut [f64]) {
+        self.counters.rhs_evaluations += 1;
+        let frame = match self.frame(t, y) {
+            Ok(f) => f,
+            Err(e) => return self.fail(e, out),
+        };
+        if let Err(e) = self.check_collapse(t, y, &frame) {
+            return self.fail(e, out);
+        }
+        self.assemble(y, &frame);
+        // The form exists only without a control law's states: no rates to write.
+        if let Err(e) = self.actuate(t, y, &frame, &mut []) {
+            return self.fail(e, out);
+        }
+        self.assemble_equations(y, &frame);
+        self.equations_residual(acc, out);
     }
 
     fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {

@@ -26,10 +26,10 @@
 //! damping forces' change with the element rotations (`dC/dz z'`).
 
 use faer::MatMut;
-use flexprr_integrators::SecondOrderForm;
+use flexprr_integrators::{BlockBanded, SecondOrderForm};
 
 use super::equations::NONE;
-use super::system::NonlinearSystem;
+use super::system::{MASS_BANDWIDTH, NonlinearSystem};
 
 impl NonlinearSystem {
     /// Adds `A^T E A` of one element (its 6x6 matrix `e` and map `map`) into `out`.
@@ -210,6 +210,22 @@ impl SecondOrderForm for NonlinearSystem {
     ) {
         self.mechanical_matrices(t, y, mass, damping, stiffness);
     }
+
+    /// One banded block per link (half-bandwidth 5: an element couples its two nodes' six
+    /// consecutive coordinates), the platform's and the sliders' coordinates the border.
+    fn structure(&self) -> Option<BlockBanded> {
+        let blocks = (0..3).map(|i| self.link_range(i)).collect();
+        BlockBanded::new(NonlinearSystem::coordinates(self), blocks, MASS_BANDWIDTH).ok()
+    }
+
+    fn has_residual(&self) -> bool {
+        true
+    }
+
+    /// `M a - F` with the banded mass the right-hand side assembles, without its solve.
+    fn residual(&mut self, t: f64, y: &[f64], acc: &[f64], residual: &mut [f64]) {
+        self.motion_residual(t, y, acc, residual);
+    }
 }
 
 #[cfg(test)]
@@ -319,6 +335,46 @@ mod tests {
             for i in 0..n {
                 for j in 0..n {
                     assert_eq!(m[(i, j)].to_bits(), m[(j, i)].to_bits(), "M ({i}, {j})");
+                }
+            }
+        }
+    }
+
+    /// The residual form: zero at the right-hand side's accelerations (`M z'' = F`), and its
+    /// change with the accelerations is the mass of the matrices (`r(a + d e_j) - r(a) =
+    /// d M e_j`); the structure holds every entry of `M`, `C` and `K`.
+    #[test]
+    fn residual_vanishes_at_the_accelerations_and_its_slope_is_the_mass() {
+        let (mut s, y) = deformed(4);
+        let t = 0.01;
+        let n = s.coordinates();
+        let mut dy = vec![0.0; 2 * n];
+        s.rhs(t, &y, &mut dy);
+        let acc = dy[n..].to_vec();
+        assert!(s.has_residual());
+        let mut r = vec![0.0; n];
+        s.residual(t, &y, &acc, &mut r);
+        let forces = s.generalized.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+        let worst = r.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(worst < 1e-12 * forces, "{worst} of {forces}");
+        let (mut m, mut c, mut k) = (Mat::zeros(n, n), Mat::zeros(n, n), Mat::zeros(n, n));
+        s.matrices(t, &y, m.as_mut(), c.as_mut(), k.as_mut());
+        let structure = s.structure().unwrap();
+        for j in 0..n {
+            let mut shifted = acc.clone();
+            shifted[j] += 1.0;
+            let mut r1 = vec![0.0; n];
+            s.residual(t, &y, &shifted, &mut r1);
+            for i in 0..n {
+                let slope = r1[i] - r[i];
+                assert!((slope - m[(i, j)]).abs() < 1e-9 * largest(&m), "({i}, {j})");
+                let outside = !structure.contains(i, j);
+                if outside {
+                    assert_eq!(
+                        (m[(i, j)], c[(i, j)], k[(i, j)]),
+                        (0.0, 0.0, 0.0),
+                        "({i}, {j})"
+                    );
                 }
             }
         }
