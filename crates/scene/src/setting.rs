@@ -246,6 +246,12 @@ fn set_in_table(
         table.insert((*first).to_string(), new);
         return Ok(());
     }
+    if !table.contains_key(*first) && rest.first().is_some_and(|p| p.parse::<usize>().is_ok()) {
+        return Err(format!(
+            "\"{key}\": there is no array `{first}` whose element could be set; give the whole \
+             array first (in a study: in the base scene or in [set]) to vary one element"
+        ));
+    }
     let child = table
         .entry((*first).to_string())
         .or_insert_with(|| toml::Value::Table(toml::Table::new()));
@@ -397,6 +403,9 @@ mod tests {
         assert!(set_key(&mut table, "name.first.x", &1.into()).is_err());
         assert!(set_key(&mut table, "links..x", &1.into()).is_err());
         assert!(set_key(&mut table, "machine.alpha_deg.7", &1.into()).is_err());
+        // An element of an array that is not there: no table named `legs` with a key `0`.
+        let missing = set_key(&mut table, "machine.legs.0.branch", &"elbow".into()).unwrap_err();
+        assert!(missing.contains("no array `legs`"), "{missing}");
         assert_eq!(table, before);
     }
 }

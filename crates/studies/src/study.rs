@@ -101,85 +101,16 @@ fn merge_into(target: &mut toml::Table, overrides: &toml::Table) {
     }
 }
 
-/// Sets `value` at the dotted `key` in `scene`, creating missing tables; an integer replacing
-/// a float becomes a float. Numeric path segments index arrays.
+/// Sets `value` at the dotted `key` in `scene`: the scene layer's
+/// [`flexprr_scene::setting::set_key`] (missing tables created, an integer replacing a float
+/// becomes a float, numeric segments index arrays, a refused key changes nothing).
 ///
 /// # Errors
-/// A message when the path runs through a value that is neither a table nor an array.
+/// Its message: an empty segment, an index out of range or into an array that is not
+/// there (give the whole array in the base scene or in `[set]`), or a path through a value
+/// that is neither a table nor an array.
 pub fn set_key(scene: &mut toml::Table, key: &str, value: &toml::Value) -> Result<(), String> {
-    let parts: Vec<&str> = key.split('.').collect();
-    if parts.iter().any(|p| p.is_empty()) {
-        return Err(format!("key \"{key}\" has an empty segment"));
-    }
-    set_in_table(scene, &parts, key, value)
-}
-
-/// An integer written where the base scene has a float becomes a float.
-fn coerce(old: Option<&toml::Value>, value: &toml::Value) -> toml::Value {
-    match (old, value) {
-        (Some(toml::Value::Float(_)), toml::Value::Integer(i)) => toml::Value::Float(*i as f64),
-        _ => value.clone(),
-    }
-}
-
-fn set_in_table(
-    table: &mut toml::Table,
-    parts: &[&str],
-    key: &str,
-    value: &toml::Value,
-) -> Result<(), String> {
-    let Some((first, rest)) = parts.split_first() else {
-        return Err(format!("key \"{key}\" is empty"));
-    };
-    if rest.is_empty() {
-        let new = coerce(table.get(*first), value);
-        table.insert(first.to_string(), new);
-        return Ok(());
-    }
-    if !table.contains_key(*first) && rest.first().is_some_and(|p| p.parse::<usize>().is_ok()) {
-        return Err(format!(
-            "\"{key}\": there is no array `{first}` whose element could be set; give the whole \
-             array in the base scene (or in [set]) to vary one element"
-        ));
-    }
-    let child = table
-        .entry(first.to_string())
-        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-    set_in_value(child, rest, key, value)
-}
-
-fn set_in_value(
-    node: &mut toml::Value,
-    parts: &[&str],
-    key: &str,
-    value: &toml::Value,
-) -> Result<(), String> {
-    match node {
-        toml::Value::Table(t) => set_in_table(t, parts, key, value),
-        toml::Value::Array(a) => {
-            let Some((first, rest)) = parts.split_first() else {
-                return Err(format!("key \"{key}\" is empty"));
-            };
-            let index: usize = first
-                .parse()
-                .map_err(|_| format!("\"{first}\" in \"{key}\" is not an array index"))?;
-            let len = a.len();
-            let slot = a.get_mut(index).ok_or_else(|| {
-                format!("index {index} in \"{key}\" is out of range (length {len})")
-            })?;
-            if rest.is_empty() {
-                let new = coerce(Some(&*slot), value);
-                *slot = new;
-                Ok(())
-            } else {
-                set_in_value(slot, rest, key, value)
-            }
-        }
-        _ => Err(format!(
-            "\"{key}\": \"{}\" is not inside a table or an array",
-            parts.first().copied().unwrap_or_default()
-        )),
-    }
+    flexprr_scene::setting::set_key(scene, key, value)
 }
 
 /// FNV-1a, 64 bit (Fowler, Noll, Vo): a hash that is stable across builds and platforms.
