@@ -322,6 +322,7 @@ impl Integrator for Abm {
     ) -> Result<AbmStepper, IntegratorError> {
         let n = system.dim();
         crate::common::validate_start(&self.options, n, y0, t0, t_end)?;
+        let options = self.options.for_system(&*system);
         if !(1..=MAX_ORDER).contains(&self.max_order) {
             return Err(IntegratorError::InvalidOptions(format!(
                 "max_order must be between 1 and {MAX_ORDER}, got {}",
@@ -329,7 +330,7 @@ impl Integrator for Abm {
             )));
         }
         let direction = (t_end - t0).signum();
-        let h_max = self.options.max_step.min((t_end - t0).abs());
+        let h_max = options.max_step.min((t_end - t0).abs());
 
         // Room for every order, so that recording one never allocates inside `step`.
         let mut stats = Stats {
@@ -343,20 +344,12 @@ impl Integrator for Abm {
             return Err(IntegratorError::NonFinite { t: t0, component });
         }
 
-        let h0 = match self.options.initial_step {
+        let h0 = match options.initial_step {
             Some(h0) => h0.min(h_max),
             None => {
                 let mut work = vec![0.0; 2 * n];
                 let h = initial_step(
-                    system,
-                    t0,
-                    y0,
-                    &dy,
-                    1,
-                    direction,
-                    h_max,
-                    &self.options,
-                    &mut work,
+                    system, t0, y0, &dy, 1, direction, h_max, &options, &mut work,
                 );
                 stats.rhs_evaluations += 1;
                 if h.is_finite() && h > 0.0 {
@@ -371,10 +364,10 @@ impl Integrator for Abm {
 
         let mut phi = vec![0.0; N_DIFF * n];
         column_mut(&mut phi, n, 1).copy_from_slice(&dy);
-        let atol = (0..n).map(|i| self.options.atol.get(i)).collect();
+        let atol = (0..n).map(|i| options.atol.get(i)).collect();
 
         Ok(AbmStepper {
-            options: self.options.clone(),
+            options: options.clone(),
             max_order: self.max_order,
             dim: n,
             span: Span::new(t0, t_end, stats),

@@ -720,6 +720,7 @@ impl crate::Integrator for Bdf {
     ) -> Result<BdfStepper, IntegratorError> {
         let n = system.dim();
         crate::common::validate_start(&self.options, n, y0, t0, t_end)?;
+        let options = self.options.for_system(&*system);
         if !(1..=MAX_ORDER).contains(&self.max_order) {
             return Err(IntegratorError::InvalidOptions(format!(
                 "BDF max_order must be between 1 and {MAX_ORDER}, got {}",
@@ -739,22 +740,14 @@ impl crate::Integrator for Bdf {
             return Err(IntegratorError::NonFinite { t: t0, component });
         }
         let span = (t_end - t0).abs();
-        let h_max = self.options.max_step.min(span);
-        let h0 = match self.options.initial_step {
+        let h_max = options.max_step.min(span);
+        let h0 = match options.initial_step {
             Some(h) => h.min(h_max),
             None => {
                 let mut work = vec![0.0; 2 * n];
                 stats.rhs_evaluations += 1;
                 initial_step(
-                    system,
-                    t0,
-                    y0,
-                    &f0,
-                    1,
-                    direction,
-                    h_max,
-                    &self.options,
-                    &mut work,
+                    system, t0, y0, &f0, 1, direction, h_max, &options, &mut work,
                 )
             }
         };
@@ -765,7 +758,7 @@ impl crate::Integrator for Bdf {
             differences[n + i] = h * f0[i];
         }
         Ok(BdfStepper {
-            options: self.options.clone(),
+            options: options.clone(),
             coefficients: Coefficients::new(self.variant),
             max_order: self.max_order,
             dim: n,

@@ -39,6 +39,11 @@ pub struct Options {
     pub max_step: f64,
     /// Largest number of steps (accepted + rejected) before giving up.
     pub max_steps: usize,
+    /// The spectral radius at infinite frequency, `0 <= rho_inf <= 1`, of methods with
+    /// numerical dissipation ([`crate::GeneralizedAlpha`]); `None` for the method's default.
+    /// Every method checks its range ([`Options::validate`]); those without numerical
+    /// dissipation do not use it.
+    pub spectral_radius: Option<f64>,
 }
 
 impl Default for Options {
@@ -49,6 +54,7 @@ impl Default for Options {
             initial_step: None,
             max_step: f64::INFINITY,
             max_steps: 1_000_000,
+            spectral_radius: None,
         }
     }
 }
@@ -89,6 +95,49 @@ impl Options {
     pub fn max_steps(mut self, n: usize) -> Self {
         self.max_steps = n;
         self
+    }
+    /// Sets the spectral radius at infinite frequency of methods with numerical
+    /// dissipation (`0` to `1`).
+    #[must_use]
+    pub fn spectral_radius(mut self, rho_inf: f64) -> Self {
+        self.spectral_radius = Some(rho_inf);
+        self
+    }
+
+    /// The options for `system`: where it gives [`crate::OdeSystem::tolerance_scales`], the
+    /// absolute tolerance of component `i` becomes `max(atol_i, rtol scale_i)`, so that the
+    /// relative tolerance is measured against at least the component's natural scale.
+    /// Otherwise a copy of these options. Called once when an integration starts.
+    #[must_use]
+    pub fn for_system<S: crate::OdeSystem + ?Sized>(&self, system: &S) -> Self {
+        let dim = system.dim();
+        let mut scales = vec![0.0; dim];
+        if !system.tolerance_scales(&mut scales) {
+            return self.clone();
+        }
+        self.with_scales(&scales)
+    }
+
+    /// These options with the absolute tolerance of component `i` raised to
+    /// `rtol scales[i]` where that is larger (see [`Options::for_system`]); non-finite or
+    /// negative scales count as none.
+    #[must_use]
+    pub fn with_scales(&self, scales: &[f64]) -> Self {
+        let atol = scales
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let floor = if s.is_finite() && *s > 0.0 {
+                    self.rtol * s
+                } else {
+                    0.0
+                };
+                self.atol.get(i).max(floor)
+            })
+            .collect();
+        let mut out = self.clone();
+        out.atol = Tolerance::PerComponent(atol);
+        out
     }
 
     /// Checks the options against a system of dimension `dim`.
@@ -138,6 +187,13 @@ impl Options {
             if !(h0.is_finite() && h0 > 0.0) {
                 return bad(format!(
                     "initial_step must be positive and finite, got {h0}"
+                ));
+            }
+        }
+        if let Some(rho) = self.spectral_radius {
+            if !(0.0..=1.0).contains(&rho) {
+                return bad(format!(
+                    "spectral_radius must be between 0 and 1, got {rho}"
                 ));
             }
         }

@@ -211,9 +211,10 @@ impl Integrator for Rk45 {
     ) -> Result<Rk45Stepper, IntegratorError> {
         let n = system.dim();
         crate::common::validate_start(&self.options, n, y0, t0, t_end)?;
+        let options = self.options.for_system(&*system);
         let span = t_end - t0;
         let direction = span.signum();
-        let h_max = self.options.max_step.min(span.abs());
+        let h_max = options.max_step.min(span.abs());
 
         let mut stats = Stats {
             orders: vec![0; ORDER + 1],
@@ -226,20 +227,12 @@ impl Integrator for Rk45 {
             return Err(IntegratorError::NonFinite { t: t0, component });
         }
 
-        let h_abs = match self.options.initial_step {
+        let h_abs = match options.initial_step {
             Some(h0) => h0.min(h_max),
             None => {
                 let mut work = vec![0.0; 2 * n];
                 let h = initial_step(
-                    system,
-                    t0,
-                    y0,
-                    &k[0],
-                    ORDER,
-                    direction,
-                    h_max,
-                    &self.options,
-                    &mut work,
+                    system, t0, y0, &k[0], ORDER, direction, h_max, &options, &mut work,
                 );
                 stats.rhs_evaluations += 1;
                 if h.is_finite() && h > 0.0 {
@@ -252,7 +245,7 @@ impl Integrator for Rk45 {
         };
 
         Ok(Rk45Stepper {
-            options: self.options.clone(),
+            options: options.clone(),
             stiffness: self.stiffness,
             direction,
             span: Span::new(t0, t_end, stats),

@@ -95,6 +95,23 @@ pub trait OdeSystem {
     fn segment_start(&mut self, t: f64, y: &[f64]) {
         let _ = (t, y);
     }
+
+    /// The magnitude of each state component that the relative tolerance is measured
+    /// against at least, written into `scales` (`dim` entries, `0` for none); `false` (the
+    /// default) when the system has none.
+    ///
+    /// A component's error weight is `atol + rtol |y_i|`: for a coordinate whose zero is
+    /// only the origin of a frame (an absolute position or angle), that weight depends on
+    /// where the origin is, and a component passing near zero asks for an accuracy that
+    /// means nothing physically. A system with such coordinates gives their natural scale
+    /// here (a length of the machine, one radian) and the integrators use
+    /// `max(atol, rtol scale_i)` as the component's absolute tolerance
+    /// ([`crate::Options::with_scales`]), so that the error test does not depend on the
+    /// frame.
+    fn tolerance_scales(&self, scales: &mut [f64]) -> bool {
+        let _ = scales;
+        false
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -121,6 +138,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     }
     fn segment_start(&mut self, t: f64, y: &[f64]) {
         (**self).segment_start(t, y);
+    }
+    fn tolerance_scales(&self, scales: &mut [f64]) -> bool {
+        (**self).tolerance_scales(scales)
     }
 }
 

@@ -203,3 +203,24 @@ fn systems_without_a_mechanical_form_are_refused() {
         .unwrap_err();
     assert!(matches!(err, IntegratorError::InvalidOptions(_)), "{err}");
 }
+
+/// The options carry the spectral radius (the scene's `integrator.spectral_radius`), and a
+/// value outside `[0, 1]` is refused before anything is integrated.
+#[test]
+fn spectral_radius_from_the_options() {
+    let method = GeneralizedAlpha::new(Options::default().spectral_radius(0.3));
+    assert_eq!(method.spectral_radius, 0.3);
+    assert_eq!(
+        GeneralizedAlpha::new(Options::default()).spectral_radius,
+        flexprr_integrators::genalpha::DEFAULT_SPECTRAL_RADIUS
+    );
+    let mut s = Oscillator {
+        omega: 1.0,
+        zeta: 0.0,
+    };
+    let bad = GeneralizedAlpha::new(Options::default().spectral_radius(1.5));
+    match bad.solve(&mut s, 0.0, &[1.0, 0.0], &[1.0]) {
+        Err(IntegratorError::InvalidOptions(m)) => assert!(m.contains("spectral_radius"), "{m}"),
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+}

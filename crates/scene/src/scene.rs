@@ -310,6 +310,7 @@ impl Scene {
                 &model_name,
             )
             .map_err(|m| c.value_error("integrator.method", m))?;
+        let options = spectral_radius(&c, registry, &raw.integrator, method.name(), options)?;
         let outputs = build_outputs(&c, &raw)?;
         Ok(Scene {
             name,
@@ -758,6 +759,44 @@ fn build_large_deflection(
         axial_damping_time,
         bending_stiffness,
     })
+}
+
+/// `integrator.spectral_radius`: in `[0, 1]`, and only for a method with numerical
+/// dissipation (a mechanical one: `generalized_alpha`, also when `auto` resolves to it).
+fn spectral_radius(
+    c: &Checker<'_>,
+    registry: &Registry,
+    ic: &crate::schema::IntegratorConfig,
+    resolved: &str,
+    options: Options,
+) -> Result<Options, ScenarioError> {
+    let Some(rho) = ic.spectral_radius else {
+        return Ok(options);
+    };
+    let key = "integrator.spectral_radius";
+    if !matches!(
+        registry.method_kind(resolved),
+        Some(crate::registry::MethodKind::Mechanical)
+    ) {
+        return Err(c.error(
+            key,
+            format!(
+                "the spectral radius is generalized_alpha's, and this scene is integrated by \
+                 {resolved}: remove the key or set integrator.method = \"generalized_alpha\" \
+                 (nonlinear model)"
+            ),
+        ));
+    }
+    if !(0.0..=1.0).contains(&rho) {
+        return Err(c.error(
+            key,
+            format!(
+                "expected a spectral radius at infinite frequency from 0 (most numerical \
+                 dissipation) to 1 (none), got {rho}"
+            ),
+        ));
+    }
+    Ok(options.spectral_radius(rho))
 }
 
 /// `[integrator]`: the registered method and its options.

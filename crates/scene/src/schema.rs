@@ -483,12 +483,13 @@ impl Default for ModelConfig {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct IntegratorConfig {
-    /// A registered integrator: `"auto"` (the default: `"magnus6"` for the KED model, `"abm"`
-    /// for the coupled and nonlinear ones; resolved when the scene is loaded), `"abm"` (like
-    /// the paper's ode113), `"rk45"`, `"bdf"`, `"magnus4"` and `"magnus6"` (exponential,
-    /// KED model only), or `"generalized_alpha"` (implicit, for structural dynamics:
-    /// models with a mechanical form, the nonlinear one, without continuous controller
-    /// states; spectral radius at infinity 0.9).
+    /// A registered integrator: `"auto"` (the default: `"magnus6"` for the KED model,
+    /// `"generalized_alpha"` for the nonlinear one without a continuous control law's
+    /// states, `"abm"` otherwise; resolved when the scene is loaded), `"abm"` (like the
+    /// paper's ode113), `"rk45"`, `"bdf"`, `"magnus4"` and `"magnus6"` (exponential, KED
+    /// model only), or `"generalized_alpha"` (implicit, for structural dynamics: models with
+    /// a mechanical form, the nonlinear one, without continuous controller states; see
+    /// `spectral_radius`).
     #[serde(default = "default_method")]
     pub method: String,
     /// Relative tolerance.
@@ -506,6 +507,11 @@ pub struct IntegratorConfig {
     /// Largest number of steps.
     #[serde(default = "default_max_steps")]
     pub max_steps: usize,
+    /// `"generalized_alpha"` only (also when `"auto"` picks it): the spectral radius at
+    /// infinite frequency, `0` (the most numerical dissipation of the unresolved modes) to
+    /// `1` (none); default 0.7.
+    #[serde(default)]
+    pub spectral_radius: Option<f64>,
 }
 
 /// `auto`: the stress suite (docs/stability.md) found it right on every stress scene and the
@@ -532,6 +538,7 @@ impl Default for IntegratorConfig {
             max_step: None,
             initial_step: None,
             max_steps: default_max_steps(),
+            spectral_radius: None,
         }
     }
 }

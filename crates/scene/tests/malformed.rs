@@ -729,3 +729,46 @@ fn string_for_a_number_inside_an_inline_section_table() {
         &["invalid type: string \"0.03\"", "expected f64"],
     );
 }
+
+#[test]
+fn spectral_radius_of_a_method_without_one() {
+    let text = edit(
+        "max_steps = 100000\n",
+        "max_steps = 100000\nspectral_radius = 0.5\n",
+    );
+    rejects(
+        &text,
+        "spectral_radius",
+        "integrator.spectral_radius",
+        &["generalized_alpha", "integrated by abm"],
+    );
+}
+
+/// The nonlinear model under generalized-alpha takes the key in `[0, 1]` into its options.
+#[test]
+fn spectral_radius_of_generalized_alpha() {
+    let nonlinear = |rho: &str| {
+        edit("method = \"abm\"\n", "method = \"generalized_alpha\"\n")
+            .replace(
+                "damping = [0.01]\n",
+                "coupling = \"nonlinear\"\nelements = 4\n",
+            )
+            .replace(
+                "max_steps = 100000\n",
+                &format!("max_steps = 100000\nspectral_radius = {rho}\n"),
+            )
+    };
+    rejects(
+        &nonlinear("1.5"),
+        "spectral_radius",
+        "integrator.spectral_radius",
+        &["from 0", "to 1", "got 1.5"],
+    );
+    let scene = Scene::from_text(FILE, "scene", &nonlinear("0.25")).unwrap();
+    assert_eq!(scene.options.spectral_radius, Some(0.25));
+    // `auto` picks generalized-alpha for this model, so the key is its.
+    let auto = nonlinear("0.25").replace("method = \"generalized_alpha\"\n", "method = \"auto\"\n");
+    let scene = Scene::from_text(FILE, "scene", &auto).unwrap();
+    assert_eq!(scene.method.name(), "generalized_alpha");
+    assert_eq!(scene.options.spectral_radius, Some(0.25));
+}

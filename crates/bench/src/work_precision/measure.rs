@@ -220,7 +220,11 @@ fn measure_point(
     rtol: f64,
 ) -> Result<WorkPrecisionRow, String> {
     let atol = reference.atol(rtol);
-    let options = Options::default().rtol(rtol).atol(atol);
+    // The scene's spectral radius stays (generalized-alpha's; the other methods ignore it).
+    let options = Options {
+        spectral_radius: model_scene.options.spectral_radius,
+        ..Options::default().rtol(rtol).atol(atol)
+    };
     let (solution, timing) = time_runs(config.warmup, config.repeats, || {
         solve(model_scene, model, method, options.clone())
     })?;

@@ -1126,6 +1126,36 @@ impl OdeSystem for NonlinearSystem {
         }
     }
 
+    /// The natural scales of the absolute coordinates (positions: the link length; angles:
+    /// one radian), so that a node or a link angle passing the frame's origin or zero does
+    /// not tighten the error test (`OdeSystem::tolerance_scales`). Velocities and the
+    /// controller's states keep their own values.
+    fn tolerance_scales(&self, scales: &mut [f64]) -> bool {
+        scales.fill(0.0);
+        let lengths: [f64; 3] =
+            std::array::from_fn(|i| self.links[i].element.length * self.options.elements as f64);
+        let mean = lengths.iter().sum::<f64>() / 3.0;
+        scales[0] = mean;
+        scales[1] = mean;
+        scales[2] = 1.0;
+        for (link, length) in lengths.iter().enumerate() {
+            for (k, scale) in scales[self.link_range(link)].iter_mut().enumerate() {
+                // psi_0, (x_k, y_k, psi_k) for k = 1..N-1, psi_N
+                *scale = if k == 0 || k % 3 == 0 || k + 1 == self.per_link {
+                    1.0
+                } else {
+                    *length
+                };
+            }
+        }
+        if self.actuated.is_some() {
+            for i in 0..3 {
+                scales[self.slider_index(i)] = mean;
+            }
+        }
+        true
+    }
+
     /// The mechanical form for implicit integrators (super::tangent); none when a
     /// continuous control law adds first-order states.
     fn second_order_form(&mut self) -> Option<&mut dyn flexprr_integrators::SecondOrderForm> {

@@ -683,6 +683,7 @@ impl Integrator for Magnus {
     ) -> Result<MagnusStepper, IntegratorError> {
         let n = system.dim();
         validate_start(&self.options, n, y0, t0, t_end)?;
+        let options = self.options.for_system(&*system);
         let name = self.name();
         let Some(lin) = system.linear_form() else {
             return Err(IntegratorError::InvalidInput(format!(
@@ -710,27 +711,19 @@ impl Integrator for Magnus {
         let half = offset;
         let span = t_end - t0;
         let direction = span.signum();
-        let h_max = self.options.max_step.min(span.abs());
+        let h_max = options.max_step.min(span.abs());
         let mut stats = Stats {
             orders: vec![0; 7],
             ..Stats::default()
         };
-        let h_abs = match self.options.initial_step {
+        let h_abs = match options.initial_step {
             Some(h0) => h0.min(h_max),
             None => {
                 let mut f0 = vec![0.0; n];
                 system.rhs(t0, y0, &mut f0);
                 let mut work = vec![0.0; 2 * n];
                 let h = initial_step(
-                    system,
-                    t0,
-                    y0,
-                    &f0,
-                    4,
-                    direction,
-                    h_max,
-                    &self.options,
-                    &mut work,
+                    system, t0, y0, &f0, 4, direction, h_max, &options, &mut work,
                 );
                 stats.rhs_evaluations += 2;
                 if h.is_finite() && h > 0.0 {
@@ -741,7 +734,7 @@ impl Integrator for Magnus {
             }
         };
         let mut stepper = MagnusStepper {
-            options: self.options.clone(),
+            options: options.clone(),
             order: self.order,
             direction,
             span: Span::new(t0, t_end, stats),
