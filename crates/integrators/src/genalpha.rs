@@ -334,20 +334,22 @@ impl GeneralizedAlphaStepper {
         self.matrices_valid = true;
         self.steps_since_matrices = 0;
         self.lu_h = None;
-        let n = self.n;
-        for j in 0..n {
-            for i in 0..n {
-                let (m, c, k) = (
-                    self.mass[(i, j)],
-                    self.damping[(i, j)],
-                    self.stiffness[(i, j)],
-                );
-                if !(m.is_finite() && c.is_finite() && k.is_finite()) {
-                    return Err(AttemptFailure::NonFiniteMatrix { row: i });
+        for j in 0..self.n {
+            let columns = [
+                self.mass.col_as_slice(j),
+                self.damping.col_as_slice(j),
+                self.stiffness.col_as_slice(j),
+            ];
+            for column in columns {
+                // `v * 0` is NaN exactly for a non-finite `v`: one vectorized sum, and the
+                // position only when there is one.
+                if column.iter().map(|v| v * 0.0).sum::<f64>().is_nan() {
+                    let row = column.iter().position(|v| !v.is_finite()).unwrap_or(0);
+                    return Err(AttemptFailure::NonFiniteMatrix { row });
                 }
                 if let Algebra::Structured { mass, .. } = &self.algebra {
-                    if (m != 0.0 || c != 0.0 || k != 0.0) && !mass.admits(i, j) {
-                        return Err(AttemptFailure::OutsideStructure { row: i, column: j });
+                    if let Some(row) = mass.first_outside(j, column) {
+                        return Err(AttemptFailure::OutsideStructure { row, column: j });
                     }
                 }
             }

@@ -152,6 +152,9 @@ pub(crate) struct BandedBordered {
     band: Vec<f64>,
     /// Row interchanges of the blocks' factorisations (local indices), per position.
     pivots: Vec<usize>,
+    /// `1 / U_jj` of the blocks' factors, per position (the back substitution multiplies:
+    /// a division in its chain of dependent steps costs several times a product).
+    inverse_diagonal: Vec<f64>,
     /// `B_b`, column `c` of block `b` at `o k + c len .. + len`; `Y_b = A_b^-1 B_b` after
     /// factoring.
     right: Vec<f64>,
@@ -198,6 +201,7 @@ impl BandedBordered {
             place,
             band: vec![0.0; o * ld],
             pivots: vec![0; o],
+            inverse_diagonal: vec![0.0; o],
             right: vec![0.0; o * k],
             bottom: vec![0.0; o * k],
             corner: vec![0.0; k * k],
@@ -207,13 +211,37 @@ impl BandedBordered {
         }
     }
 
-    /// Whether entry `(i, j)` is in the structure (as [`BlockBanded::contains`]).
-    #[inline]
-    pub(crate) fn admits(&self, i: usize, j: usize) -> bool {
-        match (self.place[i], self.place[j]) {
-            (Place::Block(_, a), Place::Block(_, b)) => a == b && i.abs_diff(j) <= self.p,
-            _ => true,
+    /// The first row `i` at which `column` (column `j` of an `n x n` matrix) is non-zero
+    /// outside the structure, if any: every row of another block, and the rows of `j`'s own
+    /// block beyond the half-bandwidth (border columns and rows hold anything). `column` must
+    /// be finite. Contiguous slices, so that checking a whole matrix costs a pass over it.
+    pub(crate) fn first_outside(&self, j: usize, column: &[f64]) -> Option<usize> {
+        let Place::Block(_, own) = self.place[j] else {
+            return None;
+        };
+        // A sum of magnitudes (vectorized) first, the position only when there is one; the
+        // caller has checked that the column is finite.
+        let nonzero = |rows: std::ops::Range<usize>| {
+            let part = &column[rows.clone()];
+            if part.iter().map(|v| v.abs()).sum::<f64>() > 0.0 {
+                part.iter().position(|v| *v != 0.0).map(|r| rows.start + r)
+            } else {
+                None
+            }
+        };
+        for (b, &(first, len, _)) in self.blocks.iter().enumerate() {
+            let found = if b == own {
+                let local = j - first;
+                let (lo, hi) = (local.saturating_sub(self.p), (local + self.p + 1).min(len));
+                nonzero(first..first + lo).or_else(|| nonzero(first + hi..first + len))
+            } else {
+                nonzero(first..first + len)
+            };
+            if found.is_some() {
+                return found;
+            }
         }
+        None
     }
 
     /// Border size.
@@ -324,9 +352,16 @@ impl BandedBordered {
             // Y_b = A_b^-1 B_b, column by column.
             let band = &self.band[o * self.ld..(o + len) * self.ld];
             let pivots = &self.pivots[o..o + len];
+            let inverse = &self.inverse_diagonal[o..o + len];
             for c in 0..k {
                 let start = o * k + c * len;
-                solve_band(band, pivots, self.p, &mut self.right[start..start + len]);
+                solve_band(
+                    band,
+                    pivots,
+                    inverse,
+                    self.p,
+                    &mut self.right[start..start + len],
+                );
             }
             // D -= R_b Y_b.
             for c in 0..k {
@@ -369,6 +404,7 @@ impl BandedBordered {
                 }
             }
             let inv = 1.0 / a[at(j, j)];
+            self.inverse_diagonal[o + j] = inv;
             // Column j's multipliers (rows j+1..=last) and each later column's rows
             // j+1..=last are contiguous in the band storage.
             let (head, tail) = a.split_at_mut((j + 1) * ld);
@@ -410,7 +446,14 @@ impl BandedBordered {
         }
         for &(_, len, o) in &self.blocks {
             let pivots = &self.pivots[o..o + len];
-            solve_band(self.block_band(o, len), pivots, self.p, &mut w[o..o + len]);
+            let inverse = &self.inverse_diagonal[o..o + len];
+            solve_band(
+                self.block_band(o, len),
+                pivots,
+                inverse,
+                self.p,
+                &mut w[o..o + len],
+            );
         }
         for r in 0..k {
             let row = &self.bottom[r * nb..(r + 1) * nb];
@@ -438,8 +481,9 @@ impl BandedBordered {
 }
 
 /// Solves in place with the banded LU factors `a` (band storage of
-/// [`BandedBordered::factor_block`], `3p + 1` rows per column) and row interchanges `pivots`.
-fn solve_band(a: &[f64], pivots: &[usize], p: usize, r: &mut [f64]) {
+/// [`BandedBordered::factor_block`], `3p + 1` rows per column), row interchanges `pivots` and
+/// the reciprocals of `U`'s diagonal `inverse`.
+fn solve_band(a: &[f64], pivots: &[usize], inverse: &[f64], p: usize, r: &mut [f64]) {
     let (len, ld) = (r.len(), 3 * p + 1);
     for j in 0..len {
         let ip = pivots[j];
@@ -458,7 +502,7 @@ fn solve_band(a: &[f64], pivots: &[usize], p: usize, r: &mut [f64]) {
     }
     for j in (0..len).rev() {
         let col = &a[j * ld..(j + 1) * ld];
-        r[j] /= col[2 * p];
+        r[j] *= inverse[j];
         let rj = r[j];
         if rj != 0.0 {
             // Column j of U, rows first..j, at offsets first + 2p - j .. 2p.
@@ -611,6 +655,31 @@ mod tests {
                 let size = x_dense.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
                 for i in 0..n {
                     assert!((x[i] - x_dense[i]).abs() < 1e-10 * size, "n = {n}: {i}");
+                }
+            }
+        }
+    }
+
+    /// `first_outside` finds an entry exactly where `BlockBanded::contains` (written
+    /// independently, by searching the block ranges) says it may not be, in every column,
+    /// with a second, admitted entry before it that must not be reported.
+    #[test]
+    fn entries_outside_the_structure_are_found() {
+        let shapes = [
+            (40, vec![2..14, 14..26, 26..38], 3),
+            (23, vec![0..10, 13..23], 2),
+            (9, vec![], 2),
+        ];
+        for (n, blocks, p) in shapes {
+            let s = BlockBanded::new(n, blocks, p).unwrap();
+            let structured = BandedBordered::new(&s);
+            for j in 0..n {
+                for i in 0..n {
+                    let mut column = vec![0.0; n];
+                    column[j] = 1.0;
+                    column[i] = -2.0;
+                    let expected = (!s.contains(i, j)).then_some(i);
+                    assert_eq!(structured.first_outside(j, &column), expected, "({i}, {j})");
                 }
             }
         }
