@@ -103,12 +103,19 @@ impl BorderedBanded {
             let x = &blocks_x[b * n..(b + 1) * n];
             let out = &mut blocks_out[b * n..(b + 1) * n];
             for i in 0..n {
-                // The diagonal and the lower band of row i, and the lower band's transpose.
-                let mut sum = band[i * (w + 1)] * x[i];
-                for d in 1..=w.min(i) {
-                    let a = band[i * (w + 1) + d];
-                    sum += a * x[i - d];
-                    out[i - d] += a * x[i];
+                // The diagonal and the lower band of row i, and the lower band's transpose:
+                // `row[d] = A[i][i - d]` against `x[i - d]`, `out[i - d]` (d = 1..=m), the
+                // windows below `i` walked backwards (no index arithmetic in the loop).
+                let row = &band[i * (w + 1)..(i + 1) * (w + 1)];
+                let (xi, m) = (x[i], w.min(i));
+                let mut sum = row[0] * xi;
+                let lower = row[1..=m]
+                    .iter()
+                    .zip(x[i - m..i].iter().rev())
+                    .zip(out[i - m..i].iter_mut().rev());
+                for ((a, xj), oj) in lower {
+                    sum += a * xj;
+                    *oj += a * xi;
                 }
                 let coupling = &c[i * k..(i + 1) * k];
                 out[i] = sum

@@ -171,10 +171,24 @@ impl NonlinearSystem {
         let model = self.options.mass;
         for i in 0..3 {
             let link = self.links[i];
+            // The angle of the last element's second node and its sine and cosine: the next
+            // element's first node.
+            let mut shared = (f64::NAN, (0.0, 1.0));
             for e in 0..ne {
                 let (q, v) = self.element_state(y, frame, i, e);
                 let (map, known) = self.element_map(frame, y, i, e);
-                let inertia = model.inertia(link.element_mass, link.element.length, &q, &v);
+                let first = if q[2].to_bits() == shared.0.to_bits() {
+                    shared.1
+                } else {
+                    q[2].sin_cos()
+                };
+                shared = (q[5], q[5].sin_cos());
+                let inertia = model.inertia_with_ends(
+                    link.element_mass,
+                    link.element.length,
+                    &v,
+                    [first, shared.1],
+                );
                 // Known force: the nodal forces of the element's nodes are added once per node
                 // (by the element that owns the node's slot: its first element, or the last
                 // element for node N), the inertia of the known accelerations per element.

@@ -84,6 +84,20 @@ impl NodalMass {
     /// The inertia of an element of mass `m = rhoA L` and length `l` at `(q, v)`.
     #[inline]
     pub fn inertia(self, m: f64, l: f64, q: &[f64; 6], v: &[f64; 6]) -> ElementInertia {
+        self.inertia_with_ends(m, l, v, [q[2].sin_cos(), q[5].sin_cos()])
+    }
+
+    /// [`NodalMass::inertia`] from `(sin psi, cos psi)` of both end angles `q[2]`, `q[5]`
+    /// (the inertia depends on the configuration only through them): the elements of a
+    /// chain share their nodes' angles, so one `sin_cos` per node serves two elements.
+    #[inline]
+    pub fn inertia_with_ends(
+        self,
+        m: f64,
+        l: f64,
+        v: &[f64; 6],
+        ends: [(f64, f64); 2],
+    ) -> ElementInertia {
         match self {
             NodalMass::Lumped => {
                 let (half, rot) = (0.5 * m, m * l * l / 78.0);
@@ -97,7 +111,7 @@ impl NodalMass {
                     velocity_terms: [0.0; 6],
                 }
             }
-            NodalMass::Consistent => consistent(m, l, q, v),
+            NodalMass::Consistent => consistent(m, l, v, ends),
         }
     }
 
@@ -124,8 +138,12 @@ impl NodalMass {
 /// Tangents `t = (cos psi, sin psi)` and normals `n = (-sin psi, cos psi)` of both ends.
 #[inline]
 fn frames(q: &[f64; 6]) -> [[[f64; 2]; 2]; 2] {
-    let (s1, c1) = q[2].sin_cos();
-    let (s2, c2) = q[5].sin_cos();
+    frames_of([q[2].sin_cos(), q[5].sin_cos()])
+}
+
+/// [`frames`] from `(sin psi, cos psi)` of both ends.
+#[inline]
+fn frames_of([(s1, c1), (s2, c2)]: [(f64, f64); 2]) -> [[[f64; 2]; 2]; 2] {
     [[[c1, s1], [-s1, c1]], [[c2, s2], [-s2, c2]]]
 }
 
@@ -133,8 +151,8 @@ fn frames(q: &[f64; 6]) -> [[[f64; 2]; 2]; 2] {
 /// slots 0 and 2, the angle 2 / 5 for slots 1 and 3.
 const SLOT_ANGLE: [usize; 2] = [2, 5];
 
-fn consistent(m: f64, l: f64, q: &[f64; 6], v: &[f64; 6]) -> ElementInertia {
-    let [[t1, n1], [t2, n2]] = frames(q);
+fn consistent(m: f64, l: f64, v: &[f64; 6], ends: [(f64, f64); 2]) -> ElementInertia {
+    let [[t1, n1], [t2, n2]] = frames_of(ends);
     let n = [n1, n2];
     let t = [t1, t2];
     // dP/dq for each slot as 2-vectors per element coordinate: J[s] = list of (coordinate,
