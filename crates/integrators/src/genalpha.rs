@@ -26,9 +26,8 @@
 //! trapezoidal rule (no dissipation), `rho_inf = 0` annihilates the highest frequencies in one
 //! step. The default [`DEFAULT_SPECTRAL_RADIUS`] = 0.7 (Exudyn's default is 0.9; HHT with
 //! `alpha = -0.2`, a common choice, corresponds to 0.67): the stiff axial modes of beam
-//! elements, which the steps
-//! need not resolve, are damped by 0.7 per step while the resolved bending modes keep their
-//! energy to second order.
+//! elements, which the steps need not resolve, are damped by 0.7 per step while the
+//! resolved bending modes keep their energy to second order.
 //!
 //! # Newton iterations
 //!
@@ -45,8 +44,8 @@
 //! iteration is modified Newton after CVODE (Hindmarsh et al., ACM TOMS 31, 2005): the
 //! matrices are kept for [`MATRIX_MAX_AGE`] accepted steps, renewed when an iteration
 //! converges slowly or fails, and the factorisation is kept while the step size stays within
-//! a factor [`REFACTOR_RATIO`] of the one it was made for. The factorisation is the banded-bordered
-//! LU of [`crate::structured`] (a banded LU with partial pivoting per block, the Schur
+//! a factor [`REFACTOR_RATIO`] of the one it was made for. The factorisation is the
+//! banded-bordered LU of [`crate::structured`] (a banded LU with partial pivoting per block, the Schur
 //! complement of the border) when the form declares a
 //! [`BlockBanded`](crate::BlockBanded) structure
 //! ([`SecondOrderForm::structure`](crate::SecondOrderForm::structure)), and the products with
