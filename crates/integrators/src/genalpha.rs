@@ -155,10 +155,12 @@ impl GeneralizedAlpha {
         }
     }
 
-    /// Sets the spectral radius at infinite frequency (`0` to `1`).
+    /// Sets the spectral radius at infinite frequency (`0` to `1`), in the options too, so
+    /// that [`crate::Integrator::options`] reports the value the method uses.
     #[must_use]
     pub fn spectral_radius(mut self, rho_inf: f64) -> Self {
         self.spectral_radius = rho_inf;
+        self.options.spectral_radius = Some(rho_inf);
         self
     }
 }

@@ -210,6 +210,9 @@ fn systems_without_a_mechanical_form_are_refused() {
 fn spectral_radius_from_the_options() {
     let method = GeneralizedAlpha::new(Options::default().spectral_radius(0.3));
     assert_eq!(method.spectral_radius.to_bits(), 0.3_f64.to_bits());
+    // The builder keeps the options in step with the method.
+    let built = GeneralizedAlpha::new(Options::default()).spectral_radius(0.6);
+    assert_eq!(built.options().spectral_radius, Some(0.6));
     assert_eq!(
         GeneralizedAlpha::new(Options::default())
             .spectral_radius
