@@ -110,6 +110,60 @@ impl Row {
     }
 }
 
+/// The interval `[u_min, u_max]` of path accelerations that meet every row at the squared
+/// path speed `x` (exact, `sqrt(x)` terms included), or `None` if a row without `u` fails
+/// at `x` or the interval is empty.
+pub(crate) fn u_interval(rows: impl Iterator<Item = Row>, x: f64) -> Option<(f64, f64)> {
+    let v = x.max(0.0).sqrt();
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for row in rows {
+        if !row.is_active() {
+            continue;
+        }
+        let rest = row.x * x + row.sqrt_x * v + row.offset;
+        let (a, b) = (row.lower - rest, row.upper - rest);
+        if row.u > 0.0 {
+            lo = lo.max(a / row.u);
+            hi = hi.min(b / row.u);
+        } else if row.u < 0.0 {
+            lo = lo.max(b / row.u);
+            hi = hi.min(a / row.u);
+        } else if a > 1e-12 * row.lower.abs() || b < -1e-12 * row.upper.abs() {
+            return None;
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// The maximum velocity curve at one point: the largest `x` for which some `u` meets every
+/// row (doubling, then bisection to full precision). `-1` if the rows fail at rest, infinite
+/// if nothing bounds `x`.
+pub(crate) fn maximum_speed(rows: impl Iterator<Item = Row> + Clone) -> f64 {
+    if u_interval(rows.clone(), 0.0).is_none() {
+        return -1.0;
+    }
+    let mut hi = 1e-12;
+    while u_interval(rows.clone(), hi).is_some() {
+        hi *= 4.0;
+        if hi > 1e30 {
+            return f64::INFINITY;
+        }
+    }
+    let mut lo = 0.0;
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if u_interval(rows.clone(), mid).is_some() {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
 /// A limit on the motion along a path, as [`Row`]s at each path point.
 ///
 /// Required: a name (for "the constraint that binds"), the unit of its values, the number of

@@ -21,7 +21,7 @@
 //! envelope of the integrated curves rather than by a search along the MVC; the two agree
 //! where the curves are integrated exactly. The switch points are reported.
 
-use crate::constraint::Row;
+use crate::constraint::{Row, maximum_speed, u_interval};
 use crate::error::PlanningError;
 use crate::plan::{Boundary, Planner};
 use crate::sample::PathSample;
@@ -48,59 +48,14 @@ struct Point {
 }
 
 impl Point {
-    /// `[u_min, u_max]` at `x` (exact), or `None` if a row without `u` fails at `x`.
     fn u_range(&self, x: f64) -> Option<(f64, f64)> {
-        let v = x.max(0.0).sqrt();
-        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-        for row in &self.rows {
-            if !row.is_active() {
-                continue;
-            }
-            let rest = row.x * x + row.sqrt_x * v + row.offset;
-            let (a, b) = (row.lower - rest, row.upper - rest);
-            if row.u > 0.0 {
-                lo = lo.max(a / row.u);
-                hi = hi.min(b / row.u);
-            } else if row.u < 0.0 {
-                lo = lo.max(b / row.u);
-                hi = hi.min(a / row.u);
-            } else if a > 1e-12 * row.lower.abs() || b < -1e-12 * row.upper.abs() {
-                return None;
-            }
-        }
-        (lo <= hi).then_some((lo, hi))
+        u_interval(self.rows.iter().copied(), x)
     }
 
-    /// The maximum velocity curve: the largest feasible `x` (doubling, then bisection).
-    fn maximum_speed(&self) -> f64 {
-        if self.u_range(0.0).is_none() {
-            return -1.0;
-        }
-        let mut hi = 1e-12;
-        while self.u_range(hi).is_some() {
-            hi *= 4.0;
-            if hi > 1e30 {
-                return f64::INFINITY;
-            }
-        }
-        let mut lo = 0.0;
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            if self.u_range(mid).is_some() {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        lo
-    }
-
-    /// `2 u` at `x` clamped into `[0, MVC]`, `u` the lower (`decelerate`) or upper bound.
+    /// `2 u` at `x` clamped into `[0, MVC]`, `u` the lower (`decelerate`) or upper bound
+    /// (infinite where no row bounds it).
     fn slope(&self, x: f64, decelerate: bool) -> f64 {
-        let x = x.clamp(0.0, self.mvc.max(0.0));
+        let x = if x.is_nan() { self.mvc } else { x }.clamp(0.0, self.mvc.max(0.0));
         match self.u_range(x) {
             Some((lo, hi)) => 2.0 * if decelerate { lo } else { hi },
             None => 0.0,
@@ -123,18 +78,22 @@ impl Planner<'_> {
             });
         }
         let path = self.path();
-        if self.settings().boundary == Boundary::Periodic && !path.is_closed() {
+        let periodic = self.settings().boundary == Boundary::Periodic;
+        if periodic && !path.is_closed() {
             return Err(PlanningError::OpenPath);
         }
-        let length = path.length();
-        let h = length / steps as f64;
+        let s = crate::plan::grid_points(path, steps, !periodic);
         let sampler = self.sampler();
         let width: usize = self.constraints().iter().map(|c| c.count()).sum();
         // Samples at the grid points and the midpoints (RK4 stages).
         let mut points = Vec::with_capacity(2 * steps + 1);
         for i in 0..=2 * steps {
-            let s = 0.5 * h * i as f64;
-            let sample: PathSample = sampler.sample(path, s)?;
+            let at = if i % 2 == 0 {
+                s[i / 2]
+            } else {
+                0.5 * (s[i / 2] + s[i / 2 + 1])
+            };
+            let sample: PathSample = sampler.sample(path, at)?;
             let mut rows = vec![Row::INACTIVE; width];
             let mut offset = 0;
             for c in self.constraints() {
@@ -142,7 +101,7 @@ impl Planner<'_> {
                 offset += c.count();
             }
             let mut point = Point { rows, mvc: 0.0 };
-            point.mvc = point.maximum_speed();
+            point.mvc = maximum_speed(point.rows.iter().copied());
             if point.mvc < 0.0 {
                 return Err(PlanningError::Infeasible {
                     constraint: "the limits together".into(),
@@ -160,27 +119,55 @@ impl Planner<'_> {
             points.push(point);
         }
         let mvc: Vec<f64> = (0..=steps).map(|i| points[2 * i].mvc).collect();
-        let rk4 = |i: usize, x: f64, backward: bool| -> f64 {
-            // From grid point i towards i+1 (forward) or i-1 (backward).
-            let (p0, pm, p1, sign) = if backward {
-                (&points[2 * i], &points[2 * i - 1], &points[2 * i - 2], -1.0)
+        // One step from grid point i towards i+1 (forward, maximum acceleration) or i-1
+        // (backward, maximum deceleration), never above `cap` at the end point. RK4; where a
+        // slope is unbounded (a point where the path's slope vanishes, so no row bounds s'')
+        // or the step overshoots below zero (the stiff approach to a force limit next to
+        // such a point), implicit Euler at the end point instead: the largest x meeting
+        // x <= x_start +/- 2 h u(end, x).
+        let step = |i: usize, x: f64, backward: bool, cap: f64| -> f64 {
+            let (j, sign) = if backward {
+                (i - 1, -1.0)
             } else {
-                (&points[2 * i], &points[2 * i + 1], &points[2 * i + 2], 1.0)
+                (i + 1, 1.0)
             };
-            let step = sign * h;
+            let (p0, pm, p1) = (&points[2 * i], &points[i + j], &points[2 * j]);
+            let h = sign * (s[j] - s[i]).abs();
             let k1 = p0.slope(x, backward);
-            let k2 = pm.slope(x + 0.5 * step * k1, backward);
-            let k3 = pm.slope(x + 0.5 * step * k2, backward);
-            let k4 = p1.slope(x + step * k3, backward);
-            x + step * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+            let k2 = pm.slope(x + 0.5 * h * k1, backward);
+            let k3 = pm.slope(x + 0.5 * h * k2, backward);
+            let k4 = p1.slope(x + h * k3, backward);
+            let rk = x + h * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0;
+            if rk.is_finite() && rk >= 0.0 {
+                return rk.min(cap);
+            }
+            let gap = |y: f64| x + h * p1.slope(y, backward) - y;
+            if gap(cap) >= 0.0 {
+                return cap;
+            }
+            let (mut lo, mut hi) = (0.0, cap);
+            if gap(lo) < 0.0 {
+                return 0.0;
+            }
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if mid <= lo || mid >= hi {
+                    break;
+                }
+                if gap(mid) >= 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
         };
-        let periodic = self.settings().boundary == Boundary::Periodic;
         let mut end = if periodic { mvc[steps] } else { 0.0 };
         let mut limit = vec![0.0; steps + 1];
         for _ in 0..200 {
             limit[steps] = end.min(mvc[steps]);
             for i in (1..=steps).rev() {
-                limit[i - 1] = rk4(i, limit[i], true).clamp(0.0, mvc[i - 1]);
+                limit[i - 1] = step(i, limit[i], true, mvc[i - 1]);
             }
             if !periodic {
                 break;
@@ -197,8 +184,8 @@ impl Planner<'_> {
         for _ in 0..200 {
             x[0] = start.min(limit[0]);
             for i in 0..steps {
-                let free = rk4(i, x[i], false).max(0.0);
-                clamped[i + 1] = free >= limit[i + 1];
+                let free = step(i, x[i], false, limit[i + 1]);
+                clamped[i + 1] = free >= limit[i + 1] * (1.0 - 1e-14);
                 x[i + 1] = free.min(limit[i + 1]);
             }
             if !periodic || (x[steps] - start).abs() <= 1e-12 * start {
@@ -206,7 +193,6 @@ impl Planner<'_> {
             }
             start = x[steps];
         }
-        let s: Vec<f64> = (0..=steps).map(|i| h * i as f64).collect();
         let mut switch_points = Vec::new();
         for i in 1..steps {
             if clamped[i] != clamped[i + 1] {

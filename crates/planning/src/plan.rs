@@ -179,6 +179,27 @@ impl Plan {
     }
 }
 
+/// `n + 1` grid points on `[0, S]`: uniform for a periodic motion; clustered like
+/// `(1 - cos)` (Chebyshev points) towards the ends of a rest-to-rest motion. Near rest the
+/// path speed changes fastest relative to itself (`s' ~ sqrt(s)`, or `1/s` where the path's
+/// slope `p'` vanishes, as at a waypoint spline's ends) and limits with a `s'` term change
+/// with it; a uniform grid resolves that only to first order in the interval, the clustered
+/// one to second order (measured: docs/planning.md, "Convergence").
+pub(crate) fn grid_points(path: &dyn Path, n: usize, rest: bool) -> Vec<f64> {
+    let length = path.length();
+    let map = |w: f64| {
+        if rest {
+            0.5 * (1.0 - (std::f64::consts::PI * w).cos())
+        } else {
+            w
+        }
+    };
+    let mut s: Vec<f64> = (0..=n).map(|k| length * map(k as f64 / n as f64)).collect();
+    s[0] = 0.0;
+    s[n] = length;
+    s
+}
+
 /// The samples and rows of a grid.
 #[derive(Debug, Clone)]
 struct Grid {
@@ -373,10 +394,11 @@ impl<'a> Planner<'a> {
         Ok(())
     }
 
-    /// The uniform grid of `n` intervals plus the path's breakpoints.
+    /// The grid of `n` intervals ([`grid_points`]) plus the path's breakpoints.
     fn uniform(&self, n: usize) -> Vec<f64> {
         let length = self.path.length();
-        let mut s: Vec<f64> = (0..=n).map(|k| length * k as f64 / n as f64).collect();
+        let rest = self.settings.boundary == Boundary::RestToRest;
+        let mut s = grid_points(self.path, n, rest);
         let gap = 1e-6 * length / n as f64;
         for b in self.path.breakpoints() {
             if b > 0.0 && b < length && s.iter().all(|g| (g - b).abs() > gap) {
@@ -553,7 +575,7 @@ impl<'a> Planner<'a> {
         // The first pass dropped the friction terms that make limits harder: re-solve with
         // their tangents at the solution (each pass is feasible; the duration settles).
         let mut previous = f64::INFINITY;
-        for _ in 0..12 {
+        for _ in 0..40 {
             let peak = profile.x.iter().fold(0.0f64, |a, &b| a.max(b));
             let floor = 1e-9 * peak + f64::MIN_POSITIVE;
             let tangent: Vec<f64> = profile.x.iter().map(|x| x.max(floor)).collect();
@@ -569,7 +591,7 @@ impl<'a> Planner<'a> {
             topp::solve(&grid.s, &lin, self.ends(), &mut work, &mut profile)
                 .map_err(|f| self.failure(grid, f))?;
             let t = topp::duration(&grid.s, &profile.x);
-            if (t - previous).abs() <= 1e-10 * t {
+            if (t - previous).abs() <= 1e-12 * t {
                 break;
             }
             previous = t;

@@ -20,8 +20,8 @@
 //! A row with a `sqrt(x)` term (viscous friction) is replaced by a half-plane inside it:
 //! where `sqrt(x)` makes the row harder to meet (`c sqrt(x)` on the side of the limit, a
 //! concave function) by its tangent at `x_0` (`sqrt(x) <= sqrt(x0)/2 + x/(2 sqrt(x0))`),
-//! where it helps by its chord on `[0, X]` (`sqrt(x) >= x / sqrt(X)`, `X` the point's exact
-//! speed bound) or by nothing. The planner re-solves with the tangents at the solution until
+//! where it helps by chords on `[0, X]` (`X` the point's exact speed bound, below which the
+//! chords of the concave `sqrt` lie under it) or, without such a bound, by nothing. The planner re-solves with the tangents at the solution until
 //! the duration settles; every solution is feasible for the exact rows at the grid points.
 //! Rows with only `sqrt(x)` (speed limits) are exact bounds on `x`.
 //!
@@ -29,7 +29,7 @@
 //! `K_N <- K_0`, until the sets stop shrinking, and the forward pass from `x_0 = hi_0` is
 //! repeated with `x_0 <- x_N` until the path speed closes on itself.
 
-use crate::constraint::Row;
+use crate::constraint::{Row, maximum_speed};
 
 /// A half-plane `a u + b x <= g`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,7 +61,7 @@ pub(crate) struct XBounds {
 /// The linearised rows of every grid point, as half-planes, and the exact bounds on `x`.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Linearized {
-    /// `2 m` planes per point (inactive: `g = inf`).
+    /// `2 m SLOTS` planes per point (inactive: `g = inf`).
     pub(crate) planes: Vec<Plane>,
     pub(crate) bounds: Vec<XBounds>,
     pub(crate) width: usize,
@@ -81,9 +81,10 @@ pub(crate) fn linearize(
     out: &mut Linearized,
 ) {
     let points = scale.len();
-    out.width = 2 * m;
+    let width = 2 * m * SLOTS;
+    out.width = width;
     out.planes.clear();
-    out.planes.resize(points * 2 * m, Plane::NONE);
+    out.planes.resize(points * width, Plane::NONE);
     out.bounds.clear();
     out.bounds.resize(
         points,
@@ -108,8 +109,30 @@ pub(crate) fn linearize(
             }
             x_bound(&row, j, bounds);
         }
+        // Chords of a helpful sqrt(x) term need a finite range of x: where no exact bound
+        // gives one, the point's maximum velocity curve does (no feasible x lies above it, so
+        // bounding x by it cuts nothing).
+        let helpful = point_rows.iter().any(|r| {
+            r.is_active()
+                && r.sqrt_x.abs() > 0.0
+                && (r.u.abs() > 0.0 || r.x.abs() > 0.0)
+                && ((r.sqrt_x < 0.0 && r.upper.is_finite())
+                    || (r.sqrt_x > 0.0 && r.lower.is_finite()))
+        });
+        if helpful && !bounds.hi.is_finite() {
+            let factor = |j: usize| scale[k] * constraint_scale[owner[j]];
+            let mvc = maximum_speed(
+                point_rows
+                    .iter()
+                    .enumerate()
+                    .map(|(j, r)| r.scaled(factor(j))),
+            );
+            if mvc.is_finite() && mvc > 0.0 {
+                bounds.hi = mvc;
+            }
+        }
         let chord_max = bounds.hi;
-        let planes = &mut out.planes[k * 2 * m..(k + 1) * 2 * m];
+        let planes = &mut out.planes[k * width..(k + 1) * width];
         for (j, row) in point_rows.iter().enumerate() {
             if !row.is_active() {
                 continue;
@@ -121,34 +144,48 @@ pub(crate) fn linearize(
             let row = row.scaled(scale[k] * constraint_scale[owner[j]]);
             let x0 = tangent.map(|t| t[k]);
             if row.upper.is_finite() {
-                planes[2 * j] = side(
+                side(
                     row.u,
                     row.x,
                     row.sqrt_x,
                     row.upper - row.offset,
                     x0,
                     chord_max,
+                    &mut planes[2 * j * SLOTS..(2 * j + 1) * SLOTS],
                 );
             }
             if row.lower.is_finite() {
-                planes[2 * j + 1] = side(
+                side(
                     -row.u,
                     -row.x,
                     -row.sqrt_x,
                     row.offset - row.lower,
                     x0,
                     chord_max,
+                    &mut planes[(2 * j + 1) * SLOTS..(2 * j + 2) * SLOTS],
                 );
             }
         }
     }
 }
 
-/// `a u + b x + c sqrt(x) <= g` as a half-plane inside it (module documentation).
+/// Half-planes per side of a row: one, or up to this many chords of a helpful `sqrt(x)`.
+const SLOTS: usize = 8;
+
+/// `a u + b x + c sqrt(x) <= g` as half-planes inside it (module documentation), written
+/// into `out` (at most [`SLOTS`]).
+///
+/// `c > 0` (the term makes the row harder): the tangent of `sqrt` at `x0` lies above it, so
+/// `a u + (b + c / (2 sqrt(x0))) x <= g - c sqrt(x0) / 2` implies the row.
+/// `c < 0` (the term helps): on `[0, X]` the piecewise-linear interpolant of `sqrt` through
+/// `0, x0/4, x0/2, 0.9 x0, x0, 1.1 x0, 2 x0, 4 x0, X` lies below it (concavity), so the chords'
+/// half-planes together with `x <= X` imply the row; the interpolant is exact at `x0` and its
+/// slopes next to `x0` are within 3 % of the derivative, so that the re-linearisation can move
+/// past `x0`.
 #[inline]
-fn side(a: f64, b: f64, c: f64, g: f64, tangent: Option<f64>, chord_max: f64) -> Plane {
+fn side(a: f64, b: f64, c: f64, g: f64, tangent: Option<f64>, chord_max: f64, out: &mut [Plane]) {
     if c > 0.0 {
-        match tangent {
+        out[0] = match tangent {
             Some(x0) => {
                 let r = x0.sqrt();
                 Plane {
@@ -158,15 +195,40 @@ fn side(a: f64, b: f64, c: f64, g: f64, tangent: Option<f64>, chord_max: f64) ->
                 }
             }
             None => Plane { a, b, g },
-        }
+        };
     } else if c < 0.0 && chord_max.is_finite() && chord_max > 0.0 {
-        Plane {
-            a,
-            b: b + c / chord_max.sqrt(),
-            g,
+        let x_max = chord_max;
+        let centre = tangent.unwrap_or(x_max / 16.0).clamp(0.0, x_max);
+        let mut knots = [
+            0.0,
+            0.25 * centre,
+            0.5 * centre,
+            0.9 * centre,
+            centre,
+            (1.1 * centre).min(x_max),
+            (2.0 * centre).min(x_max),
+            (4.0 * centre).min(x_max),
+            x_max,
+        ];
+        knots.sort_by(f64::total_cmp);
+        let mut slot = 0;
+        for pair in knots.windows(2) {
+            let (xa, xb) = (pair[0], pair[1]);
+            if xb <= xa || slot == out.len() {
+                continue;
+            }
+            let (ra, rb) = (xa.sqrt(), xb.sqrt());
+            let slope = 1.0 / (ra + rb);
+            // sqrt(x) >= ra + slope (x - xa) on [xa, xb]; c < 0 turns it into an upper bound.
+            out[slot] = Plane {
+                a,
+                b: b + c * slope,
+                g: g - c * (ra - slope * xa),
+            };
+            slot += 1;
         }
     } else {
-        Plane { a, b, g }
+        out[0] = Plane { a, b, g };
     }
 }
 
