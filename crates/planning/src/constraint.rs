@@ -558,7 +558,7 @@ impl Constraint for MotorTorque {
             // Force on the slider, affine in (u, x).
             let (fu, fx, f0) = (f.u + reflected * l.d1, f.x + reflected * l.d2, f.constant);
             let sigma = sign(l.d1);
-            let at_rest = !(l.d1.abs() > 0.0);
+            let at_rest = l.d1.abs() <= 0.0;
             let viscous = m.viscous_friction * g * l.d1;
             let coulomb = m.coulomb_friction;
             let (first, second) = (i, i + 3);

@@ -26,6 +26,28 @@ impl std::fmt::Display for Where {
     }
 }
 
+/// A limit that no motion can meet, and where.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error(
+    "no motion can meet {constraint} ({label}) at {at}: {reason} ({value:.6e} against the limit {limit:.6e} {unit})"
+)]
+pub struct Infeasibility {
+    /// The constraint's name.
+    pub constraint: String,
+    /// Which of its rows (`leg 2`, `link 1 at B`).
+    pub label: String,
+    /// Where.
+    pub at: Where,
+    /// Why.
+    pub reason: &'static str,
+    /// The value the row has there.
+    pub value: f64,
+    /// The limit.
+    pub limit: f64,
+    /// Unit of value and limit.
+    pub unit: String,
+}
+
 /// What went wrong planning a motion.
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
@@ -59,25 +81,8 @@ pub enum PlanningError {
     },
     /// A limit that no motion can meet: already broken at rest, or one that leaves no path
     /// speed at all.
-    #[error(
-        "no motion can meet {constraint} ({label}) at {at}: {reason} ({value:.6e} against the limit {limit:.6e} {unit})"
-    )]
-    Infeasible {
-        /// The constraint's name.
-        constraint: String,
-        /// Which of its rows (`leg 2`, `link 1 at B`).
-        label: String,
-        /// Where.
-        at: Where,
-        /// Why.
-        reason: &'static str,
-        /// The value the row has there.
-        value: f64,
-        /// The limit.
-        limit: f64,
-        /// Unit of value and limit.
-        unit: String,
-    },
+    #[error("{0}")]
+    Infeasible(Box<Infeasibility>),
     /// No constraint bounds the path speed somewhere: the minimum time would be zero.
     #[error(
         "no constraint bounds the path speed at {at}: add a speed, acceleration or force limit"

@@ -37,7 +37,7 @@ pub use constraint::{
     Buckling, Constraint, Efficiency, MotorSpeed, MotorTorque, PlatformSpeed, Row,
     SliderAcceleration, SliderForce, SliderSpeed,
 };
-pub use error::{PlanningError, Where};
+pub use error::{Infeasibility, PlanningError, Where};
 pub use phase::PhasePlane;
 pub use plan::{
     Binding, Boundary, CHECK_TOLERANCE, Convergence, Plan, Planner, RmsLimit, Settings, Solution,

@@ -22,7 +22,7 @@
 //! where the curves are integrated exactly. The switch points are reported.
 
 use crate::constraint::{Row, maximum_speed, u_interval};
-use crate::error::PlanningError;
+use crate::error::{Infeasibility, PlanningError};
 use crate::plan::{Boundary, Planner};
 use crate::sample::PathSample;
 
@@ -103,7 +103,7 @@ impl Planner<'_> {
             let mut point = Point { rows, mvc: 0.0 };
             point.mvc = maximum_speed(point.rows.iter().copied());
             if point.mvc < 0.0 {
-                return Err(PlanningError::Infeasible {
+                return Err(PlanningError::Infeasible(Box::new(Infeasibility {
                     constraint: "the limits together".into(),
                     label: "all rows".into(),
                     at: sample.place(),
@@ -111,7 +111,7 @@ impl Planner<'_> {
                     value: f64::NAN,
                     limit: f64::NAN,
                     unit: String::new(),
-                });
+                })));
             }
             if !point.mvc.is_finite() && i > 0 && i < 2 * steps {
                 return Err(PlanningError::Unbounded { at: sample.place() });

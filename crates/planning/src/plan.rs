@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::check::{Check, Usage};
 use crate::constraint::{Constraint, MotorTorque, Row};
-use crate::error::PlanningError;
+use crate::error::{Infeasibility, PlanningError};
 use crate::sample::{PathSample, Sampler};
 use crate::topp::{self, Ends, Failure, Linearized, Profile, Workspace, linearize};
 
@@ -453,7 +453,7 @@ impl<'a> Planner<'a> {
         limit: f64,
     ) -> PlanningError {
         let (c, r) = self.owners()[j];
-        PlanningError::Infeasible {
+        PlanningError::Infeasible(Box::new(Infeasibility {
             constraint: self.constraints[c].name().to_owned(),
             label: self.constraints[c].label(r),
             at: sample.place(),
@@ -461,7 +461,7 @@ impl<'a> Planner<'a> {
             value,
             limit,
             unit: self.constraints[c].unit().to_owned(),
-        }
+        }))
     }
 
     /// Every row must hold with the platform at rest somewhere on its range of speeds: a row
@@ -522,7 +522,7 @@ impl<'a> Planner<'a> {
             Failure::Unbounded(k) => PlanningError::Unbounded {
                 at: grid.samples[k].place(),
             },
-            Failure::Empty(k) => PlanningError::Infeasible {
+            Failure::Empty(k) => PlanningError::Infeasible(Box::new(Infeasibility {
                 constraint: "the limits together".into(),
                 label: "all rows".into(),
                 at: grid.samples[k].place(),
@@ -530,7 +530,7 @@ impl<'a> Planner<'a> {
                 value: f64::NAN,
                 limit: f64::NAN,
                 unit: String::new(),
-            },
+            })),
         }
     }
 
@@ -661,7 +661,7 @@ impl<'a> Planner<'a> {
         let n = grid.s.len();
         let mut worst = vec![0.0f64; n - 1];
         let mut t0 = 0.0;
-        for k in 0..n - 1 {
+        for (k, segment_worst) in worst.iter_mut().enumerate() {
             let (s0, s1) = (grid.s[k], grid.s[k + 1]);
             let (x0, u) = (profile.x[k], profile.u[k]);
             let root0 = x0.max(0.0).sqrt();
@@ -692,7 +692,7 @@ impl<'a> Planner<'a> {
                     let limit = if value >= 0.0 { row.upper } else { row.lower };
                     let (c, local) = owners[r];
                     check.record(c, local, usage, value, limit, s, t);
-                    worst[k] = worst[k].max(usage);
+                    *segment_worst = segment_worst.max(usage);
                 }
             }
             t0 += 2.0 * (s1 - s0) / (root0 + profile.x[k + 1].max(0.0).sqrt());
@@ -1108,8 +1108,30 @@ impl<'a> Planner<'a> {
             let trajectory = PlannedTrajectory::new(self.path, plan.timing.clone(), 0.0)?
                 .with_shaper(self.impulses.clone())?
                 .with_smoothing(window)?;
-            let check = self.check_trajectory(&trajectory, per_piece, self.jerk)?;
+            let mut check = self.check_trajectory(&trajectory, per_piece, self.jerk)?;
             if check.max_usage <= 1.0 + CHECK_TOLERANCE {
+                if self.jerk.is_some() {
+                    // The shortest window that still meets every limit (bisection; the
+                    // window found is feasible, a zero window is not).
+                    let (mut lo, mut hi) = (0.0, window);
+                    for _ in 0..12 {
+                        let mid = 0.5 * (lo + hi);
+                        let trial = PlannedTrajectory::new(self.path, plan.timing.clone(), 0.0)?
+                            .with_shaper(self.impulses.clone())?
+                            .with_smoothing(mid)?;
+                        let attempt = self.check_trajectory(&trial, per_piece, self.jerk)?;
+                        if attempt.max_usage <= 1.0 + CHECK_TOLERANCE {
+                            hi = mid;
+                            check = attempt;
+                        } else {
+                            lo = mid;
+                        }
+                    }
+                    window = hi;
+                }
+                let trajectory = PlannedTrajectory::new(self.path, plan.timing.clone(), 0.0)?
+                    .with_shaper(self.impulses.clone())?
+                    .with_smoothing(window)?;
                 plan.duration = plan.timing.duration() + trajectory.extra_time();
                 plan.impulses = self.impulses.clone();
                 plan.smoothing = window;

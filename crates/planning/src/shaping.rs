@@ -171,8 +171,9 @@ pub fn design_for_modes(shaper: Shaper, modes: &[Mode]) -> Result<Vec<Impulse>, 
     Ok(impulses)
 }
 
-/// Residual vibration of `mode` after the shaper, as a fraction of that after a single unit
-/// impulse (the "percentage vibration" of Singer & Seering):
+/// Residual vibration of `mode` after the shaper: the amplitude of the ringing left at the
+/// last impulse, as a fraction of the amplitude a single unit impulse (or step) starts with
+/// (the "percentage vibration" of Singer & Seering):
 /// `exp(-z w t_N) sqrt(C^2 + S^2)`, `C = sum A_j exp(z w t_j) cos(w_d t_j)`, `S` the same with
 /// `sin`, `w_d = w sqrt(1 - z^2)`.
 pub fn residual_vibration(impulses: &[Impulse], mode: Mode) -> f64 {

@@ -12,7 +12,7 @@
 //! `y / S` revolutions per second.
 
 use crate::constraint::Row;
-use crate::error::{PlanningError, Where};
+use crate::error::{Infeasibility, PlanningError, Where};
 use crate::plan::Planner;
 
 /// The fastest constant-speed traversal of a closed path.
@@ -152,7 +152,7 @@ impl Planner<'_> {
                 offset += cons.count();
             }
             let cons = &self.constraints()[owner.0];
-            return Err(PlanningError::Infeasible {
+            return Err(PlanningError::Infeasible(Box::new(Infeasibility {
                 constraint: cons.name().to_owned(),
                 label: cons.label(owner.1),
                 at,
@@ -160,7 +160,7 @@ impl Planner<'_> {
                 value: 0.0,
                 limit: 0.0,
                 unit: cons.unit().to_owned(),
-            });
+            })));
         }
         let mut offset = 0;
         let (mut name, mut label) = (String::new(), String::new());

@@ -137,7 +137,8 @@ pub(crate) fn linearize(
             if !row.is_active() {
                 continue;
             }
-            let pure = !(row.u.abs() > 0.0) && !(row.x.abs() > 0.0 && row.sqrt_x.abs() > 0.0);
+            let mixed = row.x.abs() > 0.0 && row.sqrt_x.abs() > 0.0;
+            let pure = row.u.abs() <= 0.0 && !mixed;
             if pure {
                 continue;
             }
@@ -491,7 +492,7 @@ fn backward(
         let (x_lo, x_hi) = work.segment(lin, k, delta, (out.lo[k + 1], out.hi[k + 1]));
         let (lo, hi) = work.project(x_lo, x_hi);
         let tolerance = SLACK * hi.abs().max(lo.abs()).max(f64::MIN_POSITIVE);
-        if !(lo <= hi + tolerance) {
+        if lo > hi + tolerance || lo.is_nan() || hi.is_nan() {
             return Err(Failure::Empty(k));
         }
         if k > 0 && !hi.is_finite() {
@@ -604,6 +605,32 @@ mod tests {
                 assert!(profile.x.iter().all(|x| *x <= v * v * (1.0 + 1e-12)));
             }
         }
+    }
+
+    #[global_allocator]
+    static GLOBAL: flexprr_testkit::alloc::CountingAllocator =
+        flexprr_testkit::alloc::CountingAllocator;
+
+    #[test]
+    fn a_warm_solve_allocates_nothing() {
+        let (s, lin) = double_integrator(1000, 0.2, 0.5, 20.0);
+        let mut work = Workspace::default();
+        let mut profile = Profile::default();
+        solve(&s, &lin, Ends::Rest, &mut work, &mut profile).unwrap();
+        let (result, allocations) = flexprr_testkit::count_allocations(|| {
+            solve(&s, &lin, Ends::Rest, &mut work, &mut profile)
+        });
+        assert!(result.is_ok());
+        assert_eq!(allocations, 0);
+        // Re-linearising into warm buffers allocates nothing either.
+        let rows: Vec<Row> = vec![Row::symmetric(1.0, 0.5, 0.0, 3.0); 2 * 1001];
+        let scale = vec![1.0; 1001];
+        let mut out = Linearized::default();
+        linearize(&rows, 2, &[0, 0], &scale, &[1.0], None, &mut out);
+        let ((), allocations) = flexprr_testkit::count_allocations(|| {
+            linearize(&rows, 2, &[0, 0], &scale, &[1.0], Some(&scale), &mut out);
+        });
+        assert_eq!(allocations, 0);
     }
 
     #[test]
