@@ -61,10 +61,11 @@ pub(crate) struct XBounds {
 /// The linearised rows of every grid point, as half-planes, and the exact bounds on `x`.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Linearized {
-    /// `2 m SLOTS` planes per point (inactive: `g = inf`).
+    /// The active planes of every point, point after point.
     pub(crate) planes: Vec<Plane>,
+    /// Where each point's planes start in `planes` (one more entry than points).
+    pub(crate) start: Vec<usize>,
     pub(crate) bounds: Vec<XBounds>,
-    pub(crate) width: usize,
 }
 
 /// Linearises the `m` rows per point of `rows` (row-major, `K x m`): `scale[k]` multiplies
@@ -81,10 +82,8 @@ pub(crate) fn linearize(
     out: &mut Linearized,
 ) {
     let points = scale.len();
-    let width = 2 * m * SLOTS;
-    out.width = width;
     out.planes.clear();
-    out.planes.resize(points * width, Plane::NONE);
+    out.start.clear();
     out.bounds.clear();
     out.bounds.resize(
         points,
@@ -132,7 +131,8 @@ pub(crate) fn linearize(
             }
         }
         let chord_max = bounds.hi;
-        let planes = &mut out.planes[k * width..(k + 1) * width];
+        out.start.push(out.planes.len());
+        let mut scratch = [Plane::NONE; SLOTS];
         for (j, row) in point_rows.iter().enumerate() {
             if !row.is_active() {
                 continue;
@@ -145,46 +145,56 @@ pub(crate) fn linearize(
             let row = row.scaled(scale[k] * constraint_scale[owner[j]]);
             let x0 = tangent.map(|t| t[k]);
             if row.upper.is_finite() {
-                side(
+                let n = side(
                     row.u,
                     row.x,
                     row.sqrt_x,
                     row.upper - row.offset,
                     x0,
                     chord_max,
-                    &mut planes[2 * j * SLOTS..(2 * j + 1) * SLOTS],
+                    &mut scratch,
                 );
+                out.planes.extend_from_slice(&scratch[..n]);
             }
             if row.lower.is_finite() {
-                side(
+                let n = side(
                     -row.u,
                     -row.x,
                     -row.sqrt_x,
                     row.offset - row.lower,
                     x0,
                     chord_max,
-                    &mut planes[(2 * j + 1) * SLOTS..(2 * j + 2) * SLOTS],
+                    &mut scratch,
                 );
+                out.planes.extend_from_slice(&scratch[..n]);
             }
         }
     }
+    out.start.push(out.planes.len());
 }
 
 /// Half-planes per side of a row: one, or up to this many chords of a helpful `sqrt(x)`.
-const SLOTS: usize = 8;
+const SLOTS: usize = 4;
 
 /// `a u + b x + c sqrt(x) <= g` as half-planes inside it (module documentation), written
-/// into `out` (at most [`SLOTS`]).
+/// into `out`; returns how many.
 ///
 /// `c > 0` (the term makes the row harder): the tangent of `sqrt` at `x0` lies above it, so
 /// `a u + (b + c / (2 sqrt(x0))) x <= g - c sqrt(x0) / 2` implies the row.
 /// `c < 0` (the term helps): on `[0, X]` the piecewise-linear interpolant of `sqrt` through
-/// `0, x0/4, x0/2, 0.9 x0, x0, 1.1 x0, 2 x0, 4 x0, X` lies below it (concavity), so the chords'
-/// half-planes together with `x <= X` imply the row; the interpolant is exact at `x0` and its
-/// slopes next to `x0` are within 3 % of the derivative, so that the re-linearisation can move
-/// past `x0`.
+/// `0, 0.8 x0, x0, 1.25 x0, X` lies below it (concavity), so the chords' half-planes together
+/// with `x <= X` imply the row; the interpolant is exact at `x0` and its slopes next to `x0`
+/// are within 6 % of the derivative, so that the re-linearisation can move past `x0`.
 #[inline]
-fn side(a: f64, b: f64, c: f64, g: f64, tangent: Option<f64>, chord_max: f64, out: &mut [Plane]) {
+fn side(
+    a: f64,
+    b: f64,
+    c: f64,
+    g: f64,
+    tangent: Option<f64>,
+    chord_max: f64,
+    out: &mut [Plane; SLOTS],
+) -> usize {
     if c > 0.0 {
         out[0] = match tangent {
             Some(x0) => {
@@ -197,20 +207,11 @@ fn side(a: f64, b: f64, c: f64, g: f64, tangent: Option<f64>, chord_max: f64, ou
             }
             None => Plane { a, b, g },
         };
+        1
     } else if c < 0.0 && chord_max.is_finite() && chord_max > 0.0 {
         let x_max = chord_max;
         let centre = tangent.unwrap_or(x_max / 16.0).clamp(0.0, x_max);
-        let mut knots = [
-            0.0,
-            0.25 * centre,
-            0.5 * centre,
-            0.9 * centre,
-            centre,
-            (1.1 * centre).min(x_max),
-            (2.0 * centre).min(x_max),
-            (4.0 * centre).min(x_max),
-            x_max,
-        ];
+        let mut knots = [0.0, 0.8 * centre, centre, (1.25 * centre).min(x_max), x_max];
         knots.sort_by(f64::total_cmp);
         let mut slot = 0;
         for pair in knots.windows(2) {
@@ -228,8 +229,10 @@ fn side(a: f64, b: f64, c: f64, g: f64, tangent: Option<f64>, chord_max: f64, ou
             };
             slot += 1;
         }
+        slot
     } else {
         out[0] = Plane { a, b, g };
+        1
     }
 }
 
@@ -311,6 +314,11 @@ pub(crate) enum Failure {
 pub(crate) struct Workspace {
     uppers: Vec<(f64, f64)>,
     lowers: Vec<(f64, f64)>,
+    /// The bounds of every segment from the last backward pass, for the forward pass.
+    cached_uppers: Vec<(f64, f64)>,
+    cached_lowers: Vec<(f64, f64)>,
+    /// `(uppers start, uppers end, lowers start, lowers end)` per segment.
+    ranges: Vec<[usize; 4]>,
 }
 
 /// Largest relative roundoff accepted between bounds.
@@ -323,7 +331,6 @@ impl Workspace {
     fn segment(&mut self, lin: &Linearized, k: usize, delta: f64, next: (f64, f64)) -> (f64, f64) {
         self.uppers.clear();
         self.lowers.clear();
-        let w = lin.width;
         let b = &lin.bounds[k];
         let (mut x_lo, mut x_hi) = (b.lo.max(0.0), b.hi);
         let mut add = |a: f64,
@@ -343,13 +350,13 @@ impl Workspace {
                 x_hi = -1.0;
             }
         };
-        for p in &lin.planes[k * w..(k + 1) * w] {
+        for p in &lin.planes[lin.start[k]..lin.start[k + 1]] {
             if p.g.is_finite() {
                 add(p.a, p.b, p.g, &mut self.uppers, &mut self.lowers);
             }
         }
         // Point k+1 at x + 2 delta u: a u + b (x + 2 delta u) <= g.
-        for p in &lin.planes[(k + 1) * w..(k + 2) * w] {
+        for p in &lin.planes[lin.start[k + 1]..lin.start[k + 2]] {
             if p.g.is_finite() {
                 add(
                     p.a + 2.0 * delta * p.b,
@@ -391,18 +398,26 @@ impl Workspace {
         (x_lo, x_hi)
     }
 
-    /// `(u_lo, u_hi)` at `x`.
+    /// `(u_lo, u_hi)` at `x` on segment `k` of the last backward pass.
     #[inline]
-    fn u_range(&self, x: f64) -> (f64, f64) {
-        let hi = self
-            .uppers
+    fn u_range(&self, k: usize, x: f64) -> (f64, f64) {
+        let [u0, u1, l0, l1] = self.ranges[k];
+        let hi = self.cached_uppers[u0..u1]
             .iter()
             .fold(f64::INFINITY, |m, &(a, b)| m.min(a + b * x));
-        let lo = self
-            .lowers
+        let lo = self.cached_lowers[l0..l1]
             .iter()
             .fold(f64::NEG_INFINITY, |m, &(a, b)| m.max(a + b * x));
         (lo, hi)
+    }
+
+    /// Keeps the bounds of segment `k` for the forward pass.
+    #[inline]
+    fn keep(&mut self, k: usize) {
+        let (u0, l0) = (self.cached_uppers.len(), self.cached_lowers.len());
+        self.cached_uppers.extend_from_slice(&self.uppers);
+        self.cached_lowers.extend_from_slice(&self.lowers);
+        self.ranges[k] = [u0, self.cached_uppers.len(), l0, self.cached_lowers.len()];
     }
 }
 
@@ -461,7 +476,7 @@ pub(crate) fn solve(
         Ends::Periodic => out.hi[0],
     };
     for _ in 0..200 {
-        forward(s, lin, x0, work, out)?;
+        forward(s, x0, work, out)?;
         if ends == Ends::Rest {
             break;
         }
@@ -487,9 +502,14 @@ fn backward(
     out: &mut Profile,
 ) -> Result<(), Failure> {
     let n = s.len();
+    work.cached_uppers.clear();
+    work.cached_lowers.clear();
+    work.ranges.clear();
+    work.ranges.resize(n - 1, [0; 4]);
     for k in (0..n - 1).rev() {
         let delta = s[k + 1] - s[k];
         let (x_lo, x_hi) = work.segment(lin, k, delta, (out.lo[k + 1], out.hi[k + 1]));
+        work.keep(k);
         let (lo, hi) = work.project(x_lo, x_hi);
         let tolerance = SLACK * hi.abs().max(lo.abs()).max(f64::MIN_POSITIVE);
         if lo > hi + tolerance || lo.is_nan() || hi.is_nan() {
@@ -504,20 +524,13 @@ fn backward(
     Ok(())
 }
 
-fn forward(
-    s: &[f64],
-    lin: &Linearized,
-    x0: f64,
-    work: &mut Workspace,
-    out: &mut Profile,
-) -> Result<(), Failure> {
+fn forward(s: &[f64], x0: f64, work: &mut Workspace, out: &mut Profile) -> Result<(), Failure> {
     let n = s.len();
     out.x[0] = x0.clamp(out.lo[0], out.hi[0]);
     for k in 0..n - 1 {
         let delta = s[k + 1] - s[k];
         let x = out.x[k];
-        work.segment(lin, k, delta, (out.lo[k + 1], out.hi[k + 1]));
-        let (u_lo, u_hi) = work.u_range(x);
+        let (u_lo, u_hi) = work.u_range(k, x);
         if !u_hi.is_finite() {
             return Err(Failure::Unbounded(k));
         }
