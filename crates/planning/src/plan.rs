@@ -20,7 +20,7 @@
 //! dense check of the filtered motion, and the limits are tightened until it passes.
 
 use flexprr_dynamics::{AxialForceModel, JointReactionAxialForce, Machine};
-use flexprr_kinematics::{Impulse, Path, PlannedTrajectory, Timing};
+use flexprr_kinematics::{Impulse, Path, PathState, PlannedTrajectory, Timing};
 use serde::{Deserialize, Serialize};
 
 use crate::check::{Check, Usage};
@@ -646,18 +646,40 @@ impl<'a> Planner<'a> {
         }
     }
 
-    /// Dense check of a grid profile: `factor` points per interval, the timing's own
-    /// piecewise-constant `u`. Returns the check and the largest use per interval.
+    /// The rows at the `factor - 1` interior check points of every interval of `grid`
+    /// (they do not depend on the timing: computed once per grid, reused while limits are
+    /// tightened).
+    fn dense_rows(&self, grid: &Grid, factor: usize) -> Result<Vec<Row>, PlanningError> {
+        let sampler = self.sampler();
+        let m = self.width();
+        let n = grid.s.len();
+        let mut rows = vec![Row::INACTIVE; (n - 1) * (factor - 1) * m];
+        let mut chunks = rows.chunks_exact_mut(m);
+        for k in 0..n - 1 {
+            let (s0, s1) = (grid.s[k], grid.s[k + 1]);
+            for j in 1..factor {
+                let s = s0 + (s1 - s0) * j as f64 / factor as f64;
+                let sample = sampler.sample(self.path, s)?;
+                if let Some(chunk) = chunks.next() {
+                    self.write_rows(&sample, chunk);
+                }
+            }
+        }
+        Ok(rows)
+    }
+
+    /// Dense check of a grid profile: `factor` points per interval (`dense`: the rows at the
+    /// interior ones), the timing's own piecewise-constant `u`. Returns the check and the
+    /// largest use per interval.
     fn check_profile(
         &self,
         grid: &Grid,
+        dense: &[Row],
         profile: &Profile,
         factor: usize,
     ) -> Result<(Check, Vec<f64>), PlanningError> {
-        let sampler = self.sampler();
         let m = self.width();
         let owners = self.owners();
-        let mut rows = vec![Row::INACTIVE; m];
         let mut check = self.new_check();
         let n = grid.s.len();
         let mut worst = vec![0.0f64; n - 1];
@@ -675,14 +697,14 @@ impl<'a> Planner<'a> {
                 };
                 let s_dot = x.sqrt();
                 let t = t0 + 2.0 * (s - s0) / (root0 + s_dot).max(f64::MIN_POSITIVE);
-                if j == 0 {
-                    rows.copy_from_slice(&grid.rows[k * m..(k + 1) * m]);
+                let rows = if j == 0 {
+                    &grid.rows[k * m..(k + 1) * m]
                 } else if j == factor {
-                    rows.copy_from_slice(&grid.rows[(k + 1) * m..(k + 2) * m]);
+                    &grid.rows[(k + 1) * m..(k + 2) * m]
                 } else {
-                    let sample = sampler.sample(self.path, s)?;
-                    self.write_rows(&sample, &mut rows);
-                }
+                    let at = (k * (factor - 1) + j - 1) * m;
+                    &dense[at..at + m]
+                };
                 check.samples += 1;
                 for (r, row) in rows.iter().enumerate() {
                     if !row.is_active() {
@@ -716,6 +738,34 @@ impl<'a> Planner<'a> {
         jerk: Option<f64>,
     ) -> Result<Check, PlanningError> {
         use flexprr_kinematics::Trajectory;
+        let start = trajectory.start();
+        let end = trajectory
+            .duration()
+            .unwrap_or(start + trajectory.timing().duration());
+        self.check_timing(
+            &trajectory.breakpoints(),
+            (start, end),
+            per_piece,
+            |t| trajectory.path_state(t),
+            jerk,
+        )
+    }
+
+    /// Dense check of any timing `s(t)` of this planner's path, given as the path state at a
+    /// time (the scene's own timing of the path, to compare with the plan): `per_piece`
+    /// instants between consecutive `breakpoints` within `span` (one-sided at the pieces'
+    /// ends).
+    ///
+    /// # Errors
+    /// As [`Planner::check_trajectory`].
+    pub fn check_timing(
+        &self,
+        breakpoints: &[f64],
+        span: (f64, f64),
+        per_piece: usize,
+        state_at: impl Fn(f64) -> PathState,
+        jerk: Option<f64>,
+    ) -> Result<Check, PlanningError> {
         let sampler = self.sampler();
         let m = self.width();
         let owners = self.owners();
@@ -725,11 +775,8 @@ impl<'a> Planner<'a> {
         if jerk.is_some() {
             check.constraints.push(Usage::new("slider_jerk", "m/s^3"));
         }
-        let mut times = trajectory.breakpoints();
-        let start = trajectory.start();
-        let end = trajectory
-            .duration()
-            .unwrap_or(start + trajectory.timing().duration());
+        let (start, end) = span;
+        let mut times: Vec<f64> = breakpoints.to_vec();
         times.retain(|t| *t >= start && *t <= end);
         times.push(start);
         times.push(end);
@@ -742,7 +789,7 @@ impl<'a> Planner<'a> {
                 let t = w[0] + (w[1] - w[0]) * j as f64 / per_piece as f64;
                 // Just inside the piece at its ends (one-sided derivatives).
                 let t = t.clamp(w[0] + 1e-12 * (w[1] - w[0]), w[1] - 1e-12 * (w[1] - w[0]));
-                let state = trajectory.path_state(t);
+                let state = state_at(t);
                 let s = if closed {
                     state.s.rem_euclid(length)
                 } else {
@@ -802,9 +849,11 @@ impl<'a> Planner<'a> {
         let mut scale = vec![1.0; grid.s.len()];
         let mut rounds = 0;
         let mut tightened = vec![false; grid.s.len()];
+        let factor = self.settings.check_factor;
+        let mut dense = self.dense_rows(&grid, factor)?;
         for iteration in 0..40 {
             let profile = self.solve_grid(&grid, &scale, constraint_scale)?;
-            let (check, worst) = self.check_profile(&grid, &profile, self.settings.check_factor)?;
+            let (check, worst) = self.check_profile(&grid, &dense, &profile, factor)?;
             if check.max_usage <= 1.0 + CHECK_TOLERANCE {
                 let count = tightened.iter().filter(|t| **t).count();
                 return Ok((grid, profile, check, rounds, count));
@@ -831,6 +880,7 @@ impl<'a> Planner<'a> {
                     }
                 }
                 grid = self.sample_grid(s, Some(&grid))?;
+                dense = self.dense_rows(&grid, factor)?;
                 scale = new_scale;
                 tightened = new_tightened;
                 rounds += 1;

@@ -66,6 +66,8 @@ pub(crate) struct Linearized {
     /// Where each point's planes start in `planes` (one more entry than points).
     pub(crate) start: Vec<usize>,
     pub(crate) bounds: Vec<XBounds>,
+    /// Scratch of the pruning: which of a point's planes to keep.
+    keep: Vec<bool>,
 }
 
 /// Linearises the `m` rows per point of `rows` (row-major, `K x m`): `scale[k]` multiplies
@@ -169,8 +171,89 @@ pub(crate) fn linearize(
                 out.planes.extend_from_slice(&scratch[..n]);
             }
         }
+        let first = out.start[k];
+        let (lo, hi) = (bounds.lo.max(0.0), bounds.hi);
+        prune(&mut out.planes, first, lo, hi, &mut out.keep);
     }
     out.start.push(out.planes.len());
+}
+
+/// Drops the planes of one point (`planes[first..]`) that never bind for `x` in `[lo, hi]`:
+/// of the upper bounds `u <= alpha + beta x` only those on their lower envelope over the
+/// interval, of the lower bounds only those on their upper envelope. The sets are equal, and
+/// stay equal under the map `(u, x) -> (u, x + 2 Delta u)` of the interpolated constraints, so
+/// the projections are exact; the Fourier-Motzkin step then pairs a few bounds, not all.
+fn prune(planes: &mut Vec<Plane>, first: usize, lo: f64, hi: f64, keep: &mut Vec<bool>) {
+    let count = planes.len() - first;
+    if count < 3 || lo > hi || !lo.is_finite() {
+        return;
+    }
+    keep.clear();
+    keep.resize(count, false);
+    for upper in [true, false] {
+        // Lines y = alpha + beta x, negated for the lower bounds (so: a lower envelope).
+        let line = |p: &Plane| -> Option<(f64, f64)> {
+            let ok = if upper { p.a > 0.0 } else { p.a < 0.0 };
+            ok.then(|| {
+                let (alpha, beta) = (p.g / p.a, -p.b / p.a);
+                if upper {
+                    (alpha, beta)
+                } else {
+                    (-alpha, -beta)
+                }
+            })
+        };
+        let group = &planes[first..];
+        // The lowest line at x = lo (ties: the smallest slope, which stays lowest).
+        let mut current = None;
+        let mut best = (f64::INFINITY, f64::INFINITY);
+        for (j, p) in group.iter().enumerate() {
+            if let Some((alpha, beta)) = line(p) {
+                let value = alpha + beta * lo;
+                if value < best.0 || (value <= best.0 && beta < best.1) {
+                    best = (value, beta);
+                    current = Some(j);
+                }
+            }
+        }
+        let mut x = lo;
+        while let Some(c) = current {
+            if keep[c] {
+                break;
+            }
+            keep[c] = true;
+            let (ac, bc) = line(&group[c]).unwrap_or((0.0, 0.0));
+            // The next line to cross below it: smaller slope, first crossing after x.
+            let mut next = None;
+            let mut at = (hi, f64::INFINITY);
+            for (j, p) in group.iter().enumerate() {
+                if let Some((alpha, beta)) = line(p)
+                    && beta < bc
+                {
+                    let cross = (alpha - ac) / (bc - beta);
+                    let cross = cross.max(x);
+                    if cross < at.0 || (cross <= at.0 && beta < at.1) {
+                        at = (cross, beta);
+                        next = Some(j);
+                    }
+                }
+            }
+            if next.is_some() && at.0 <= hi {
+                x = at.0;
+            }
+            current = next;
+        }
+    }
+    // Planes without u (bounds on x) are always kept.
+    let mut write = first;
+    for j in 0..count {
+        let p = planes[first + j];
+        if keep[j] || p.a.abs() <= 0.0 {
+            planes[write] = p;
+            write += 1;
+        }
+    }
+    planes.truncate(write);
 }
 
 /// Half-planes per side of a row: one, or up to this many chords of a helpful `sqrt(x)`.
@@ -644,6 +727,38 @@ mod tests {
             linearize(&rows, 2, &[0, 0], &scale, &[1.0], Some(&scale), &mut out);
         });
         assert_eq!(allocations, 0);
+    }
+
+    proptest::proptest! {
+        /// Pruning keeps the feasible u-interval at every x of the range.
+        #[test]
+        fn pruning_keeps_the_feasible_set(
+            raw in proptest::collection::vec((-2.0f64..2.0, -2.0f64..2.0, -2.0f64..2.0), 3..30),
+            lo in 0.0f64..1.0, width in 0.0f64..5.0, probes in proptest::collection::vec(0.0f64..1.0, 20),
+        ) {
+            let planes: Vec<Plane> = raw.iter().map(|&(a, b, g)| Plane { a, b, g }).collect();
+            let hi = lo + width;
+            let mut pruned = planes.clone();
+            let mut keep = Vec::new();
+            prune(&mut pruned, 0, lo, hi, &mut keep);
+            let range = |set: &[Plane], x: f64| {
+                let mut r = (f64::NEG_INFINITY, f64::INFINITY);
+                for p in set {
+                    if p.a > 0.0 {
+                        r.1 = r.1.min((p.g - p.b * x) / p.a);
+                    } else if p.a < 0.0 {
+                        r.0 = r.0.max((p.g - p.b * x) / p.a);
+                    }
+                }
+                r
+            };
+            for w in probes {
+                let x = lo + w * width;
+                let (full, less) = (range(&planes, x), range(&pruned, x));
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs()) || (a.is_infinite() && b.is_infinite() && a.is_sign_positive() == b.is_sign_positive());
+                proptest::prop_assert!(close(full.0, less.0) && close(full.1, less.1), "{full:?} vs {less:?} at {x}");
+            }
+        }
     }
 
     #[test]
