@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::KinematicsError;
 use crate::pose::{PlatformMotion, Pose};
-use crate::trajectory::{Circle, Line, PointToPoint, Trajectory, WaypointSpline};
+use crate::trajectory::{Circle, Line, PointToPoint, Trajectory, WaypointSpline, finite, invalid};
 
 /// The pose and its first three derivatives with respect to the path parameter at one `s`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -116,22 +116,6 @@ pub trait Path {
     /// Unit of `s`: `"m"` (arc length), `"rad"` (rotation angle) or `"s"` (a spline's time).
     fn unit(&self) -> &'static str {
         "m"
-    }
-}
-
-fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> KinematicsError {
-    KinematicsError::InvalidTrajectory {
-        quantity,
-        value,
-        reason,
-    }
-}
-
-fn finite(quantity: &'static str, value: f64) -> Result<(), KinematicsError> {
-    if value.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(quantity, value, "must be finite"))
     }
 }
 

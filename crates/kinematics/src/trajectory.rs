@@ -68,7 +68,7 @@ pub trait Trajectory {
     }
 }
 
-fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> KinematicsError {
+pub(crate) fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> KinematicsError {
     KinematicsError::InvalidTrajectory {
         quantity,
         value,
@@ -76,7 +76,7 @@ fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> Kinemati
     }
 }
 
-fn finite(quantity: &'static str, value: f64) -> Result<(), KinematicsError> {
+pub(crate) fn finite(quantity: &'static str, value: f64) -> Result<(), KinematicsError> {
     if value.is_finite() {
         Ok(())
     } else {
@@ -464,20 +464,11 @@ impl Trajectory for WaypointSpline {
         if t >= self.times[n - 1] {
             return PlatformMotion::at_rest(Pose::from_vector(&self.values[n - 1]));
         }
-        // Interval k with t_k <= t < t_{k+1}.
-        let k = self.times.partition_point(|&tk| tk <= t) - 1;
-        let h = self.times[k + 1] - self.times[k];
-        let a = self.times[k + 1] - t;
-        let b = t - self.times[k];
-        let (m0, m1) = (self.curvature[k], self.curvature[k + 1]);
-        let c0 = self.values[k] / h - m0 * (h / 6.0);
-        let c1 = self.values[k + 1] / h - m1 * (h / 6.0);
+        let [q, velocity, acceleration, _] = self.derivatives(t);
         PlatformMotion {
-            pose: Pose::from_vector(
-                &(m0 * (a * a * a / (6.0 * h)) + m1 * (b * b * b / (6.0 * h)) + c0 * a + c1 * b),
-            ),
-            velocity: m1 * (b * b / (2.0 * h)) - m0 * (a * a / (2.0 * h)) + c1 - c0,
-            acceleration: m0 * (a / h) + m1 * (b / h),
+            pose: Pose::from_vector(&q),
+            velocity,
+            acceleration,
         }
     }
 

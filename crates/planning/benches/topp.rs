@@ -7,37 +7,18 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use flexprr_control::{MotorBallScrew, MotorRatings};
-use flexprr_dynamics::paper;
-use flexprr_kinematics::{CirclePath, Pose, SegmentPath};
+
+#[path = "../tests/common/mod.rs"]
+mod common;
 use flexprr_planning::{
     Boundary, Buckling, Efficiency, MotorSpeed, MotorTorque, Planner, Settings, SliderForce,
     SliderSpeed,
 };
 
-fn motor() -> MotorBallScrew {
-    MotorBallScrew {
-        rotor_inertia: 1.6e-5,
-        lead: 0.01,
-        efficiency: 0.9,
-        ratings: MotorRatings {
-            peak_torque: 0.64,
-            continuous_torque: 0.32,
-            max_speed: 100.0,
-        },
-        viscous_friction: 2e-4,
-        coulomb_friction: 0.01,
-        coulomb_smoothing: 0.01,
-    }
-}
-
 fn planning(c: &mut Criterion) {
-    let machine = paper::machine(1, paper::YOUNGS_MODULUS).expect("paper machine");
-    let phi = 30f64.to_radians();
-    let segment =
-        SegmentPath::new(Pose::new(-0.08, -0.03, phi), Pose::new(-0.02, 0.033, phi)).unwrap();
-    let circle =
-        CirclePath::new([-0.05, 0.0], 0.05, std::f64::consts::FRAC_PI_4, 0.0, false).unwrap();
+    let machine = common::machine();
+    let segment = common::pick_and_place();
+    let circle = common::circle();
     let settings = Settings {
         convergence: false,
         ..Settings::default()
@@ -53,8 +34,8 @@ fn planning(c: &mut Criterion) {
     };
     let motor_buckling = |path, settings| {
         Planner::new(&machine, path, settings)
-            .constraint(MotorTorque::new(motor(), Efficiency::PowerFlow).unwrap())
-            .constraint(MotorSpeed::new(&motor()))
+            .constraint(MotorTorque::new(common::motor(), Efficiency::PowerFlow).unwrap())
+            .constraint(MotorSpeed::new(&common::motor()))
             .constraint(Buckling::new(&machine, 0.5).unwrap())
     };
     let cases = [

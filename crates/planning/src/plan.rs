@@ -55,6 +55,30 @@ pub struct Settings {
     pub convergence: bool,
 }
 
+impl Settings {
+    /// Checks the grid and the check factor.
+    ///
+    /// # Errors
+    /// [`PlanningError::InvalidSpec`] on the key `grid` or `check_factor`.
+    pub fn validate(&self) -> Result<(), PlanningError> {
+        if self.grid < 2 {
+            return Err(PlanningError::InvalidSpec {
+                key: "grid",
+                value: self.grid.to_string(),
+                rule: "must be >= 2 intervals".into(),
+            });
+        }
+        if self.check_factor < 2 {
+            return Err(PlanningError::InvalidSpec {
+                key: "check_factor",
+                value: self.check_factor.to_string(),
+                rule: "must be >= 2 points per interval".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Self {
@@ -333,20 +357,7 @@ impl<'a> Planner<'a> {
 
     fn validate(&self) -> Result<(), PlanningError> {
         let s = &self.settings;
-        if s.grid < 2 {
-            return Err(PlanningError::InvalidSpec {
-                key: "grid",
-                value: s.grid.to_string(),
-                rule: "need at least 2 intervals".into(),
-            });
-        }
-        if s.check_factor < 2 {
-            return Err(PlanningError::InvalidSpec {
-                key: "check_factor",
-                value: s.check_factor.to_string(),
-                rule: "need at least 2 checked points per interval".into(),
-            });
-        }
+        s.validate()?;
         if self.constraints.is_empty() {
             return Err(PlanningError::InvalidSpec {
                 key: "limits",

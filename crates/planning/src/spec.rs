@@ -198,20 +198,7 @@ impl PlanSpec {
                 rule: "must be >= 1".into(),
             });
         }
-        if self.grid < 2 {
-            return Err(PlanningError::InvalidSpec {
-                key: "grid",
-                value: self.grid.to_string(),
-                rule: "must be >= 2 intervals".into(),
-            });
-        }
-        if self.check_factor < 2 {
-            return Err(PlanningError::InvalidSpec {
-                key: "check_factor",
-                value: self.check_factor.to_string(),
-                rule: "must be >= 2 points per interval".into(),
-            });
-        }
+        self.settings().validate()?;
         if self.boundary == Boundary::Periodic && self.shaping != Shaping::None {
             return Err(PlanningError::InvalidSpec {
                 key: "shaping",

@@ -5,7 +5,7 @@
 
 mod common;
 
-use flexprr_control::{Actuator, MotorBallScrew, MotorRatings};
+use flexprr_control::{Actuator, MotorBallScrew};
 use flexprr_dynamics::{
     AxialForceModel, AxialInput, JointReactionAxialForce, Machine, end_forces, inverse_dynamics,
 };
@@ -113,22 +113,6 @@ fn trajectory_of<'p>(plan: &Plan, path: &'p dyn Path) -> PlannedTrajectory<&'p d
     plan.trajectory(path, 0.0).unwrap()
 }
 
-fn motor() -> MotorBallScrew {
-    MotorBallScrew {
-        rotor_inertia: 1.6e-5,
-        lead: 0.01,
-        efficiency: 0.9,
-        ratings: MotorRatings {
-            peak_torque: 0.64,
-            continuous_torque: 0.32,
-            max_speed: 100.0,
-        },
-        viscous_friction: 2e-4,
-        coulomb_friction: 0.01,
-        coulomb_smoothing: 0.01,
-    }
-}
-
 /// Checks `plan` at ten times its grid resolution (in time) and returns the worst use.
 fn ten_times_finer(machine: &Machine, plan: &Plan, path: &dyn Path, limits: &Limits) -> f64 {
     let trajectory = trajectory_of(plan, path);
@@ -185,13 +169,13 @@ fn motor_and_buckling_limits_hold_between_grid_points() {
     let circle = common::circle();
     for path in [&segment as &dyn Path, &circle] {
         let limits = Limits {
-            motor: Some(motor()),
+            motor: Some(common::motor()),
             buckling: Some(0.3),
             ..Limits::default()
         };
         let planner = Planner::new(&machine, path, Settings::default())
-            .constraint(MotorTorque::new(motor(), Efficiency::Symmetric).unwrap())
-            .constraint(MotorSpeed::new(&motor()))
+            .constraint(MotorTorque::new(common::motor(), Efficiency::Symmetric).unwrap())
+            .constraint(MotorSpeed::new(&common::motor()))
             .constraint(Buckling::new(&machine, 0.3).unwrap());
         let plan = planner.plan().unwrap();
         let worst = ten_times_finer(&machine, &plan, path, &limits);
@@ -209,7 +193,7 @@ fn motor_and_buckling_limits_hold_between_grid_points() {
 fn an_rms_limit_lowers_the_peak_torque_until_it_holds() {
     let machine = common::machine();
     let segment = common::pick_and_place();
-    let mut motor = motor();
+    let mut motor = common::motor();
     motor.ratings.continuous_torque = 0.3;
     let torque = MotorTorque::new(motor, Efficiency::Symmetric).unwrap();
     let base = Planner::new(&machine, &segment, Settings::default())

@@ -3,28 +3,11 @@
 
 mod common;
 
-use flexprr_control::{MotorBallScrew, MotorRatings};
 use flexprr_kinematics::{Path, Pose, SplinePath, WaypointSpline};
 use flexprr_planning::{
     Boundary, Buckling, Efficiency, MotorSpeed, MotorTorque, Planner, Settings, SliderAcceleration,
     SliderForce, SliderSpeed,
 };
-
-fn motor() -> MotorBallScrew {
-    MotorBallScrew {
-        rotor_inertia: 1.6e-5,
-        lead: 0.01,
-        efficiency: 0.9,
-        ratings: MotorRatings {
-            peak_torque: 0.64,
-            continuous_torque: 0.32,
-            max_speed: 100.0,
-        },
-        viscous_friction: 2e-4,
-        coulomb_friction: 0.01,
-        coulomb_smoothing: 0.01,
-    }
-}
 
 fn spline() -> SplinePath {
     let d = |deg: f64| deg.to_radians();
@@ -75,13 +58,13 @@ fn topp_ra_and_the_phase_plane_agree_on_the_paper_machine() {
                 .constraint(SliderAcceleration::new(300.0).unwrap())
                 .constraint(SliderForce::new(150.0).unwrap()),
             Planner::new(&machine, path, settings)
-                .constraint(MotorTorque::new(motor(), Efficiency::PowerFlow).unwrap())
-                .constraint(MotorSpeed::new(&motor()))
+                .constraint(MotorTorque::new(common::motor(), Efficiency::PowerFlow).unwrap())
+                .constraint(MotorSpeed::new(&common::motor()))
                 .constraint(Buckling::new(&machine, 0.5).unwrap()),
             // Viscous friction with no speed limit: the chords of the helpful side need the
             // maximum velocity curve.
             Planner::new(&machine, path, settings)
-                .constraint(MotorTorque::new(motor(), Efficiency::Symmetric).unwrap()),
+                .constraint(MotorTorque::new(common::motor(), Efficiency::Symmetric).unwrap()),
         ];
         for (k, planner) in sets.iter().enumerate() {
             let (checked, raw, pp) = both(planner);
