@@ -38,6 +38,11 @@ fn leg_label(leg: &Option<usize>) -> String {
     }
 }
 
+/// Formats an optional array index as `[k]`.
+fn index_label(index: &Option<usize>) -> String {
+    index.map_or_else(String::new, |k| format!("[{k}]"))
+}
+
 /// Everything that can go wrong in the kinematics layer.
 ///
 /// Leg fields are zero-based indices into [`crate::Geometry::legs`]; messages print them
@@ -134,6 +139,18 @@ pub enum KinematicsError {
     InvalidTrajectory {
         /// Name of the parameter.
         quantity: &'static str,
+        /// Offending value.
+        value: f64,
+        /// What is required.
+        reason: &'static str,
+    },
+    /// A field of a planned trajectory's data (a path timing, a shaper) is invalid.
+    #[error("invalid planned trajectory: {field}{} = {value:.6e} ({reason})", index_label(.index))]
+    InvalidPlan {
+        /// The data field (`s`, `s_dot`, `shaper`, `smoothing`, ...).
+        field: &'static str,
+        /// Zero-based index into the field's array, where it is one.
+        index: Option<usize>,
         /// Offending value.
         value: f64,
         /// What is required.

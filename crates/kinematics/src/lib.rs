@@ -17,6 +17,10 @@
 //! - Trajectories: the object-safe [`Trajectory`] trait, [`Circle`], [`Line`],
 //!   [`PointToPoint`] with a rest-to-rest [`Profile`], [`WaypointSpline`]; and
 //!   [`validate_trajectory`].
+//! - Geometric paths `p(s)` with three derivatives ([`Path`]: [`CirclePath`], [`SegmentPath`],
+//!   [`SplinePath`], as data [`GeometricPath`]) and the planned motion along one
+//!   ([`PlannedTrajectory`]: a path, a piecewise-quadratic [`Timing`], input-shaper
+//!   [`Impulse`]s and a smoothing window; serialisable as [`PlannedData`]).
 //!
 //! Conventions, equations and thresholds are in the workspace's `docs/kinematics.md`.
 //!
@@ -35,6 +39,8 @@ mod error;
 mod forward;
 mod geometry;
 mod inverse;
+mod path;
+mod planned;
 mod pose;
 mod trajectory;
 
@@ -45,6 +51,11 @@ pub use inverse::{
     LegKinematics, LegPosition, LegState, MachineKinematics, MachineState, SingularityMeasures,
     VelocityJacobians,
 };
+pub use path::{
+    CircleData, CirclePath, GeometricPath, Path, PathPoint, SegmentData, SegmentPath, SplineData,
+    SplinePath,
+};
+pub use planned::{Impulse, PathState, PlannedData, PlannedTrajectory, Timing, check_impulses};
 pub use pose::{PlatformMotion, Pose};
 pub use trajectory::{
     Circle, Line, PointToPoint, Profile, Trajectory, TrajectoryReport, WaypointSpline,

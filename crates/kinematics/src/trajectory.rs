@@ -68,7 +68,7 @@ pub trait Trajectory {
     }
 }
 
-fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> KinematicsError {
+pub(crate) fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> KinematicsError {
     KinematicsError::InvalidTrajectory {
         quantity,
         value,
@@ -76,7 +76,7 @@ fn invalid(quantity: &'static str, value: f64, reason: &'static str) -> Kinemati
     }
 }
 
-fn finite(quantity: &'static str, value: f64) -> Result<(), KinematicsError> {
+pub(crate) fn finite(quantity: &'static str, value: f64) -> Result<(), KinematicsError> {
     if value.is_finite() {
         Ok(())
     } else {
@@ -139,6 +139,31 @@ impl Circle {
     pub fn period(&self) -> f64 {
         1.0 / self.frequency.abs()
     }
+
+    /// Centre (m).
+    pub fn centre(&self) -> Point2<f64> {
+        self.centre
+    }
+
+    /// Radius (m).
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// Frequency (Hz; negative runs clockwise).
+    pub fn frequency(&self) -> f64 {
+        self.frequency
+    }
+
+    /// Constant orientation `phi` (rad).
+    pub fn phi(&self) -> f64 {
+        self.phi
+    }
+
+    /// Angle on the circle at `t = 0` (rad).
+    pub fn start_angle(&self) -> f64 {
+        self.start_angle
+    }
 }
 
 impl Trajectory for Circle {
@@ -180,6 +205,16 @@ impl Line {
             velocity,
             start_time,
         })
+    }
+
+    /// Pose at the start time.
+    pub fn start(&self) -> Pose {
+        self.start
+    }
+
+    /// Constant twist `(x', y', phi')` (m/s, rad/s).
+    pub fn velocity(&self) -> Vector3<f64> {
+        self.velocity
     }
 }
 
@@ -273,6 +308,16 @@ impl PointToPoint {
             duration,
             profile,
         })
+    }
+
+    /// Start pose.
+    pub fn start(&self) -> Pose {
+        self.start
+    }
+
+    /// End pose.
+    pub fn end(&self) -> Pose {
+        self.end
     }
 }
 
@@ -378,6 +423,36 @@ impl WaypointSpline {
     pub fn times(&self) -> &[f64] {
         &self.times
     }
+
+    /// The waypoints `(t_k, pose_k)`.
+    pub fn waypoints(&self) -> Vec<(f64, Pose)> {
+        self.times
+            .iter()
+            .zip(&self.values)
+            .map(|(t, q)| (*t, Pose::from_vector(q)))
+            .collect()
+    }
+
+    /// Position and its first three derivatives in the spline's own parameter at `t`,
+    /// clamped into `[t_0, t_n]`; at a knot the interval to its right (to its left at
+    /// `t_n`) is used, so the one-sided third derivative is that of the next piece.
+    pub(crate) fn derivatives(&self, t: f64) -> [Vector3<f64>; 4] {
+        let n = self.times.len();
+        let t = t.clamp(self.times[0], self.times[n - 1]);
+        let k = (self.times.partition_point(|&tk| tk <= t).max(1) - 1).min(n - 2);
+        let h = self.times[k + 1] - self.times[k];
+        let a = self.times[k + 1] - t;
+        let b = t - self.times[k];
+        let (m0, m1) = (self.curvature[k], self.curvature[k + 1]);
+        let c0 = self.values[k] / h - m0 * (h / 6.0);
+        let c1 = self.values[k + 1] / h - m1 * (h / 6.0);
+        [
+            m0 * (a * a * a / (6.0 * h)) + m1 * (b * b * b / (6.0 * h)) + c0 * a + c1 * b,
+            m1 * (b * b / (2.0 * h)) - m0 * (a * a / (2.0 * h)) + c1 - c0,
+            m0 * (a / h) + m1 * (b / h),
+            (m1 - m0) / h,
+        ]
+    }
 }
 
 impl Trajectory for WaypointSpline {
@@ -389,20 +464,11 @@ impl Trajectory for WaypointSpline {
         if t >= self.times[n - 1] {
             return PlatformMotion::at_rest(Pose::from_vector(&self.values[n - 1]));
         }
-        // Interval k with t_k <= t < t_{k+1}.
-        let k = self.times.partition_point(|&tk| tk <= t) - 1;
-        let h = self.times[k + 1] - self.times[k];
-        let a = self.times[k + 1] - t;
-        let b = t - self.times[k];
-        let (m0, m1) = (self.curvature[k], self.curvature[k + 1]);
-        let c0 = self.values[k] / h - m0 * (h / 6.0);
-        let c1 = self.values[k + 1] / h - m1 * (h / 6.0);
+        let [q, velocity, acceleration, _] = self.derivatives(t);
         PlatformMotion {
-            pose: Pose::from_vector(
-                &(m0 * (a * a * a / (6.0 * h)) + m1 * (b * b * b / (6.0 * h)) + c0 * a + c1 * b),
-            ),
-            velocity: m1 * (b * b / (2.0 * h)) - m0 * (a * a / (2.0 * h)) + c1 - c0,
-            acceleration: m0 * (a / h) + m1 * (b / h),
+            pose: Pose::from_vector(&q),
+            velocity,
+            acceleration,
         }
     }
 
