@@ -55,7 +55,7 @@ pub use inverse::{
     VelocityJacobians,
 };
 pub use oriented::{
-    OrientedData, OrientedPath, Orientation, PhiFourier, PhiFourierData, PhiLaw, PhiSpline,
+    Orientation, OrientedData, OrientedPath, PhiFourier, PhiFourierData, PhiLaw, PhiSpline,
     PhiSplineData,
 };
 pub use path::{

@@ -596,7 +596,9 @@ mod tests {
         // Linear precision: control values at the Greville abscissae
         // (t_{i+1} + t_{i+2} + t_{i+3}) / 3 give g(w) = w exactly.
         let n = 7;
-        let knots = &PhiSpline::new(vec![0.0; n]).unwrap().levels[0].knots.clone();
+        let knots = &PhiSpline::new(vec![0.0; n]).unwrap().levels[0]
+            .knots
+            .clone();
         let greville: Vec<f64> = (0..n)
             .map(|i| (knots[i + 1] + knots[i + 2] + knots[i + 3]) / 3.0)
             .collect();
@@ -728,7 +730,8 @@ mod tests {
 
     #[test]
     fn oriented_paths_round_trip_through_serde() {
-        let base = GeometricPath::Circle(CirclePath::new([0.0, 0.0], 0.05, 0.1, 0.0, true).unwrap());
+        let base =
+            GeometricPath::Circle(CirclePath::new([0.0, 0.0], 0.05, 0.1, 0.0, true).unwrap());
         let law = PhiLaw::Fourier(PhiFourier::new(0.1, vec![0.02], vec![-0.01]).unwrap());
         let path = GeometricPath::Oriented(Box::new(
             Orientation {

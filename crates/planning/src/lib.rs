@@ -52,5 +52,5 @@ pub use plan::{
     Binding, Boundary, CHECK_TOLERANCE, Convergence, Plan, Planner, RmsLimit, Settings, Solution,
 };
 pub use sample::{Affine, LegPath, PathSample, Sampler};
-pub use spec::{PlanSpec, Shaping};
+pub use spec::{PhiGoal, PhiMode, PlanSpec, Shaping};
 pub use speed::ConstantSpeed;

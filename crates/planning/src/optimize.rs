@@ -182,9 +182,11 @@ pub(crate) fn nelder_mead(
             let (low, high) = (values[0], values[n]);
             let width = (0..n)
                 .map(|j| {
-                    let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-                        (a.0.min(p[j]), a.1.max(p[j]))
-                    });
+                    let (lo, hi) = points
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+                            (a.0.min(p[j]), a.1.max(p[j]))
+                        });
                     hi - lo
                 })
                 .fold(0.0f64, f64::max);
@@ -231,27 +233,28 @@ pub(crate) fn nelder_mead(
                 continue;
             }
             // Shrink towards the best vertex.
-            for k in 1..=n {
+            let (first, rest) = points.split_at_mut(1);
+            for (k, point) in rest.iter_mut().enumerate() {
                 if evaluations >= settings.max_evaluations {
                     break;
                 }
-                for j in 0..n {
-                    points[k][j] = points[0][j] + shrink * (points[k][j] - points[0][j]);
+                for (x, b) in point.iter_mut().zip(&first[0]) {
+                    *x = b + shrink * (*x - b);
                 }
-                values[k] = evaluate(&points[k], &mut evaluations);
+                values[k + 1] = evaluate(point, &mut evaluations);
             }
         }
-        let (k, value) = values
-            .iter()
-            .enumerate()
-            .fold((0, f64::INFINITY), |a, (k, v)| if *v < a.1 { (k, *v) } else { a });
+        let (k, value) =
+            values.iter().enumerate().fold(
+                (0, f64::INFINITY),
+                |a, (k, v)| if *v < a.1 { (k, *v) } else { a },
+            );
         if value < best {
             best = value;
             best_x.clone_from(&points[k]);
         }
         let improved = round_start - best > settings.value_tolerance * best.abs();
-        if !converged || evaluations >= settings.max_evaluations || (restarts > 0 && !improved)
-        {
+        if !converged || evaluations >= settings.max_evaluations || (restarts > 0 && !improved) {
             break;
         }
         restarts += 1;
@@ -273,20 +276,32 @@ mod tests {
     #[test]
     fn brent_finds_smooth_kinked_and_boundary_minima() {
         let (x, fx, n) = brent(&mut |x| (x - 2.0) * (x - 2.0) + 1.0, 0.0, 5.0, 1e-8, 100);
-        assert!((x - 2.0).abs() <= 1e-7 && (fx - 1.0).abs() <= 1e-14, "{x} {fx} {n}");
+        assert!(
+            (x - 2.0).abs() <= 1e-7 && (fx - 1.0).abs() <= 1e-14,
+            "{x} {fx} {n}"
+        );
         // Fewer than golden sections alone would need (log(5e8) / log(1.618) = 42).
         assert!(n < 30, "{n}");
         let (x, _, _) = brent(&mut |x| (x - 1.3).abs(), 0.0, 5.0, 1e-8, 200);
         assert!((x - 1.3).abs() <= 1e-7, "{x}");
         // Infeasible below 1: the minimum sits on the edge of the feasible set.
         let (x, fx, _) = brent(
-            &mut |x| if x < 1.0 { f64::INFINITY } else { (x - 0.5).powi(2) },
+            &mut |x| {
+                if x < 1.0 {
+                    f64::INFINITY
+                } else {
+                    (x - 0.5).powi(2)
+                }
+            },
             0.0,
             3.0,
             1e-8,
             200,
         );
-        assert!((x - 1.0).abs() <= 1e-7 && (fx - 0.25).abs() <= 1e-7, "{x} {fx}");
+        assert!(
+            (x - 1.0).abs() <= 1e-7 && (fx - 0.25).abs() <= 1e-7,
+            "{x} {fx}"
+        );
     }
 
     #[test]
@@ -300,7 +315,10 @@ mod tests {
             |x: &[f64]| 100.0 * (x[1] - x[0] * x[0]).powi(2) + (1.0 - x[0]).powi(2);
         let found = nelder_mead(&mut rosenbrock, &[-1.2, 1.0], &[0.1, 0.1], settings);
         assert!(found.converged, "{found:?}");
-        assert!((found.x[0] - 1.0).abs() <= 1e-5 && (found.x[1] - 1.0).abs() <= 1e-5, "{found:?}");
+        assert!(
+            (found.x[0] - 1.0).abs() <= 1e-5 && (found.x[1] - 1.0).abs() <= 1e-5,
+            "{found:?}"
+        );
         // A 4-d quadratic, infinite outside x_0 >= 0.5: the minimum (0.5, 1, -2, 3) is on the
         // barrier.
         let centre = [0.0, 1.0, -2.0, 3.0];
@@ -308,7 +326,10 @@ mod tests {
             if x[0] < 0.5 {
                 return f64::INFINITY;
             }
-            x.iter().zip(&centre).map(|(a, c)| (a - c) * (a - c)).sum::<f64>()
+            x.iter()
+                .zip(&centre)
+                .map(|(a, c)| (a - c) * (a - c))
+                .sum::<f64>()
         };
         let found = nelder_mead(&mut quadratic, &[1.0, 0.0, 0.0, 0.0], &[0.2; 4], settings);
         let exact = [0.5, 1.0, -2.0, 3.0];

@@ -26,6 +26,8 @@ use flexprr_kinematics::{
     Orientation, Path, PathState, PhiFourier, PhiLaw, PhiSpline, Profile, Timing,
 };
 
+use serde::{Deserialize, Serialize};
+
 use crate::constraint::Buckling;
 use crate::error::{PlanningError, Where};
 use crate::optimize::{SimplexSettings, brent, nelder_mead};
@@ -182,7 +184,8 @@ pub enum PhiObjective {
 }
 
 /// Whether a free orientation keeps the path's end orientations (rest-to-rest motions).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum PhiEnds {
     /// The law may change the end orientations (it starts from the best constant).
     #[default]
@@ -262,7 +265,11 @@ impl PhiSearch {
             return bad("phi_min_deg", deg(self.min), "must be finite");
         }
         if !(self.max.is_finite() && self.max > self.min) {
-            return bad("phi_max_deg", deg(self.max), "must be finite and > phi_min_deg");
+            return bad(
+                "phi_max_deg",
+                deg(self.max),
+                "must be finite and > phi_min_deg",
+            );
         }
         if self.max - self.min > std::f64::consts::TAU * (1.0 + 1e-12) {
             return bad(
@@ -272,10 +279,18 @@ impl PhiSearch {
             );
         }
         if !(self.scan_step.is_finite() && self.scan_step > 0.0) {
-            return bad("phi_scan_step_deg", deg(self.scan_step), "must be finite and > 0");
+            return bad(
+                "phi_scan_step_deg",
+                deg(self.scan_step),
+                "must be finite and > 0",
+            );
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return bad("phi_tolerance_deg", deg(self.tolerance), "must be finite and > 0");
+            return bad(
+                "phi_tolerance_deg",
+                deg(self.tolerance),
+                "must be finite and > 0",
+            );
         }
         if !(self.step.is_finite() && self.step > 0.0) {
             return bad("phi_step_deg", deg(self.step), "must be finite and > 0");
@@ -728,11 +743,24 @@ impl Planner<'_> {
                 reason: format!("the free search has no feasible start: {reason}"),
             });
         }
-        let step = vec![search.step; start.0.len()];
+        // A constant on a bound leaves the simplex no room: every harmonic or control value
+        // moved by a step crosses the bound. The simplex then starts one step inside (the
+        // result is still compared with the start).
+        let mut origin = start.0.clone();
+        if !relative && search.max - search.min > 2.0 * search.step {
+            let inside = c.clamp(search.min + search.step, search.max - search.step);
+            if (inside - c).abs() > 0.0 {
+                match template {
+                    PhiLaw::Fourier(_) => origin[0] = inside,
+                    _ => origin.iter_mut().for_each(|v| *v = inside),
+                }
+            }
+        }
+        let step = vec![search.step; origin.len()];
         let budget = search.max_evaluations.saturating_sub(starts.len()).max(2);
         let found = nelder_mead(
             &mut objective,
-            &start.0,
+            &origin,
             &step,
             SimplexSettings {
                 max_evaluations: budget,
@@ -765,7 +793,10 @@ impl Planner<'_> {
         };
         let oriented = orientation.on(path)?;
         let range = (0..=BOUND_POINTS).fold((f64::INFINITY, f64::NEG_INFINITY), |r, k| {
-            let phi = oriented.point(length * k as f64 / BOUND_POINTS as f64).pose.phi;
+            let phi = oriented
+                .point(length * k as f64 / BOUND_POINTS as f64)
+                .pose
+                .phi;
             (r.0.min(phi), r.1.max(phi))
         });
         let value = checked.value();
