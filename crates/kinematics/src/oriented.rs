@@ -18,20 +18,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::KinematicsError;
 use crate::path::{GeometricPath, Path, PathPoint};
-
-fn bad(
-    field: &'static str,
-    index: Option<usize>,
-    value: f64,
-    reason: &'static str,
-) -> KinematicsError {
-    KinematicsError::InvalidPlan {
-        field,
-        index,
-        value,
-        reason,
-    }
-}
+use crate::planned::bad;
 
 fn all_finite(field: &'static str, values: &[f64]) -> Result<(), KinematicsError> {
     match values.iter().position(|v| !v.is_finite()) {

@@ -210,7 +210,8 @@ pub struct PhiSearch {
     pub tolerance: f64,
     /// Local minima of the scan refined (3).
     pub brackets: usize,
-    /// Free orientation of a rest-to-rest motion: ends free or kept.
+    /// Free orientation of a non-periodic motion: ends free or kept (a periodic motion has
+    /// no ends: ignored).
     pub ends: PhiEnds,
     /// Control values of the B-spline law (non-periodic motions; 6, at least 4).
     pub spline_points: usize,

@@ -8,10 +8,9 @@ mod common;
 
 use std::time::Instant;
 
-use common::recheck::{Limits, ten_times_finer};
+use common::recheck::{Limits, lowest_axial_force, ten_times_finer};
 use flexprr_dynamics::{
-    AxialForceModel, AxialInput, JointReactionAxialForce, Machine, PaperAxialForce, end_forces,
-    inverse_dynamics,
+    AxialForceModel, JointReactionAxialForce, Machine, PaperAxialForce, inverse_dynamics,
 };
 use flexprr_kinematics::{
     Circle, CirclePath, Orientation, Path, PlannedTrajectory, Pose, SegmentPath, Timing, Trajectory,
@@ -52,18 +51,7 @@ fn independent_ratio(
             .unwrap();
         let reactions = inverse_dynamics(machine, &state, None, t).unwrap();
         for i in 0..3 {
-            let load = model.load(&AxialInput {
-                leg: &state.legs[i].kinematics,
-                guide_direction: machine.geometry.legs[i].guide.direction.into_inner(),
-                link: &machine.links[i],
-                reactions: Some(&reactions),
-                index: i,
-            });
-            let length = machine.links[i].length();
-            let (p0, pl) = end_forces(&load, length);
-            let lowest = (1..50)
-                .map(|j| load.at(length * j as f64 / 50.0))
-                .fold(p0.min(pl), f64::min);
+            let lowest = lowest_axial_force(machine, &state, &reactions, i, model);
             worst = worst.max(-lowest / euler);
         }
     }

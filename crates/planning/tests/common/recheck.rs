@@ -5,9 +5,10 @@
 
 use flexprr_control::{Actuator, MotorBallScrew};
 use flexprr_dynamics::{
-    AxialForceModel, AxialInput, JointReactionAxialForce, Machine, end_forces, inverse_dynamics,
+    AxialForceModel, AxialInput, JointReactionAxialForce, JointReactions, Machine, end_forces,
+    inverse_dynamics,
 };
-use flexprr_kinematics::{Path, PlannedTrajectory, Trajectory};
+use flexprr_kinematics::{MachineState, Path, PlannedTrajectory, Trajectory};
 use flexprr_planning::Plan;
 
 /// Limits as the independent check sees them.
@@ -23,6 +24,30 @@ pub struct Limits {
 }
 
 /// Largest use of each limit over `samples` instants of the motion (and the RMS torque).
+/// The lowest axial force (tension positive, N) anywhere along link `i` of the machine in
+/// `state` under `reactions`, from `model`: its two ends and 49 interior points (a fine scan,
+/// not only the ends).
+pub fn lowest_axial_force(
+    machine: &Machine,
+    state: &MachineState,
+    reactions: &JointReactions,
+    i: usize,
+    model: &dyn AxialForceModel,
+) -> f64 {
+    let load = model.load(&AxialInput {
+        leg: &state.legs[i].kinematics,
+        guide_direction: machine.geometry.legs[i].guide.direction.into_inner(),
+        link: &machine.links[i],
+        reactions: Some(reactions),
+        index: i,
+    });
+    let length = machine.links[i].length();
+    let (p0, pl) = end_forces(&load, length);
+    (1..50)
+        .map(|j| load.at(length * j as f64 / 50.0))
+        .fold(p0.min(pl), f64::min)
+}
+
 pub fn recheck(
     machine: &Machine,
     trajectory: &dyn Trajectory,
@@ -66,19 +91,8 @@ pub fn recheck(
                 }
             }
             if let Some(margin) = limits.buckling {
-                let load = JointReactionAxialForce.load(&AxialInput {
-                    leg: &leg.kinematics,
-                    guide_direction: machine.geometry.legs[i].guide.direction.into_inner(),
-                    link: &machine.links[i],
-                    reactions: Some(&reactions),
-                    index: i,
-                });
-                // The compression anywhere along the link (a fine scan, not only the ends).
-                let length = machine.links[i].length();
-                let (p0, pl) = end_forces(&load, length);
-                let lowest = (0..=50)
-                    .map(|j| load.at(length * j as f64 / 50.0))
-                    .fold(p0.min(pl), f64::min);
+                let lowest =
+                    lowest_axial_force(machine, &state, &reactions, i, &JointReactionAxialForce);
                 note(-lowest / (margin * euler), "buckling", t);
             }
             if let Some(j) = limits.jerk {
