@@ -18,7 +18,9 @@
 //!   [`PointToPoint`] with a rest-to-rest [`Profile`], [`WaypointSpline`]; and
 //!   [`validate_trajectory`].
 //! - Geometric paths `p(s)` with three derivatives ([`Path`]: [`CirclePath`], [`SegmentPath`],
-//!   [`SplinePath`], as data [`GeometricPath`]) and the planned motion along one
+//!   [`SplinePath`], as data [`GeometricPath`]); a base path with a designed orientation
+//!   ([`OrientedPath`]: `phi(s)` a constant, a cubic B-spline or a Fourier series, replacing or
+//!   correcting the base path's); and the planned motion along one
 //!   ([`PlannedTrajectory`]: a path, a piecewise-quadratic [`Timing`], input-shaper
 //!   [`Impulse`]s and a smoothing window; serialisable as [`PlannedData`]).
 //!
@@ -39,6 +41,7 @@ mod error;
 mod forward;
 mod geometry;
 mod inverse;
+mod oriented;
 mod path;
 mod planned;
 mod pose;
@@ -50,6 +53,10 @@ pub use geometry::{Branch, Geometry, Guide, Leg, Thresholds};
 pub use inverse::{
     LegKinematics, LegPosition, LegState, MachineKinematics, MachineState, SingularityMeasures,
     VelocityJacobians,
+};
+pub use oriented::{
+    Orientation, OrientedData, OrientedPath, PhiFourier, PhiFourierData, PhiLaw, PhiSpline,
+    PhiSplineData,
 };
 pub use path::{
     CircleData, CirclePath, GeometricPath, Path, PathPoint, SegmentData, SegmentPath, SplineData,

@@ -20,6 +20,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::KinematicsError;
+use crate::oriented::OrientedPath;
 use crate::pose::{PlatformMotion, Pose};
 use crate::trajectory::{Circle, Line, PointToPoint, Trajectory, WaypointSpline, finite, invalid};
 
@@ -483,7 +484,8 @@ impl Path for SplinePath {
 }
 
 /// The path of any of the scene's trajectory kinds, as data (serde: a table with `kind =
-/// "circle"`, `"segment"` or `"spline"` and that kind's fields; SI units, angles in rad).
+/// "circle"`, `"segment"`, `"spline"` or `"oriented"` and that kind's fields; SI units, angles
+/// in rad).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum GeometricPath {
@@ -493,6 +495,8 @@ pub enum GeometricPath {
     Segment(SegmentPath),
     /// [`SplinePath`].
     Spline(SplinePath),
+    /// An [`OrientedPath`]: a base path with a designed orientation.
+    Oriented(Box<OrientedPath>),
 }
 
 impl GeometricPath {
@@ -501,15 +505,17 @@ impl GeometricPath {
             GeometricPath::Circle(p) => p,
             GeometricPath::Segment(p) => p,
             GeometricPath::Spline(p) => p,
+            GeometricPath::Oriented(p) => p.as_ref(),
         }
     }
 
-    /// The path's kind as spelled in data (`circle`, `segment`, `spline`).
+    /// The path's kind as spelled in data (`circle`, `segment`, `spline`, `oriented`).
     pub fn kind(&self) -> &'static str {
         match self {
             GeometricPath::Circle(_) => "circle",
             GeometricPath::Segment(_) => "segment",
             GeometricPath::Spline(_) => "spline",
+            GeometricPath::Oriented(_) => "oriented",
         }
     }
 }

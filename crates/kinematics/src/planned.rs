@@ -24,7 +24,8 @@ use crate::path::{GeometricPath, Path};
 use crate::pose::PlatformMotion;
 use crate::trajectory::Trajectory;
 
-fn bad(
+/// An [`KinematicsError::InvalidPlan`] for `field` (at `index`).
+pub(crate) fn bad(
     field: &'static str,
     index: Option<usize>,
     value: f64,

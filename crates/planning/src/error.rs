@@ -109,6 +109,37 @@ pub enum PlanningError {
         /// What was left.
         detail: String,
     },
+    /// No orientation in the search's bounds gives a feasible motion (every candidate left
+    /// the workspace or met a limit no timing can meet).
+    #[error(
+        "no constant orientation in [{min_deg:.3}, {max_deg:.3}] deg gives a feasible motion ({tried} tried); at phi = {phi_deg:.3} deg: {reason}"
+    )]
+    NoFeasibleOrientation {
+        /// Lower bound (deg).
+        min_deg: f64,
+        /// Upper bound (deg).
+        max_deg: f64,
+        /// Orientations tried.
+        tried: usize,
+        /// One of them (deg), the middle of the range.
+        phi_deg: f64,
+        /// Why it fails.
+        reason: String,
+    },
+    /// An orientation law leaves the search's bounds somewhere on the path.
+    #[error(
+        "the orientation {phi_deg:.4} deg at s = {s:.6} is outside [{min_deg:.3}, {max_deg:.3}] deg (phi_min_deg, phi_max_deg)"
+    )]
+    OrientationBounds {
+        /// Path parameter there.
+        s: f64,
+        /// The orientation there (deg).
+        phi_deg: f64,
+        /// Lower bound (deg).
+        min_deg: f64,
+        /// Upper bound (deg).
+        max_deg: f64,
+    },
     /// An invalid planned timing or shaper (from the kinematics layer).
     #[error(transparent)]
     Trajectory(#[from] KinematicsError),

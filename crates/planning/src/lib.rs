@@ -16,6 +16,10 @@
 //!   constant speed ([`Planner::constant_speed`]).
 //! * [`shaping`]: ZV, ZVD and EI shapers (Singer & Seering 1990; Singhose et al.), for one or
 //!   several modes, and their residual vibration.
+//! * The platform's orientation as a design variable ([`Planner::best_constant_phi`],
+//!   [`Planner::free_phi`]): the best constant `phi`, or `phi(s)` a smooth law, for the
+//!   shortest motion or the largest buckling margin ([`Planner::compression`]) at a given
+//!   timing ([`Schedule`]).
 //! * [`PlanSpec`]: the `[plan]` settings as data (serde), validated by key.
 //!
 //! The result is a [`Plan`] whose timing, with the path, is a
@@ -24,6 +28,8 @@
 mod check;
 mod constraint;
 mod error;
+mod optimize;
+mod orientation;
 mod phase;
 mod plan;
 mod sample;
@@ -38,10 +44,13 @@ pub use constraint::{
     SliderAcceleration, SliderForce, SliderSpeed,
 };
 pub use error::{Infeasibility, PlanningError, Where};
+pub use orientation::{
+    Compression, ConstantPhi, FreePhi, PhiEnds, PhiObjective, PhiSearch, ScanPoint, Schedule,
+};
 pub use phase::PhasePlane;
 pub use plan::{
     Binding, Boundary, CHECK_TOLERANCE, Convergence, Plan, Planner, RmsLimit, Settings, Solution,
 };
 pub use sample::{Affine, LegPath, PathSample, Sampler};
-pub use spec::{PlanSpec, Shaping};
+pub use spec::{PhiGoal, PhiMode, PlanSpec, Shaping};
 pub use speed::ConstantSpeed;

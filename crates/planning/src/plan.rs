@@ -258,6 +258,28 @@ impl std::fmt::Debug for Planner<'_> {
 
 static JOINT_REACTION: JointReactionAxialForce = JointReactionAxialForce;
 
+/// A constraint borrowed from another planner ([`Planner::on_path`]).
+#[derive(Debug)]
+struct Shared<'b>(&'b dyn Constraint);
+
+impl Constraint for Shared<'_> {
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+    fn unit(&self) -> &str {
+        self.0.unit()
+    }
+    fn count(&self) -> usize {
+        self.0.count()
+    }
+    fn label(&self, row: usize) -> String {
+        self.0.label(row)
+    }
+    fn rows(&self, sample: &PathSample, rows: &mut [Row]) {
+        self.0.rows(sample, rows);
+    }
+}
+
 impl<'a> Planner<'a> {
     /// A planner of `path` on `machine` without constraints (add them with
     /// [`Planner::constraint`]).
@@ -324,6 +346,42 @@ impl<'a> Planner<'a> {
     /// The path.
     pub fn path(&self) -> &'a dyn Path {
         self.path
+    }
+
+    /// The machine.
+    pub fn machine(&self) -> &'a Machine {
+        self.machine
+    }
+
+    /// The same planner (constraints, axial model, RMS and jerk limits, shaper) on another
+    /// path, with other settings: the constraints are shared, not copied.
+    pub fn on_path<'b>(&'b self, path: &'b dyn Path, settings: Settings) -> Planner<'b> {
+        Planner {
+            machine: self.machine,
+            path,
+            axial: self.axial,
+            constraints: self
+                .constraints
+                .iter()
+                .map(|c| Box::new(Shared(c.as_ref())) as Box<dyn Constraint + 'b>)
+                .collect(),
+            settings,
+            rms: self.rms,
+            jerk: self.jerk,
+            impulses: self.impulses.clone(),
+        }
+    }
+
+    /// Whether the plan filters or rescales the time-optimal timing (RMS limit, jerk
+    /// smoothing, shaping).
+    pub(crate) fn has_filters(&self) -> bool {
+        self.rms.is_some() || self.jerk.is_some() || !self.impulses.is_empty()
+    }
+
+    /// A sampler with the planner's axial-force model (the joint-reaction model unless set),
+    /// whatever the constraints.
+    pub(crate) fn axial_sampler(&self) -> Sampler<'a> {
+        Sampler::new(self.machine, Some(self.axial.unwrap_or(&JOINT_REACTION)))
     }
 
     /// The sampler the planner uses (axial forces only when a constraint needs them).

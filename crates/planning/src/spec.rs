@@ -11,6 +11,7 @@ use crate::constraint::{
     SliderForce, SliderSpeed,
 };
 use crate::error::PlanningError;
+use crate::orientation::{PhiEnds, PhiObjective, PhiSearch, Schedule};
 use crate::plan::{Boundary, RmsLimit, Settings};
 use crate::shaping::{Mode, Shaper, design_for_modes};
 
@@ -38,6 +39,44 @@ pub enum Shaping {
     Ei,
 }
 
+/// How the platform's orientation `phi` is chosen (`phi` key).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PhiMode {
+    /// The path's own orientation.
+    #[default]
+    Fixed,
+    /// The best constant orientation within the bounds.
+    BestConstant,
+    /// A smooth orientation law along the path, from the best constant.
+    Free,
+}
+
+/// What the orientation is chosen for (`phi_objective` key).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PhiGoal {
+    /// The shortest time-optimal motion (the largest frequency of a periodic one).
+    #[default]
+    MinTime,
+    /// The largest buckling margin at the scene's own timing of the path.
+    MaxMargin,
+}
+
+fn goal_name(goal: PhiGoal) -> &'static str {
+    match goal {
+        PhiGoal::MinTime => "min_time",
+        PhiGoal::MaxMargin => "max_margin",
+    }
+}
+
+fn ends_name(ends: PhiEnds) -> &'static str {
+    match ends {
+        PhiEnds::Free => "free",
+        PhiEnds::Fixed => "fixed",
+    }
+}
+
 fn yes() -> bool {
     true
 }
@@ -55,6 +94,30 @@ fn default_tolerance() -> f64 {
 }
 fn default_modes() -> usize {
     1
+}
+fn default_scan_step() -> f64 {
+    2.0
+}
+fn default_phi_tolerance() -> f64 {
+    0.01
+}
+fn default_phi_step() -> f64 {
+    5.0
+}
+fn default_brackets() -> usize {
+    3
+}
+fn default_spline_points() -> usize {
+    6
+}
+fn default_harmonics() -> usize {
+    2
+}
+fn default_evaluations() -> usize {
+    1000
+}
+fn default_samples() -> usize {
+    1000
 }
 
 /// The `[plan]` settings (docs/planning.md, "Settings"). Every limit is optional; at least
@@ -116,6 +179,45 @@ pub struct PlanSpec {
     /// Refinement rounds before tightening.
     #[serde(default = "default_refinements")]
     pub refinements: usize,
+    /// The platform's orientation: `fixed` (the path's), `best_constant` or `free`.
+    #[serde(default)]
+    pub phi: PhiMode,
+    /// Lower bound on the orientation everywhere on the path (deg; -180 unless set).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phi_min_deg: Option<f64>,
+    /// Upper bound (deg; 180 unless set; at most 360 above the lower bound).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phi_max_deg: Option<f64>,
+    /// What the orientation is chosen for: `min_time` or `max_margin`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phi_objective: Option<PhiGoal>,
+    /// A free orientation of a rest-to-rest move: `free` ends or `fixed` (the path's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phi_ends: Option<PhiEnds>,
+    /// Spacing of the scan of constant orientations (deg).
+    #[serde(default = "default_scan_step")]
+    pub phi_scan_step_deg: f64,
+    /// Tolerance of the best constant, and the simplex size of the free search (deg).
+    #[serde(default = "default_phi_tolerance")]
+    pub phi_tolerance_deg: f64,
+    /// Initial step of the free search's coefficients (deg).
+    #[serde(default = "default_phi_step")]
+    pub phi_step_deg: f64,
+    /// Local minima of the scan refined.
+    #[serde(default = "default_brackets")]
+    pub phi_brackets: usize,
+    /// Control values of the free law of a non-periodic motion (cubic B-spline, >= 4).
+    #[serde(default = "default_spline_points")]
+    pub phi_spline_points: usize,
+    /// Harmonics of the free law of a periodic motion (Fourier series, >= 1).
+    #[serde(default = "default_harmonics")]
+    pub phi_harmonics: usize,
+    /// Most objective evaluations of the free search.
+    #[serde(default = "default_evaluations")]
+    pub phi_evaluations: usize,
+    /// Instants sampled for the buckling margin.
+    #[serde(default = "default_samples")]
+    pub phi_samples: usize,
 }
 
 impl Default for PlanSpec {
@@ -139,6 +241,19 @@ impl Default for PlanSpec {
             grid: default_grid(),
             check_factor: default_check_factor(),
             refinements: default_refinements(),
+            phi: PhiMode::Fixed,
+            phi_min_deg: None,
+            phi_max_deg: None,
+            phi_objective: None,
+            phi_ends: None,
+            phi_scan_step_deg: default_scan_step(),
+            phi_tolerance_deg: default_phi_tolerance(),
+            phi_step_deg: default_phi_step(),
+            phi_brackets: default_brackets(),
+            phi_spline_points: default_spline_points(),
+            phi_harmonics: default_harmonics(),
+            phi_evaluations: default_evaluations(),
+            phi_samples: default_samples(),
         }
     }
 }
@@ -199,6 +314,7 @@ impl PlanSpec {
             });
         }
         self.settings().validate()?;
+        self.validate_phi()?;
         if self.boundary == Boundary::Periodic && self.shaping != Shaping::None {
             return Err(PlanningError::InvalidSpec {
                 key: "shaping",
@@ -207,6 +323,98 @@ impl PlanSpec {
             });
         }
         Ok(())
+    }
+
+    /// The orientation keys: their ranges, and no key that the chosen `phi` ignores.
+    fn validate_phi(&self) -> Result<(), PlanningError> {
+        let unused = |key: &'static str, value: String, rule: &str| {
+            Err(PlanningError::InvalidSpec {
+                key,
+                value,
+                rule: rule.into(),
+            })
+        };
+        if self.phi == PhiMode::Fixed {
+            let ignored =
+                "has no effect with phi = \"fixed\" (set phi = \"best_constant\" or \"free\")";
+            if let Some(v) = self.phi_min_deg {
+                return unused("phi_min_deg", v.to_string(), ignored);
+            }
+            if let Some(v) = self.phi_max_deg {
+                return unused("phi_max_deg", v.to_string(), ignored);
+            }
+            if let Some(v) = self.phi_objective {
+                return unused("phi_objective", goal_name(v).into(), ignored);
+            }
+            if let Some(v) = self.phi_ends {
+                return unused("phi_ends", ends_name(v).into(), ignored);
+            }
+        }
+        if let Some(ends) = self.phi_ends {
+            if self.phi == PhiMode::BestConstant {
+                return unused(
+                    "phi_ends",
+                    ends_name(ends).into(),
+                    "applies to phi = \"free\" (a constant orientation sets the end orientations too)",
+                );
+            }
+            if self.boundary == Boundary::Periodic {
+                return unused(
+                    "phi_ends",
+                    ends_name(ends).into(),
+                    "applies to rest-to-rest motions (a periodic motion has no ends)",
+                );
+            }
+        }
+        self.search(PhiObjective::MinTime).validate()
+    }
+
+    /// The orientation search of these settings with `objective` (not validated).
+    fn search(&self, objective: PhiObjective) -> PhiSearch {
+        PhiSearch {
+            min: self.phi_min_deg.unwrap_or(-180.0).to_radians(),
+            max: self.phi_max_deg.unwrap_or(180.0).to_radians(),
+            objective,
+            scan_step: self.phi_scan_step_deg.to_radians(),
+            tolerance: self.phi_tolerance_deg.to_radians(),
+            brackets: self.phi_brackets,
+            ends: self.phi_ends.unwrap_or_default(),
+            spline_points: self.phi_spline_points,
+            harmonics: self.phi_harmonics,
+            max_evaluations: self.phi_evaluations,
+            step: self.phi_step_deg.to_radians(),
+            samples: self.phi_samples,
+        }
+    }
+
+    /// The orientation search (`None` with `phi = "fixed"`). `scene_timing` is the scene's
+    /// own timing of its path, which `phi_objective = "max_margin"` needs.
+    ///
+    /// # Errors
+    /// An invalid value (as [`PlanSpec::validate`]); `max_margin` without a timing.
+    pub fn phi_search(
+        &self,
+        scene_timing: Option<Schedule>,
+    ) -> Result<Option<PhiSearch>, PlanningError> {
+        self.validate()?;
+        if self.phi == PhiMode::Fixed {
+            return Ok(None);
+        }
+        let objective = match (self.phi_objective.unwrap_or_default(), scene_timing) {
+            (PhiGoal::MinTime, _) => PhiObjective::MinTime,
+            (PhiGoal::MaxMargin, Some(schedule)) => PhiObjective::MaxMargin(schedule),
+            (PhiGoal::MaxMargin, None) => {
+                return Err(PlanningError::InvalidSpec {
+                    key: "phi_objective",
+                    value: "max_margin".into(),
+                    rule: "needs the scene's own timing of the path (the margin is that motion's)"
+                        .into(),
+                });
+            }
+        };
+        let search = self.search(objective);
+        search.validate()?;
+        Ok(Some(search))
     }
 
     /// The numerical settings.

@@ -5,126 +5,12 @@
 
 mod common;
 
-use flexprr_control::{Actuator, MotorBallScrew};
-use flexprr_dynamics::{
-    AxialForceModel, AxialInput, JointReactionAxialForce, Machine, end_forces, inverse_dynamics,
-};
-use flexprr_kinematics::{Path, PlannedTrajectory, Trajectory};
+use common::recheck::{Limits, recheck, ten_times_finer, trajectory_of};
+use flexprr_kinematics::Path;
 use flexprr_planning::{
-    Boundary, Buckling, Efficiency, MotorSpeed, MotorTorque, Plan, Planner, RmsLimit, Settings,
+    Boundary, Buckling, Efficiency, MotorSpeed, MotorTorque, Planner, RmsLimit, Settings,
     SliderAcceleration, SliderForce, SliderSpeed, shaping,
 };
-
-/// Limits as the independent check sees them.
-#[derive(Debug, Default, Clone, Copy)]
-struct Limits {
-    speed: Option<f64>,
-    acceleration: Option<f64>,
-    force: Option<f64>,
-    motor: Option<MotorBallScrew>,
-    buckling: Option<f64>,
-    jerk: Option<f64>,
-    rms: Option<f64>,
-}
-
-/// Largest use of each limit over `samples` instants of the motion (and the RMS torque).
-fn recheck(
-    machine: &Machine,
-    trajectory: &dyn Trajectory,
-    span: (f64, f64),
-    samples: usize,
-    limits: &Limits,
-) -> (f64, String) {
-    let euler = flexprr_testkit::paper::euler_load();
-    let mut worst = (0.0f64, String::new());
-    let mut note = |usage: f64, what: &str, t: f64| {
-        if usage > worst.0 {
-            worst = (usage, format!("{what} at t = {t}"));
-        }
-    };
-    let mut torque_squares = [0.0; 3];
-    let dt = (span.1 - span.0) / samples as f64;
-    for k in 0..=samples {
-        let t = span.0 + dt * k as f64;
-        let motion = trajectory.motion(t);
-        let state = machine.geometry.inverse_kinematics(&motion).unwrap();
-        let reactions = inverse_dynamics(machine, &state, None, t).unwrap();
-        for (i, squares) in torque_squares.iter_mut().enumerate() {
-            let leg = &state.legs[i];
-            let force = reactions.driving_force[i];
-            if let Some(v) = limits.speed {
-                note(leg.rho_dot.abs() / v, "slider speed", t);
-            }
-            if let Some(a) = limits.acceleration {
-                note(leg.rho_ddot.abs() / a, "slider acceleration", t);
-            }
-            if let Some(f) = limits.force {
-                note(force.abs() / f, "slider force", t);
-            }
-            if let Some(motor) = limits.motor {
-                let actuator_force = force + motor.reflected_mass() * leg.rho_ddot;
-                let (torque, speed) = motor.required(actuator_force, leg.rho_dot).unwrap();
-                note(torque.abs() / motor.ratings.peak_torque, "motor torque", t);
-                note(speed.abs() / motor.ratings.max_speed, "motor speed", t);
-                if k < samples {
-                    *squares += torque * torque * dt;
-                }
-            }
-            if let Some(margin) = limits.buckling {
-                let load = JointReactionAxialForce.load(&AxialInput {
-                    leg: &leg.kinematics,
-                    guide_direction: machine.geometry.legs[i].guide.direction.into_inner(),
-                    link: &machine.links[i],
-                    reactions: Some(&reactions),
-                    index: i,
-                });
-                // The compression anywhere along the link (a fine scan, not only the ends).
-                let length = machine.links[i].length();
-                let (p0, pl) = end_forces(&load, length);
-                let lowest = (0..=50)
-                    .map(|j| load.at(length * j as f64 / 50.0))
-                    .fold(p0.min(pl), f64::min);
-                note(-lowest / (margin * euler), "buckling", t);
-            }
-            if let Some(j) = limits.jerk {
-                let h = 1e-7;
-                let ahead = machine
-                    .geometry
-                    .inverse_kinematics(&trajectory.motion(t + h))
-                    .unwrap();
-                let behind = machine
-                    .geometry
-                    .inverse_kinematics(&trajectory.motion(t - h))
-                    .unwrap();
-                let jerk = (ahead.legs[i].rho_ddot - behind.legs[i].rho_ddot) / (2.0 * h);
-                note(jerk.abs() / j, "slider jerk", t);
-            }
-        }
-    }
-    if let Some(limit) = limits.rms {
-        for q in torque_squares {
-            note((q / (span.1 - span.0)).sqrt() / limit, "RMS torque", span.1);
-        }
-    }
-    worst
-}
-
-fn trajectory_of<'p>(plan: &Plan, path: &'p dyn Path) -> PlannedTrajectory<&'p dyn Path> {
-    plan.trajectory(path, 0.0).unwrap()
-}
-
-/// Checks `plan` at ten times its grid resolution (in time) and returns the worst use.
-fn ten_times_finer(machine: &Machine, plan: &Plan, path: &dyn Path, limits: &Limits) -> f64 {
-    let trajectory = trajectory_of(plan, path);
-    let samples = 10 * plan.grid_points;
-    let (worst, what) = recheck(machine, &trajectory, (0.0, plan.duration), samples, limits);
-    println!(
-        "worst use {worst:.9} ({what}), duration {:.6} s",
-        plan.duration
-    );
-    assert!(worst <= 1.001, "{what}: {worst}");
-    worst
-}
 
 #[test]
 fn slider_limits_hold_between_grid_points() {

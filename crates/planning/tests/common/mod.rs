@@ -1,6 +1,8 @@
 //! Shared fixtures: the paper's machine, its circle and the pick-and-place move.
 #![allow(dead_code)]
 
+pub mod recheck;
+
 use flexprr_control::{MotorBallScrew, MotorRatings};
 use flexprr_dynamics::{Machine, paper};
 use flexprr_kinematics::{CirclePath, Pose, SegmentPath};
