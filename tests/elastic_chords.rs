@@ -128,6 +128,7 @@ fn the_relaxed_mass_is_the_coupled_models_own() {
                     expected[modes + i] = own + xi * through_platform;
                 }
             }
+            _ => unreachable!("only forces are applied here"),
         }
         for row in 0..n {
             let force: f64 = (0..n)
@@ -269,6 +270,7 @@ fn the_scene_key_keeps_the_chords_rigid_and_only_the_coupled_model_takes_it() {
             scene,
             flexprr_run::linear::OperatingPoint::Rest(pose()),
             3,
+            &flexprr_linear::Settings::default(),
         )
         .unwrap()
         .modes

@@ -15,8 +15,11 @@ const ZERO_FREQUENCY_HZ: f64 = 1e-3;
 /// One mode of a linear model.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mode {
-    /// The eigenvalue `lambda` (1/s).
+    /// The eigenvalue `lambda` (1/s): of `A` in continuous time; in discrete time the
+    /// equivalent continuous one, `ln(z) / T` (principal branch: `|Im| <= pi / T`).
     pub eigenvalue: Complex,
+    /// The eigenvalue `z` of a discrete-time `A` (`None` in continuous time).
+    pub z: Option<Complex>,
     /// `|lambda| / 2 pi` (Hz).
     pub frequency_hz: f64,
     /// `-Re(lambda) / |lambda|`.
@@ -26,9 +29,15 @@ pub struct Mode {
     pub shape: Vec<Complex>,
 }
 
+/// `ln(z) / dt`, principal branch.
+fn continuous_equivalent(z: Complex, dt: f64) -> Complex {
+    Complex::new(z.norm().ln() / dt, z.arg() / dt)
+}
+
 /// The modes of `lin` sorted by frequency, rigid-body (zero-frequency) modes left out; a
 /// real eigenvalue (an overdamped motion, a controller's integral) is a mode of damping
-/// ratio 1.
+/// ratio 1. A discrete-time model's eigenvalues `z` give `lambda = ln(z) / T`; a mode at
+/// `z = 0` (settled in one sample) has no continuous equivalent and is left out.
 ///
 /// # Errors
 /// The eigenvalue problem did not converge.
@@ -38,6 +47,7 @@ pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
     let eigen = Eigen::new_from_real(balanced.as_ref())
         .map_err(|e| LinearError::Numerics(format!("eigenvalues of A ({n} x {n}): {e:?}")))?;
     let (values, vectors) = (eigen.S(), eigen.U());
+    let discrete = lin.dt > 0.0;
     let scale = (0..n)
         .map(|k| {
             let v = values[k];
@@ -46,10 +56,20 @@ pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
         .fold(0.0, f64::max);
     let mut modes = Vec::new();
     for k in 0..n {
-        let lambda = Complex::new(values[k].re, values[k].im);
+        let raw = Complex::new(values[k].re, values[k].im);
+        if raw.im < -1e-9 * scale.max(1.0) {
+            continue;
+        }
+        let lambda = if discrete {
+            if raw.norm() < f64::MIN_POSITIVE.sqrt() {
+                continue;
+            }
+            continuous_equivalent(raw, lin.dt)
+        } else {
+            raw
+        };
         let modulus = lambda.norm();
-        if modulus / std::f64::consts::TAU < ZERO_FREQUENCY_HZ || lambda.im < -1e-9 * scale.max(1.0)
-        {
+        if !modulus.is_finite() || modulus / std::f64::consts::TAU < ZERO_FREQUENCY_HZ {
             continue;
         }
         let column: Vec<Complex> = (0..n)
@@ -57,6 +77,7 @@ pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
             .collect();
         modes.push(Mode {
             eigenvalue: lambda,
+            z: discrete.then_some(raw),
             frequency_hz: modulus / std::f64::consts::TAU,
             damping_ratio: -lambda.re / modulus,
             shape: normalised(&lin.c, &column),

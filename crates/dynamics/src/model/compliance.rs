@@ -5,6 +5,10 @@
 
 use faer::Mat;
 
+/// Axial coordinates per link that the relaxed chords add beyond the platform's deviation
+/// (the links' distributed axial inertia).
+pub const AXIAL_MODES: usize = 0;
+
 /// The relaxation of a model's rigid chords into axial springs, at a state at rest.
 ///
 /// With `z` the model's coordinates ([`crate::SceneModel::modes`]) and `p` the platform
@@ -40,4 +44,11 @@ pub struct ChordCompliance {
     /// joints' motion); the acceleration of that point along the normal has `xi` times it
     /// as its gradient in `d''`.
     pub joint_normal: [[f64; 3]; 3],
+}
+
+impl ChordCompliance {
+    /// Number of coordinates the relaxation adds.
+    pub fn size(&self) -> usize {
+        self.deviation_mass.nrows()
+    }
 }

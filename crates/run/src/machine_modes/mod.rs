@@ -15,7 +15,9 @@ mod shape;
 use std::time::Instant;
 
 use flexprr_kinematics::Pose;
-use flexprr_linear::{Axis, Complex, Input, LinearError, Output, linearize, modes};
+use flexprr_linear::{
+    Axis, Complex, Input, LinearError, Output, Settings, linearize, linearize_with_settings, modes,
+};
 use flexprr_scene::{ScenarioError, Scene};
 
 use crate::error::RunError;
@@ -42,8 +44,10 @@ pub const MODES_PRODUCTS: Products = Products {
 /// One whole-machine mode with its shape.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MachineMode {
-    /// The eigenvalue `lambda` (1/s).
+    /// The eigenvalue `lambda` (1/s): in discrete time `ln(z) / dt`.
     pub eigenvalue: Complex,
+    /// The pole `z` of a discrete-time model (`None` in continuous time).
+    pub z: Option<Complex>,
     /// `|lambda| / 2 pi` (Hz), the undamped natural frequency.
     pub frequency_hz: f64,
     /// `-Re(lambda) / |lambda|` (MATLAB's `damp`).
@@ -97,6 +101,11 @@ pub struct MachineModes {
     pub modes: Vec<MachineMode>,
     /// Where the time went.
     pub timing: ModesTiming,
+    /// The sample period of a discrete-time model (s; 0 in continuous time): the modes are
+    /// then the poles `z` of the sampled loop, with `lambda = ln(z) / dt`.
+    pub dt: f64,
+    /// What the linear model left out or found at the operating point (one line each).
+    pub notes: Vec<String>,
 }
 
 /// The shape outputs: sliders, platform pose, each link's deflection at `points` points.
@@ -132,25 +141,45 @@ pub fn machine_modes(
     scene: &Scene,
     at: OperatingPoint,
     points: usize,
+    settings: &Settings,
+) -> Result<MachineModes, RunError> {
+    machine_modes_with_progress(scene, at, points, settings, &mut |_| {})
+}
+
+/// [`machine_modes`], calling `progress` with what it does next (`"model"`,
+/// `"linearisation"`, `"eigenvalues"`).
+///
+/// # Errors
+/// As [`machine_modes`].
+pub fn machine_modes_with_progress(
+    scene: &Scene,
+    at: OperatingPoint,
+    points: usize,
+    settings: &Settings,
+    progress: &mut dyn FnMut(&str),
 ) -> Result<MachineModes, RunError> {
     let points = points.max(2);
     let clock = Instant::now();
+    progress("model");
     let mut point = operating_point(scene, at)?;
     let model_s = clock.elapsed().as_secs_f64();
     let snapshot = point.model.snapshot(point.t, &point.state)?;
     let (outputs, xi) = shape_outputs(points);
     let clock = Instant::now();
     let no_inputs: [Input; 0] = [];
-    let lin = linearize(
+    progress("linearisation");
+    let lin = linearize_with_settings(
         point.model.as_mut(),
         point.t,
         &point.state,
         &no_inputs,
         &outputs,
+        settings,
     )
-    .map_err(linear_error)?;
+    .map_err(|e| crate::linear::linear_error(scene, e))?;
     let linearisation_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
+    progress("eigenvalues");
     let found = modes(&lin).map_err(linear_error)?;
     let geometry = &scene.machine.geometry;
     let modes = found
@@ -159,6 +188,7 @@ pub fn machine_modes(
             let shape = ModeShape::from_outputs(&m.shape, points, snapshot.platform.pose, geometry);
             MachineMode {
                 eigenvalue: m.eigenvalue,
+                z: m.z,
                 frequency_hz: m.frequency_hz,
                 damping_ratio: m.damping_ratio,
                 kind: shape.kind(&scene.machine),
@@ -185,6 +215,8 @@ pub fn machine_modes(
             linearisation_s,
             eigen_s,
         },
+        dt: lin.dt,
+        notes: lin.notes.clone(),
     })
 }
 
@@ -217,8 +249,8 @@ pub fn sliders_description(scene: &Scene) -> String {
 /// As [`machine_modes`]; a model without any non-rigid mode is a failure of the analysis.
 pub fn lowest_frequency(scene: &Scene, at: OperatingPoint) -> Result<(f64, f64), RunError> {
     let mut point = operating_point(scene, at)?;
-    let lin =
-        linearize(point.model.as_mut(), point.t, &point.state, &[], &[]).map_err(linear_error)?;
+    let lin = linearize(point.model.as_mut(), point.t, &point.state, &[], &[])
+        .map_err(|e| crate::linear::linear_error(scene, e))?;
     let found = modes(&lin).map_err(linear_error)?;
     let first = found.first().ok_or_else(|| {
         RunError::Scene(ScenarioError::Run(
@@ -255,23 +287,10 @@ pub enum RestFrequency {
 /// reach, and singular (type I, or type II by the kinematic or the equilibrium measure), are
 /// marked as such rather than failures.
 pub fn rest_frequency(scene: &Scene, pose: Pose) -> RestFrequency {
-    use flexprr_kinematics::{KinematicsError, PlatformMotion};
-    let geometry = &scene.machine.geometry;
-    let state = match geometry.inverse_kinematics(&PlatformMotion::at_rest(pose)) {
-        Ok(state) => state,
-        Err(e @ (KinematicsError::Unreachable { .. } | KinematicsError::TravelExceeded { .. })) => {
-            return RestFrequency::Unreachable(e.to_string());
-        }
-        Err(e @ KinematicsError::Singular { .. }) => return RestFrequency::Singular(e.to_string()),
-        Err(e) => return RestFrequency::Failed(e.to_string()),
+    let measure = match rest_pose(scene, pose) {
+        Ok(measure) => measure,
+        Err(other) => return other,
     };
-    let measure = flexprr_dynamics::equilibrium_measure(&state);
-    if measure.is_nan() || measure < geometry.thresholds.type_ii {
-        return RestFrequency::Singular(format!(
-            "type-II measure of the platform's equilibrium {measure:.2e} below {:.1e}",
-            geometry.thresholds.type_ii
-        ));
-    }
     match lowest_frequency(scene, OperatingPoint::Rest(pose)) {
         Ok((frequency_hz, damping_ratio)) => RestFrequency::Found {
             frequency_hz,
@@ -285,6 +304,36 @@ pub fn rest_frequency(scene: &Scene, pose: Pose) -> RestFrequency {
         ) => RestFrequency::Singular(e.to_string()),
         Err(e) => RestFrequency::Failed(e.to_string()),
     }
+}
+
+/// Whether the machine holds the platform at rest at `pose`: the type-II measure of its
+/// equilibrium there, or why not: out of reach (a leg does not close, a slider beyond its
+/// travel), singular (type I, or type II by the kinematic or the equilibrium measure: the
+/// links do not hold the platform), or a failure of the kinematics.
+///
+/// # Errors
+/// The [`RestFrequency`] that says why (never `Found`).
+pub fn rest_pose(scene: &Scene, pose: Pose) -> Result<f64, RestFrequency> {
+    use flexprr_kinematics::{KinematicsError, PlatformMotion};
+    let geometry = &scene.machine.geometry;
+    let state = match geometry.inverse_kinematics(&PlatformMotion::at_rest(pose)) {
+        Ok(state) => state,
+        Err(e @ (KinematicsError::Unreachable { .. } | KinematicsError::TravelExceeded { .. })) => {
+            return Err(RestFrequency::Unreachable(e.to_string()));
+        }
+        Err(e @ KinematicsError::Singular { .. }) => {
+            return Err(RestFrequency::Singular(e.to_string()));
+        }
+        Err(e) => return Err(RestFrequency::Failed(e.to_string())),
+    };
+    let measure = flexprr_dynamics::equilibrium_measure(&state);
+    if measure.is_nan() || measure < geometry.thresholds.type_ii {
+        return Err(RestFrequency::Singular(format!(
+            "type-II measure of the platform's equilibrium {measure:.2e} below {:.1e}",
+            geometry.thresholds.type_ii
+        )));
+    }
+    Ok(measure)
 }
 
 /// The scene's start pose: the trajectory's pose at the first output time, the default
