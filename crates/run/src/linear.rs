@@ -147,10 +147,7 @@ pub type MotionStates = (Box<dyn SceneModel>, Vec<Vec<f64>>);
 /// # Errors
 /// A KED scene, a time outside the span or not increasing, or a run that fails before the
 /// last time (with its time).
-pub fn along_motion_states(
-    scene: &Scene,
-    times: &[f64],
-) -> Result<MotionStates, RunError> {
+pub fn along_motion_states(scene: &Scene, times: &[f64]) -> Result<MotionStates, RunError> {
     if scene.coupling == CouplingModel::Ked {
         operating_point(scene, OperatingPoint::Time(scene.output_times[0]))?;
     }

@@ -204,9 +204,9 @@ class LinearModel:
         s = self.state_scale
         data = dict(self.__dict__)
         data.update(
-            A=self.A * s[None, :] / s[:, None],
-            B=self.B / s[:, None],
-            C=self.C * s[None, :],
+            A=self.A * s[:, None] / s[None, :],
+            B=self.B * s[:, None],
+            C=self.C / s[None, :],
             x0=self.x0 * s,
             state_scale=_np.ones_like(s),
             realization="physical",
