@@ -279,8 +279,8 @@ fn the_scene_key_keeps_the_chords_rigid_and_only_the_coupled_model_takes_it() {
     assert_eq!(count(&rigid), 9, "nine bending modes on rigid chords");
     assert_eq!(
         count(&elastic),
-        12,
-        "and three platform modes on elastic ones"
+        21,
+        "and three platform modes and each link's three axial modes on elastic ones"
     );
     let refused =
         flexprr_scene::Scene::from_text("nonlinear.toml", "nonlinear", &with("nonlinear", "rigid"))

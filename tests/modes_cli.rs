@@ -128,8 +128,8 @@ fn json_is_the_modes_sorted_with_matlab_damp_definitions() {
     let list = value["modes"].as_array().unwrap();
     assert_eq!(
         list.len(),
-        15,
-        "9 bending, 3 servo and 3 platform modes (state of 30)"
+        24,
+        "9 bending, 3 servo, 3 platform and 9 axial link modes (state of 48)"
     );
     let mut last = 0.0;
     for m in list {
@@ -630,4 +630,40 @@ fn a_sampled_law_gives_the_poles_of_its_discrete_loop() {
         let s = (re.hypot(im).ln() / 2e-4).hypot(im.atan2(re) / 2e-4);
         assert!((s / (2.0 * PI) / found[k].0 - 1.0).abs() < 1e-9);
     }
+}
+
+/// Issue 35, item 3: `flexprr modes` says when the listed modes reach the first bending
+/// family the basis leaves out (the 4th of 3 sine modes per link, 16 f_1 = 1862 Hz; the
+/// machine's is at 1840-1874 Hz) and how many modes per link bring every family in; not
+/// when the listed modes stay below it.
+#[test]
+fn modes_say_where_the_basis_leaves_families_out() {
+    let scene = config("coupled_f20.toml");
+    let o = modes(&[scene.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains(
+            "the basis has 3 bending modes per link: the families from about 1862 Hz (the 4th)"
+        ) && table.contains("links.modes = 7"),
+        "{table}"
+    );
+    let o = modes(&[scene.to_str().unwrap(), "--count", "9"]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("families from about"));
+    let dir = tempfile::tempdir().unwrap();
+    let o = modes(&[
+        scene.to_str().unwrap(),
+        "--out",
+        dir.path().join("m").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("m").join("modes.json")).unwrap(),
+    )
+    .unwrap();
+    let t = &json["truncation"];
+    assert_eq!(t["modes_per_link"], 3);
+    assert_eq!(t["complete"], false);
+    let first = t["first_missing_family_hz"].as_f64().unwrap();
+    assert!((first / (16.0 * 116.3914) - 1.0).abs() < 1e-4, "{first}");
 }

@@ -189,7 +189,12 @@ pub fn run(args: ModesArgs) -> Result<(), Failure> {
         write_files(&scene, &modes, count, target)?;
     }
     if args.json {
-        for note in &modes.notes {
+        for note in modes
+            .notes
+            .iter()
+            .cloned()
+            .chain(truncation_note(&modes, count))
+        {
             eprintln!("note: {note}");
         }
         let value = modes_summary_json(&modes, count);
@@ -264,6 +269,18 @@ fn where_text(modes: &MachineModes) -> String {
     }
 }
 
+/// The basis' truncation, when the listed modes reach the first bending family it leaves
+/// out.
+fn truncation_note(modes: &MachineModes, count: usize) -> Option<String> {
+    let highest = modes
+        .modes
+        .iter()
+        .take(count)
+        .map(|m| m.frequency_hz)
+        .fold(0.0, f64::max);
+    modes.truncation.and_then(|t| t.note(highest))
+}
+
 /// The table `flexprr modes` prints without `--json`.
 fn table(modes: &MachineModes, count: usize, out: Option<&Path>) -> String {
     use std::fmt::Write as _;
@@ -280,6 +297,9 @@ fn table(modes: &MachineModes, count: usize, out: Option<&Path>) -> String {
         let _ = writeln!(s, "chords {}", modes.chords);
     }
     for note in &modes.notes {
+        let _ = writeln!(s, "note: {note}");
+    }
+    if let Some(note) = truncation_note(modes, count) {
         let _ = writeln!(s, "note: {note}");
     }
     let _ = writeln!(

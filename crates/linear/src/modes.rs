@@ -27,6 +27,10 @@ pub struct Mode {
     /// The eigenvector seen at the linearisation's outputs (`C v`), scaled so that its
     /// largest entry is 1 (real).
     pub shape: Vec<Complex>,
+    /// The eigenvector's coordinates that the relaxation of the chords added (the
+    /// platform's deviation, then each link's axial modes), scaled as `shape`; empty
+    /// without them.
+    pub added: Vec<Complex>,
 }
 
 /// `ln(z) / dt`, principal branch.
@@ -75,30 +79,45 @@ pub fn modes(lin: &Linearization) -> Result<Vec<Mode>, LinearError> {
         let column: Vec<Complex> = (0..n)
             .map(|j| Complex::new(vectors[(j, k)].re, vectors[(j, k)].im).scale(scaling[j]))
             .collect();
+        let (shape, added) = normalised(
+            &lin.c,
+            &column,
+            lin.coordinates - lin.added..lin.coordinates,
+        );
         modes.push(Mode {
             eigenvalue: lambda,
             z: discrete.then_some(raw),
             frequency_hz: modulus / std::f64::consts::TAU,
             damping_ratio: -lambda.re / modulus,
-            shape: normalised(&lin.c, &column),
+            shape,
+            added,
         });
     }
     modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
     Ok(modes)
 }
 
-/// `C v`, divided by its entry of largest modulus.
-fn normalised(c: &Mat<f64>, v: &[Complex]) -> Vec<Complex> {
+/// `C v` and the entries of `v` in `added`, both divided by the entry of `C v` of largest
+/// modulus.
+fn normalised(
+    c: &Mat<f64>,
+    v: &[Complex],
+    added: std::ops::Range<usize>,
+) -> (Vec<Complex>, Vec<Complex>) {
     let seen: Vec<Complex> = (0..c.nrows())
         .map(|i| (0..c.ncols()).fold(Complex::default(), |sum, j| sum + v[j].scale(c[(i, j)])))
         .collect();
+    let extra: Vec<Complex> = v[added].to_vec();
     let largest = seen
         .iter()
         .copied()
         .max_by(|a, b| a.norm().total_cmp(&b.norm()))
         .unwrap_or_default();
     if largest.norm() <= 0.0 {
-        return seen;
+        return (seen, extra);
     }
-    seen.iter().map(|s| *s / largest).collect()
+    (
+        seen.iter().map(|s| *s / largest).collect(),
+        extra.iter().map(|s| *s / largest).collect(),
+    )
 }

@@ -5,9 +5,12 @@
 
 use faer::Mat;
 
-/// Axial coordinates per link that the relaxed chords add beyond the platform's deviation
-/// (the links' distributed axial inertia).
-pub const AXIAL_MODES: usize = 0;
+/// Axial coordinates per link that the relaxed chords add beyond the platform's deviation:
+/// the links' fixed-fixed axial modes `sin(k pi xi)`, `k = 1 ..`, which distribute their
+/// axial inertia (docs/linear.md, "Elastic chords"). Three put the platform modes within
+/// 0.05 % of an axially exact reference where one puts them within 0.2 % and none within
+/// 0.9 %.
+pub const AXIAL_MODES: usize = 3;
 
 /// The relaxation of a model's rigid chords into axial springs, at a state at rest.
 ///

@@ -106,6 +106,92 @@ pub struct MachineModes {
     pub dt: f64,
     /// What the linear model left out or found at the operating point (one line each).
     pub notes: Vec<String>,
+    /// The assumed-mode basis' truncation, for a model whose links bend in assumed modes
+    /// (the coupled model; `None` for the nonlinear model's elements).
+    pub truncation: Option<Truncation>,
+}
+
+/// The bending families an assumed-mode basis leaves out (docs/linear.md, "Truncation").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Truncation {
+    /// Modes per link of the basis (the fewest of the three links).
+    pub modes_per_link: usize,
+    /// The first family the basis leaves out (Hz), about `f_r ((r + 1) / r)^2` from the
+    /// basis' own highest frequency `f_r` of the unloaded link (exact for a uniform
+    /// pinned-pinned link in sine modes, `f_k = k^2 f_1`), the lowest of the links.
+    pub first_missing_hz: f64,
+    /// The basis' highest frequency of that link (Hz).
+    pub highest_hz: f64,
+}
+
+/// Margin of [`Truncation::recommended`]: the first family left out should lie this far
+/// above the highest mode of interest.
+pub const TRUNCATION_MARGIN: f64 = 1.5;
+
+impl Truncation {
+    /// The truncation of `scene`'s links, for a model in assumed modes.
+    pub fn of(scene: &Scene) -> Option<Self> {
+        if scene.coupling != flexprr_dynamics::CouplingModel::Coupled {
+            return None;
+        }
+        scene
+            .machine
+            .links
+            .iter()
+            .filter_map(|link| {
+                let f = link_frequencies_hz(&link.integrals.mass, &link.integrals.stiffness)?;
+                let r = f.len();
+                let top = *f.last()?;
+                let ratio = (r + 1) as f64 / r as f64;
+                Some(Self {
+                    modes_per_link: r,
+                    first_missing_hz: top * ratio * ratio,
+                    highest_hz: top,
+                })
+            })
+            .min_by(|a, b| a.first_missing_hz.total_cmp(&b.first_missing_hz))
+    }
+
+    /// Modes per link whose first family left out lies [`TRUNCATION_MARGIN`] times above
+    /// `highest_hz` (the `k^2` law of the pinned-pinned link from the basis' highest mode).
+    pub fn recommended(&self, highest_hz: f64) -> usize {
+        let r = self.modes_per_link as f64;
+        let next = (r * (TRUNCATION_MARGIN * highest_hz / self.highest_hz).sqrt()).ceil() as usize;
+        next.saturating_sub(1).max(self.modes_per_link + 1)
+    }
+
+    /// The note when modes up to `highest_hz` are listed and some lie above the first family
+    /// left out.
+    pub fn note(&self, highest_hz: f64) -> Option<String> {
+        if highest_hz < self.first_missing_hz {
+            return None;
+        }
+        Some(format!(
+            "the basis has {} bending modes per link: the families from about {:.0} Hz (the \
+             {}th) on are left out, so the modes above it are incomplete and may be off by a \
+             percent and more; links.modes = {} brings in every family below {:.0} Hz ({} times \
+             the highest mode listed)",
+            self.modes_per_link,
+            self.first_missing_hz,
+            self.modes_per_link + 1,
+            self.recommended(highest_hz),
+            TRUNCATION_MARGIN * highest_hz,
+            TRUNCATION_MARGIN
+        ))
+    }
+}
+
+/// The unloaded natural frequencies of a link's basis (Hz, ascending): the eigenvalues of
+/// `M^-1 K`.
+fn link_frequencies_hz(mass: &faer::Mat<f64>, stiffness: &faer::Mat<f64>) -> Option<Vec<f64>> {
+    use faer::linalg::solvers::{Eigen, Solve};
+    let k = mass.partial_piv_lu().solve(stiffness);
+    let eigen = Eigen::new_from_real(k.as_ref()).ok()?;
+    let mut f: Vec<f64> = (0..k.nrows())
+        .map(|j| eigen.S()[j].re.max(0.0).sqrt() / std::f64::consts::TAU)
+        .collect();
+    f.sort_by(f64::total_cmp);
+    Some(f)
 }
 
 /// The shape outputs: sliders, platform pose, each link's deflection at `points` points.
@@ -181,11 +267,16 @@ pub fn machine_modes_with_progress(
     let clock = Instant::now();
     progress("eigenvalues");
     let found = modes(&lin).map_err(linear_error)?;
-    let geometry = &scene.machine.geometry;
     let modes = found
         .iter()
         .map(|m| {
-            let shape = ModeShape::from_outputs(&m.shape, points, snapshot.platform.pose, geometry);
+            let shape = ModeShape::from_outputs(
+                &m.shape,
+                &m.added,
+                points,
+                snapshot.platform.pose,
+                &scene.machine,
+            );
             MachineMode {
                 eigenvalue: m.eigenvalue,
                 z: m.z,
@@ -217,6 +308,7 @@ pub fn machine_modes_with_progress(
         },
         dt: lin.dt,
         notes: lin.notes.clone(),
+        truncation: Truncation::of(scene),
     })
 }
 

@@ -102,6 +102,17 @@ pub fn modes_json(modes: &MachineModes, count: usize) -> Value {
         "modes_written": list.len(),
         "dt_s": modes.dt,
         "notes": modes.notes,
+        "truncation": modes.truncation.map(|t| {
+            let highest = list_highest(modes, count);
+            json!({
+                "modes_per_link": t.modes_per_link,
+                "first_missing_family_hz": t.first_missing_hz,
+                "highest_mode_written_hz": highest,
+                "complete": highest < t.first_missing_hz,
+                "modes_per_link_for_the_written_modes": t.recommended(highest),
+                "note": t.note(highest),
+            })
+        }),
         "definitions": {
             "frequency_hz": "|lambda| / (2 pi), the undamped natural frequency of the eigenvalue lambda of A (of a discrete-time model, dt_s > 0: lambda = ln(z) / dt for its pole z, principal branch, so frequencies above the Nyquist frequency 1 / (2 dt) fold below it)",
             "damping_ratio": "-Re(lambda) / |lambda| (MATLAB's damp)",
@@ -116,6 +127,16 @@ pub fn modes_json(modes: &MachineModes, count: usize) -> Value {
         "xi": modes.xi,
         "modes": list,
     })
+}
+
+/// The highest frequency of the lowest `count` modes (Hz).
+fn list_highest(modes: &MachineModes, count: usize) -> f64 {
+    modes
+        .modes
+        .iter()
+        .take(count)
+        .map(|m| m.frequency_hz)
+        .fold(0.0, f64::max)
 }
 
 /// `modes.csv`: one row per mode (the lowest `count`): its frequency, damping ratio,
