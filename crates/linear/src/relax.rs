@@ -138,6 +138,7 @@ pub(crate) fn relax_chords(
     for q in 0..added {
         for r in 0..added {
             forces[(nz + q, nz + r)] = -cc.stiffness[(q, r)];
+            forces[(nz + q, total + nz + r)] = -cc.damping[(q, r)];
         }
         for (col, point) in points.iter().enumerate() {
             if let Some((link, xi)) = *point {

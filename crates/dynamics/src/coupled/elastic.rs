@@ -211,11 +211,22 @@ impl CoupledSystem {
                 }
             }
         }
+        // The scene's modal damping ratio of the links' highest bending mode, for each added
+        // coordinate in its own motion.
+        let zeta = self.damping.ratios.last().copied().unwrap_or(0.0);
+        let full_damping = Mat::from_fn(added, added, |i, j| {
+            if i == j {
+                2.0 * zeta * (full_stiffness[(i, i)] * full_mass[(i, i)]).max(0.0).sqrt()
+            } else {
+                0.0
+            }
+        });
         Ok(Some(ChordCompliance {
             mass,
             coupling: full_coupling,
             deviation_mass: full_mass,
             stiffness: full_stiffness,
+            damping: full_damping,
             joint_normal,
         }))
     }

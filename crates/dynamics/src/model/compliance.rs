@@ -41,6 +41,10 @@ pub struct ChordCompliance {
     pub deviation_mass: Mat<f64>,
     /// `K_d = G^T diag(EA_i / l_i) G` (`3 x 3`; N/m, N, N m).
     pub stiffness: Mat<f64>,
+    /// Damping of the added coordinates (the same size as the stiffness): each damped in its
+    /// own motion at the scene's modal damping ratio of the links' highest bending mode,
+    /// `c_qq = 2 zeta sqrt(k_qq m_qq)` (zero without damping).
+    pub damping: Mat<f64>,
     /// For each link, `dC_i/dp^T n_i`: the generalized force on the deviation of a unit
     /// force at the platform joint along the link's chord normal. A transverse force at
     /// `xi` along the link contributes `xi` times it (the linear interpolation of the
