@@ -108,7 +108,7 @@ pub fn modes_json(modes: &MachineModes, count: usize) -> Value {
                 "modes_per_link": t.modes_per_link,
                 "first_missing_family_hz": t.first_missing_hz,
                 "highest_mode_written_hz": highest,
-                "complete": highest < t.first_missing_hz,
+                "complete": t.complete(highest),
                 "modes_per_link_for_the_written_modes": t.recommended(highest),
                 "note": t.note(highest),
             })
