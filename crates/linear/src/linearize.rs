@@ -658,9 +658,9 @@ pub fn linearize_with_settings(
             format!(
                 "discrete time at the law's period T = {} s (zero-order hold; the command of \
                  a sample acts from that sample on): poles z, frequencies from s = ln(z) / T, \
-                 those above the Nyquist frequency {:.6} Hz fold below it",
+                 those above the Nyquist frequency {} Hz fold below it",
                 period,
-                0.5 / period
+                (0.5 / period * 1e6).round() / 1e6
             ),
         );
     }

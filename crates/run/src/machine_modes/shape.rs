@@ -142,12 +142,12 @@ impl ModeShape {
     pub(crate) fn kind(&self, machine: &Machine) -> String {
         let (sliders, platform, links) = self.amplitudes();
         let bending = links.iter().fold(0.0_f64, |m, v| m.max(*v));
-        if sliders >= 0.5 * platform.max(bending) && sliders > 0.0 {
-            return "servo".to_string();
-        }
         let (platform_energy, bending_energy) = self.kinetic(machine);
+        let slider_energy: f64 = (0..3)
+            .map(|i| machine.slider_mass[i] * self.sliders[i] * self.sliders[i])
+            .sum();
         let axial: f64 = self.axial.iter().sum();
-        if axial > platform_energy.max(bending_energy) {
+        if axial > platform_energy.max(bending_energy).max(slider_energy) {
             let largest = self.axial.iter().fold(0.0_f64, |m, v| m.max(*v));
             let involved: Vec<String> = (0..3)
                 .filter(|&k| self.axial[k] >= 0.25 * largest)
@@ -158,6 +158,9 @@ impl ModeShape {
                 if involved.len() == 1 { "" } else { "s" },
                 involved.join(", ")
             );
+        }
+        if sliders >= 0.5 * platform.max(bending) && sliders > 0.0 {
+            return "servo".to_string();
         }
         if platform_energy > bending_energy {
             return "platform".to_string();
