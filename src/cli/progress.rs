@@ -15,6 +15,9 @@ struct State {
     done: bool,
 }
 
+/// Where the lines go.
+type Sink = Box<dyn Fn(String) + Send>;
+
 /// Reports the progress of one command's work (see the module documentation).
 pub struct Progress {
     shared: Arc<(Mutex<State>, Condvar)>,
@@ -27,15 +30,30 @@ const QUIET_START: Duration = Duration::from_secs(1);
 const REPEAT: Duration = Duration::from_secs(2);
 
 impl Progress {
-    /// Starts watching for the command `name` (`"modes"`, `"frf"`); `quiet` prints nothing.
+    /// Starts watching for the command `name` (`"modes"`, `"frf"`), lines on standard
+    /// error after a second; `quiet` prints nothing.
     pub fn start(name: &str, quiet: bool) -> Self {
+        if quiet {
+            return Self {
+                shared: Arc::new((Mutex::new(State::default()), Condvar::new())),
+                watcher: None,
+            };
+        }
+        Self::start_with(name, QUIET_START, Box::new(|line| eprintln!("{line}")))
+    }
+
+    /// Starts watching, the first line after `quiet_start`, each line given to `sink`.
+    pub fn start_with(name: &str, quiet_start: Duration, sink: Sink) -> Self {
         let shared = Arc::new((Mutex::new(State::default()), Condvar::new()));
-        let watcher = (!quiet).then(|| {
+        let watcher = {
             let shared = Arc::clone(&shared);
             let name = name.to_string();
-            std::thread::spawn(move || watch(&name, &shared))
-        });
-        Self { shared, watcher }
+            std::thread::spawn(move || watch(&name, &shared, quiet_start, &sink))
+        };
+        Self {
+            shared,
+            watcher: Some(watcher),
+        }
     }
 
     /// The work entered `stage` (with the share done, when known).
@@ -65,7 +83,7 @@ impl Drop for Progress {
 }
 
 /// The watcher's loop: wakes every quarter second until the work is done.
-fn watch(name: &str, shared: &(Mutex<State>, Condvar)) {
+fn watch(name: &str, shared: &(Mutex<State>, Condvar), quiet_start: Duration, sink: &Sink) {
     let (lock, wake) = shared;
     let start = Instant::now();
     let mut printed: Option<(String, Instant)> = None;
@@ -81,7 +99,7 @@ fn watch(name: &str, shared: &(Mutex<State>, Condvar)) {
             return;
         }
         let elapsed = start.elapsed();
-        if elapsed < QUIET_START || state.stage.is_empty() {
+        if elapsed < quiet_start || state.stage.is_empty() {
             continue;
         }
         let due = match &printed {
@@ -93,12 +111,49 @@ fn watch(name: &str, shared: &(Mutex<State>, Condvar)) {
                 .share
                 .map(|s| format!(" {:.0} %", 100.0 * s))
                 .unwrap_or_default();
-            eprintln!(
+            sink(format!(
                 "{name}: {}{share} ({:.1} s so far)",
                 state.stage,
                 elapsed.as_secs_f64()
-            );
+            ));
             printed = Some((state.stage.clone(), Instant::now()));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::mpsc;
+
+    /// Issue 34, item 4: a stage that lasts is reported while it runs (here without the
+    /// first second's silence), with its share; nothing is reported during the silence.
+    #[test]
+    fn a_long_stage_is_reported_while_it_runs() {
+        let (send, receive) = mpsc::channel();
+        let sink = Mutex::new(send);
+        let progress = Progress::start_with(
+            "frf",
+            Duration::ZERO,
+            Box::new(move |line| {
+                let _ = sink.lock().map(|s| s.send(line));
+            }),
+        );
+        progress.update("responses", Some(0.37));
+        let line = receive.recv_timeout(Duration::from_secs(600)).unwrap();
+        assert!(line.starts_with("frf: responses 37 % ("), "{line}");
+        drop(progress);
+        let (send, receive) = mpsc::channel();
+        let sink = Mutex::new(send);
+        let quiet = Progress::start_with(
+            "modes",
+            Duration::from_secs(3600),
+            Box::new(move |line| {
+                let _ = sink.lock().map(|s| s.send(line));
+            }),
+        );
+        quiet.update("eigenvalues", None);
+        drop(quiet);
+        assert!(receive.try_recv().is_err());
     }
 }
