@@ -21,6 +21,24 @@ pub struct Actuation {
     pub actuators: [Arc<dyn Actuator>; 3],
 }
 
+/// The sampled laws of a model with the slider law `actuated` (if any) and a vibration law
+/// of period `patch_period` (0 for none or a continuous one), at `t`.
+pub(crate) fn sampled_laws(
+    actuated: Option<&Actuated>,
+    patch_period: f64,
+    t: f64,
+) -> crate::SampledLaws {
+    let slider_period = actuated.map_or(0.0, Actuated::period);
+    crate::SampledLaws {
+        slider_period,
+        patch_period,
+        slider_states: match actuated {
+            Some(a) if slider_period > 0.0 => a.held_states(t),
+            _ => Vec::new(),
+        },
+    }
+}
+
 /// The force commands of the three sliders and what their actuators did with them.
 pub(crate) type Commands = ([f64; 3], [ActuatorOutput; 3]);
 

@@ -103,37 +103,8 @@ pub fn operating_point(scene: &Scene, at: OperatingPoint) -> Result<AtOperatingP
 
 /// The scene's model integrated from its start to `t`.
 fn along_motion(scene: &Scene, t: f64) -> Result<AtOperatingPoint, RunError> {
-    let (t0, t1) = (
-        scene.output_times[0],
-        scene.output_times[scene.output_times.len() - 1],
-    );
-    if !(t.is_finite() && t >= t0 && t <= t1) {
-        return Err(RunError::Scene(ScenarioError::Input {
-            location: None,
-            key: "time".into(),
-            message: format!("t = {t:?} s is outside the scene's time span [{t0:?}, {t1:?}] s"),
-        }));
-    }
-    let mut model = scene.build_model()?;
-    check_size(scene, model.as_ref())?;
-    if t <= t0 {
-        let state = model.initial_state();
-        return Ok(AtOperatingPoint { model, t, state });
-    }
-    let mut span = scene.clone();
-    span.output_times = vec![t0, t];
-    span.stop_times.retain(|s| *s < t);
-    let integration = integrate_model(
-        &span,
-        scene_integrator(scene).as_ref(),
-        model.as_mut(),
-        &mut |_| {},
-    );
-    if let Some(failure) = integration.failure {
-        return Err(failure);
-    }
-    let solution = integration.solution;
-    let state = solution.y(solution.len() - 1).to_vec();
+    let (model, mut states) = integrate_to(scene, &[t], "time")?;
+    let state = states.pop().unwrap_or_default();
     Ok(AtOperatingPoint { model, t, state })
 }
 
@@ -148,6 +119,11 @@ pub type MotionStates = (Box<dyn SceneModel>, Vec<Vec<f64>>);
 /// A KED scene, a time outside the span or not increasing, or a run that fails before the
 /// last time (with its time).
 pub fn along_motion_states(scene: &Scene, times: &[f64]) -> Result<MotionStates, RunError> {
+    integrate_to(scene, times, "times")
+}
+
+/// [`along_motion_states`] with a bad time refused at `key`.
+fn integrate_to(scene: &Scene, times: &[f64], key: &str) -> Result<MotionStates, RunError> {
     if scene.coupling == CouplingModel::Ked {
         operating_point(scene, OperatingPoint::Time(scene.output_times[0]))?;
     }
@@ -158,7 +134,7 @@ pub fn along_motion_states(scene: &Scene, times: &[f64]) -> Result<MotionStates,
     let bad = |message: String| {
         RunError::Scene(ScenarioError::Input {
             location: None,
-            key: "times".into(),
+            key: key.into(),
             message,
         })
     };

@@ -720,15 +720,11 @@ impl NonlinearSystem {
 
     /// The sampled laws at `t` (see [`crate::SceneModel::sampled_laws`]).
     pub fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
-        let slider_period = self.actuated.as_ref().map_or(0.0, Actuated::period);
-        crate::SampledLaws {
-            slider_period,
-            patch_period: self.patches.as_ref().map_or(0.0, |(law, _)| law.period()),
-            slider_states: match &self.actuated {
-                Some(a) if slider_period > 0.0 => a.held_states(t),
-                _ => Vec::new(),
-            },
-        }
+        crate::actuation::sampled_laws(
+            self.actuated.as_ref(),
+            self.patches.as_ref().map_or(0.0, |(law, _)| law.period()),
+            t,
+        )
     }
 
     /// What the sampled laws command at a sample at `(t, y)` (see
