@@ -454,3 +454,49 @@ fn a_failed_identification_keeps_the_responses_and_exits_one() {
     let json = read_json(&out.path().join("frf.json"));
     assert!(json["identified"]["failed"].as_str().is_some());
 }
+
+/// Issue 35, item 1: a sampled law's frequency response is that of the discrete-time model
+/// of its loop, `H(z)` at `z = exp(i w T)`, up to the Nyquist frequency: at 1 Hz slider 1
+/// yields `1 / kp` to its own force (on main the held command made it a free mass, 3.4e-2
+/// m/N at 1 Hz); the default grid stops at the Nyquist frequency and a grid beyond it is
+/// refused.
+#[test]
+fn a_sampled_law_responds_as_its_discrete_loop_up_to_nyquist() {
+    let out = tempfile::tempdir().unwrap();
+    let scene = out.path().join("sampled.toml");
+    let text = std::fs::read_to_string(config("servo_f20.toml"))
+        .unwrap()
+        .replace("period = 0 ", "period = 0.001 ");
+    std::fs::write(&scene, text).unwrap();
+    let run = |extra: &[&str], dir: &str| {
+        flexprr()
+            .arg("frf")
+            .arg(&scene)
+            .args(["--input", "slider_force:1", "--output", "slider:1"])
+            .args(extra)
+            .arg("--out")
+            .arg(out.path().join(dir))
+            .output()
+            .unwrap()
+    };
+    let o = run(&["--from", "1", "--to", "2", "--points", "2"], "low");
+    assert!(o.status.success(), "{}", stderr_of(&o));
+    let (_, rows) = read_csv(&out.path().join("low").join("frf.csv"));
+    let compliance = rows[0][1];
+    println!("|H| at 1 Hz: {compliance:.6e} m/N (1/kp = 5e-6)");
+    assert!((compliance / 5e-6 - 1.0).abs() < 1e-3, "{compliance}");
+    let json = read_json(&out.path().join("low").join("frf.json"));
+    assert_eq!(json["dt_s"], 1e-3);
+    let o = run(&[], "default");
+    assert!(o.status.success(), "{}", stderr_of(&o));
+    let (_, rows) = read_csv(&out.path().join("default").join("frf.csv"));
+    let top = rows.last().unwrap()[0];
+    assert!(top <= 500.0 && top > 400.0, "{top}");
+    let o = run(&["--to", "600"], "beyond");
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr_of(&o);
+    assert!(
+        err.contains("--to") && err.contains("Nyquist frequency 500 Hz"),
+        "{err}"
+    );
+}

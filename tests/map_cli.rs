@@ -113,3 +113,51 @@ fn a_map_refuses_shards_and_resume() {
         assert!(!out.exists());
     }
 }
+
+/// Issue 34, item 6: a map whose poses are all type-II singular is refused as singular,
+/// not as out of reach (on main: "none of the poses is within reach").
+#[test]
+fn a_map_of_singular_poses_says_singular() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("singular.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "base = {:?}\n[map]\nx = {{ start = -0.01, end = 0.01, count = 3 }}\ny = {{ start = -0.01, end = 0.01, count = 3 }}\nphi_deg = 0.0\n",
+            config("servo_f20.toml").display().to_string()
+        ),
+    )
+    .unwrap();
+    let o = flexprr()
+        .args(["study", study.to_str().unwrap(), "--out"])
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("9 are singular") && err.contains("type-II") && err.contains("0 out of reach"),
+        "{err}"
+    );
+    assert!(!err.contains("is within reach"), "{err}");
+    // An orientation of many turns is refused at its key.
+    std::fs::write(
+        &study,
+        format!(
+            "base = {:?}\n[map]\nx = {{ start = -0.01, end = 0.01, count = 3 }}\ny = {{ start = -0.01, end = 0.01, count = 3 }}\nphi_deg = 1e6\n",
+            config("servo_f20.toml").display().to_string()
+        ),
+    )
+    .unwrap();
+    let o = flexprr()
+        .args(["study", study.to_str().unwrap(), "--out"])
+        .arg(dir.path().join("out2"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("map.phi_deg") && err.contains("more than two turns"),
+        "{err}"
+    );
+}

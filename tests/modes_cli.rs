@@ -128,8 +128,8 @@ fn json_is_the_modes_sorted_with_matlab_damp_definitions() {
     let list = value["modes"].as_array().unwrap();
     assert_eq!(
         list.len(),
-        15,
-        "9 bending, 3 servo and 3 platform modes (state of 30)"
+        24,
+        "9 bending, 3 servo, 3 platform and 9 axial link modes (state of 48)"
     );
     let mut last = 0.0;
     for m in list {
@@ -436,4 +436,234 @@ fn a_nonlinear_variant_of_the_coupled_scene_is_analysed_whatever_it_requests() {
         );
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 34, item 6: an orientation of many turns is refused at `--pose` with its
+/// equivalent within a turn (on main `--pose 0,0,1e6` reported a collapse, exit 1).
+#[test]
+fn an_orientation_of_many_turns_is_refused_at_the_pose() {
+    let scene = config("servo_f20.toml");
+    refused(
+        &modes(&[scene.to_str().unwrap(), "--pose", "0,0,1e6"]),
+        &["--pose 0,0,1e6", "more than two turns", "280 deg"],
+    );
+    // Within two turns the pose is the same as its equivalent within one.
+    let one = frequencies(&json(&modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.05,0,45",
+        "--json",
+    ])));
+    let turned = frequencies(&json(&modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.05,0,-315",
+        "--json",
+    ])));
+    for (a, b) in one.iter().zip(&turned) {
+        assert!((a.0 - b.0).abs() < 1e-6 * a.0, "{a:?} {b:?}");
+    }
+}
+
+/// Issue 34, item 4: a model whose dense linear analysis would exceed the memory bound is
+/// refused before anything is built, at the key that sets its size, with the estimate (on
+/// main, 512 elements built a state of 9,216 and aborted under 2.5 GB).
+#[test]
+fn a_model_too_large_for_a_dense_analysis_is_refused_with_its_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("fine.toml");
+    let text = std::fs::read_to_string(config("nonlinear_f30.toml"))
+        .unwrap()
+        .lines()
+        .map(|l| {
+            if l.trim_start().starts_with("elements") {
+                "elements = 512".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&scene, text).unwrap();
+    let o = modes(&[scene.to_str().unwrap()]);
+    refused(
+        &o,
+        &[
+            "fine.toml:",
+            "model.elements",
+            "state of 9216",
+            "GB of memory",
+            "docs/linear.md",
+        ],
+    );
+}
+
+/// The servo-motor scene at rest, closed form: each slider of mass `m = m_s + J g^2` (its
+/// own and the rotor's reflected) on the PD law's spring `kp` and damper `kd` plus the
+/// motor's viscous friction `b g^2 eta` reflected to the slider, `omega = sqrt(kp / m)`,
+/// `zeta = (kd + b g^2 eta) / (2 sqrt(kp m))`. Issue 35, item 2: the Coulomb friction's
+/// smoothed slope at zero speed (about 1e5 N s/m) is left out by default and the output
+/// says so; on main it made three overdamped modes at 0.28 Hz.
+#[test]
+fn coulomb_friction_at_rest_is_left_out_and_said() {
+    let scene = config("servo_motor_f2.toml");
+    let o = modes(&[scene.to_str().unwrap(), "--count", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("note: Coulomb friction left out at sliders 1, 2 and 3"),
+        "{table}"
+    );
+    let found = frequencies(&json(&modes(&[scene.to_str().unwrap(), "--json"])));
+    let (kp, kd, ms, j, lead, b, eta) = (2e5, 2000.0, 0.5, 1.6e-5, 0.01, 1e-4, 0.9);
+    let g = 2.0 * PI / lead;
+    let m = ms + j * g * g;
+    let (f, zeta) = (
+        (kp / m).sqrt() / (2.0 * PI),
+        (kd + b * g * g * eta) / (2.0 * (kp * m).sqrt()),
+    );
+    println!(
+        "closed form {f:.3} Hz, zeta {zeta:.4}; found {:?}",
+        &found[..3]
+    );
+    // The links and the platform add a little mass and coupling to each slider.
+    for (fk, zk) in &found[..3] {
+        assert!((fk / f - 1.0).abs() < 0.02, "{fk} Hz against {f} Hz");
+        assert!((zk - zeta).abs() < 0.02, "zeta {zk} against {zeta}");
+    }
+    // Kept on request: the smoothing's stiff damper at rest.
+    let smoothed = frequencies(&json(&modes(&[
+        scene.to_str().unwrap(),
+        "--coulomb",
+        "smoothed",
+        "--json",
+    ])));
+    assert!(
+        smoothed[0].0 < 1.0 && (smoothed[0].1 - 1.0).abs() < 1e-6,
+        "{smoothed:?}"
+    );
+}
+
+/// Issue 35, item 2: an actuator saturated at the operating point is reported, and its
+/// loop is open in the model: a motor whose peak torque is far below what the motion needs
+/// saturates along it, and the servo modes held by `kp` are gone (the sliders are free).
+#[test]
+fn a_saturated_actuator_at_the_operating_point_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("weak.toml");
+    let text = std::fs::read_to_string(config("servo_motor_f2.toml"))
+        .unwrap()
+        .replace("peak_torque = 3.5 ", "peak_torque = 0.02 ")
+        .replace("continuous_torque = 1.2 ", "continuous_torque = 0.01 ");
+    std::fs::write(&scene, text).unwrap();
+    let o = modes(&[scene.to_str().unwrap(), "--time", "0.1", "--count", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("slider 1's actuator is saturated at the operating point")
+            && table.contains("its loop is open in this model"),
+        "{table}"
+    );
+    let found = frequencies(&json(&modes(&[
+        scene.to_str().unwrap(),
+        "--time",
+        "0.1",
+        "--json",
+    ])));
+    // Without kp the sliders have no spring: nothing is left near the 27 Hz servo modes.
+    assert!(
+        found.iter().all(|(f, _)| *f < 5.0 || *f > 100.0),
+        "{found:?}"
+    );
+}
+
+/// Issue 35, item 1: a sampled law's modes are the poles z of the discrete-time model of
+/// its loop (s = ln z / T), and the output says so; without the law's period they were
+/// the plant's, undamped (116 Hz at zeta 0 under a header saying the law holds the
+/// sliders).
+#[test]
+fn a_sampled_law_gives_the_poles_of_its_discrete_loop() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("sampled.toml");
+    let text = std::fs::read_to_string(config("servo_f20.toml"))
+        .unwrap()
+        .replace("period = 0 ", "period = 0.0002 ");
+    std::fs::write(&scene, text).unwrap();
+    let o = modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.1,0,45",
+        "--count",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("discrete time at the law's period T = 0.0002 s"),
+        "{table}"
+    );
+    let sampled = json(&modes(&[
+        scene.to_str().unwrap(),
+        "--pose",
+        "-0.1,0,45",
+        "--json",
+    ]));
+    let continuous = frequencies(&json(&modes(&[
+        config("servo_f20.toml").to_str().unwrap(),
+        "--pose",
+        "-0.1,0,45",
+        "--json",
+    ])));
+    // At 5 kHz the loop is nearly the continuous one: its servo modes within a few percent
+    // and damped as much; each mode has its pole z.
+    let found = frequencies(&sampled);
+    for k in 0..3 {
+        assert!(
+            (found[k].0 / continuous[k].0 - 1.0).abs() < 0.05,
+            "{:?} {:?}",
+            found[k],
+            continuous[k]
+        );
+        assert!((found[k].1 - continuous[k].1).abs() < 0.05);
+        let z = &sampled["modes"][k]["z"];
+        let (re, im) = (z[0].as_f64().unwrap(), z[1].as_f64().unwrap());
+        let s = (re.hypot(im).ln() / 2e-4).hypot(im.atan2(re) / 2e-4);
+        assert!((s / (2.0 * PI) / found[k].0 - 1.0).abs() < 1e-9);
+    }
+}
+
+/// Issue 35, item 3: `flexprr modes` says when the listed modes reach the first bending
+/// family the basis leaves out (the 4th of 3 sine modes per link, 16 f_1 = 1862 Hz; the
+/// machine's is at 1840-1874 Hz) and how many modes per link bring every family in; not
+/// when the listed modes stay below it.
+#[test]
+fn modes_say_where_the_basis_leaves_families_out() {
+    let scene = config("coupled_f20.toml");
+    let o = modes(&[scene.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains(
+            "the basis has 3 bending modes per link: the families from about 1862 Hz (the 4th)"
+        ) && table.contains("links.modes = 7"),
+        "{table}"
+    );
+    let o = modes(&[scene.to_str().unwrap(), "--count", "9"]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("families from about"));
+    let dir = tempfile::tempdir().unwrap();
+    let o = modes(&[
+        scene.to_str().unwrap(),
+        "--out",
+        dir.path().join("m").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("m").join("modes.json")).unwrap(),
+    )
+    .unwrap();
+    let t = &json["truncation"];
+    assert_eq!(t["modes_per_link"], 3);
+    assert_eq!(t["complete"], false);
+    let first = t["first_missing_family_hz"].as_f64().unwrap();
+    assert!((first / (16.0 * 116.3914) - 1.0).abs() < 1e-4, "{first}");
 }

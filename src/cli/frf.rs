@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use flexprr_kinematics::Pose;
 use flexprr_linear::{Input, Output};
 use flexprr_run::OutputDir;
-use flexprr_run::frf::{FrfRequest, Grid, frequency_responses, write_frf};
+use flexprr_run::frf::{FrfRequest, Grid, frequency_responses_with_progress, write_frf};
 use flexprr_run::frf_plan::{FrfPlan, read_frequencies};
 use flexprr_run::linear::OperatingPoint;
 use flexprr_run::output_dir::FRF;
@@ -38,13 +38,21 @@ pub struct FrfArgs {
     /// The state of the scene's motion at this time (s).
     #[arg(long, value_name = "T_S")]
     pub time: Option<f64>,
-    /// An input (repeatable): slider_force:I or point_force:LINK@XI (a hammer on the link).
+    /// An input (repeatable): slider_force:I, point_force:LINK@XI (a hammer on the link),
+    /// reference:I, reference_rate:I (the slider law's setpoint) or patch_voltage:P
+    /// (docs/linear.md, "Channels").
     #[arg(long = "input", value_name = "IN")]
     pub inputs: Vec<String>,
-    /// An output (repeatable): slider:I, platform:x|y|phi, deflection:LINK@XI,
-    /// slope:LINK@XI or acceleration:LINK@XI.
+    /// An output (repeatable): slider:I, slider_velocity:I, slider_error:I,
+    /// slider_error_rate:I, motor_torque:I, slider_command:I, platform:x|y|phi,
+    /// platform_velocity:x|y|phi, deflection:LINK@XI, slope:LINK@XI, acceleration:LINK@XI or
+    /// patch_sensor:P.
     #[arg(long = "output", value_name = "OUT")]
     pub outputs: Vec<String>,
+    /// How the actuators' Coulomb friction enters: left out (held at its value at the
+    /// operating point, the default) or with its smoothed slope.
+    #[arg(long, value_enum, default_value_t = CoulombArg::LeftOut)]
+    pub coulomb: CoulombArg,
     /// Lowest frequency (Hz; default 1).
     #[arg(long, value_name = "HZ")]
     pub from: Option<f64>,
@@ -80,6 +88,28 @@ pub struct FrfArgs {
     pub rigid_chords: bool,
 }
 
+/// `--coulomb`: how the actuators' Coulomb friction enters the linear model.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum CoulombArg {
+    /// Held at its value at the operating point (the default: at rest the smoothed law's
+    /// slope is the smoothing's, not a damper).
+    #[default]
+    LeftOut,
+    /// Its smoothed slope kept (the model as it is integrated).
+    Smoothed,
+}
+
+/// The linearisation settings of `--coulomb`.
+pub fn settings(coulomb: CoulombArg) -> flexprr_linear::Settings {
+    flexprr_linear::Settings {
+        coulomb: match coulomb {
+            CoulombArg::LeftOut => flexprr_linear::Coulomb::LeftOut,
+            CoulombArg::Smoothed => flexprr_linear::Coulomb::Smoothed,
+        },
+        ..flexprr_linear::Settings::default()
+    }
+}
+
 /// `X,Y,PHI_DEG` as a pose (m, m, rad).
 ///
 /// # Errors
@@ -92,6 +122,8 @@ pub fn parse_pose(text: &str) -> Result<Pose, Failure> {
         .map_err(|_| bad_pose(text))?;
     match values.as_slice() {
         [x, y, phi] if values.iter().all(|v| v.is_finite()) => {
+            flexprr_run::linear::check_orientation_deg(*phi)
+                .map_err(|m| Failure::bad_input(format!("--pose {text}: {m}")))?;
             Ok(Pose::new(*x, *y, phi.to_radians()))
         }
         _ => Err(bad_pose(text)),
@@ -136,7 +168,7 @@ pub fn operating_point(
 /// The channel's own one-line message.
 pub fn channels<T>(names: &[String]) -> Result<Vec<T>, Failure>
 where
-    T: std::str::FromStr<Err = flexprr_linear::LinearError>,
+    T: std::str::FromStr<Err = flexprr_linear::ChannelError>,
 {
     names
         .iter()
@@ -229,6 +261,7 @@ pub fn run(args: FrfArgs) -> Result<(), Failure> {
         outputs,
         grid: grid(&args, plan)?,
         identify: args.identify.or(plan.map(|p| p.identify)).unwrap_or(0),
+        settings: settings(args.coulomb),
     };
     let out = args.out.clone().unwrap_or_else(|| match plan {
         Some(p) => PathBuf::from("out").join(&p.name),
@@ -241,7 +274,12 @@ pub fn run(args: FrfArgs) -> Result<(), Failure> {
     let target = OutputDir::check(&out, FRF, args.force, &inputs_read, &[])
         .map_err(|e| failure(e.into()))?;
     target.check_writable().map_err(|e| failure(e.into()))?;
-    let frf = frequency_responses(&scene, &request).map_err(|e| {
+    let progress = super::progress::Progress::start("frf", false);
+    let frf = frequency_responses_with_progress(&scene, &request, &mut |stage, share| {
+        progress.update(stage, (stage == "responses").then_some(share));
+    });
+    drop(progress);
+    let frf = frf.map_err(|e| {
         located_failure(
             e,
             args.scene.as_deref(),
@@ -325,6 +363,9 @@ fn report(
         rounded(top),
         out.display()
     );
+    for note in &frf.lin.notes {
+        println!("  note: {note}");
+    }
     // Repeated modes (the three identical links) once, with their multiplicity.
     let mut grouped: Vec<(f64, usize)> = Vec::new();
     for m in frf.modes.iter().filter(|m| m.frequency_hz <= top) {

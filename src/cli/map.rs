@@ -14,7 +14,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::Failure;
 
 /// Progress of a map: a bar on a terminal; off a terminal one line each time another tenth
-/// of the poses is done; nothing when `quiet`.
+/// of the poses is done (and the first after a second when a tenth takes longer); nothing
+/// when `quiet`.
 struct MapView {
     bar: Option<ProgressBar>,
     lines: bool,
@@ -61,8 +62,10 @@ impl MapView {
                 .last_tenth
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
-            if *last < tenth {
-                *last = tenth;
+            // Every tenth, and once a second has passed with less than a tenth done.
+            let slow = *last == 0 && self.start.elapsed().as_secs_f64() >= 1.0;
+            if *last < tenth || (slow && p.done < p.total) {
+                *last = tenth.max(usize::from(slow));
                 eprintln!(
                     "{}: {}/{} poses ({} %), {marked}, {:.1} s",
                     self.name,

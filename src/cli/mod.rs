@@ -6,6 +6,7 @@ pub mod frf;
 pub mod kinematics;
 pub mod map;
 pub mod modes;
+pub mod progress;
 pub mod run;
 pub mod statespace;
 pub mod study;

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use flexprr_kinematics::Pose;
 use flexprr_run::linear::OperatingPoint;
 use flexprr_run::machine_modes::{
-    MODES_PRODUCTS, MachineModes, SHAPE_POINTS, machine_modes, modes_csv, modes_json,
+    MODES_PRODUCTS, MachineModes, SHAPE_POINTS, machine_modes_with_progress, modes_csv, modes_json,
     modes_summary_json, modes_svg, start_pose,
 };
 use flexprr_run::{OutputDir, RunError};
@@ -54,6 +54,10 @@ pub struct ModesArgs {
     /// How many of the lowest modes to report (default 12); `modes.svg` draws up to six.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub count: Option<String>,
+    /// How the actuators' Coulomb friction enters: left out (held at its value at the
+    /// operating point, the default) or with its smoothed slope.
+    #[arg(long, value_enum, default_value_t = super::frf::CoulombArg::LeftOut)]
+    pub coulomb: super::frf::CoulombArg,
 }
 
 /// `X,Y,PHI_DEG` as a pose (m, m, rad).
@@ -70,6 +74,8 @@ fn parse_pose(text: &str) -> Result<Pose, Failure> {
         .map_err(|_| bad())?;
     match values.as_slice() {
         [x, y, phi] if values.iter().all(|v| v.is_finite()) => {
+            flexprr_run::linear::check_orientation_deg(*phi)
+                .map_err(|m| Failure::bad_input(format!("--pose {text}: {m}")))?;
             Ok(Pose::new(*x, *y, phi.to_radians()))
         }
         _ => Err(bad()),
@@ -169,11 +175,28 @@ pub fn run(args: ModesArgs) -> Result<(), Failure> {
         }
         None => None,
     };
-    let modes = machine_modes(&scene, at, SHAPE_POINTS).map_err(|e| failure(e, &args))?;
+    let progress = super::progress::Progress::start("modes", false);
+    let modes = machine_modes_with_progress(
+        &scene,
+        at,
+        SHAPE_POINTS,
+        &super::frf::settings(args.coulomb),
+        &mut |stage| progress.update(stage, None),
+    );
+    drop(progress);
+    let modes = modes.map_err(|e| failure(e, &args))?;
     if let Some(target) = &target {
         write_files(&scene, &modes, count, target)?;
     }
     if args.json {
+        for note in modes
+            .notes
+            .iter()
+            .cloned()
+            .chain(truncation_note(&modes, count))
+        {
+            eprintln!("note: {note}");
+        }
         let value = modes_summary_json(&modes, count);
         let text = serde_json::to_string_pretty(&value).unwrap_or_else(|_| value.to_string());
         write_stdout(&(text + "\n"))?;
@@ -246,6 +269,18 @@ fn where_text(modes: &MachineModes) -> String {
     }
 }
 
+/// The basis' truncation, when the listed modes reach the first bending family it leaves
+/// out.
+fn truncation_note(modes: &MachineModes, count: usize) -> Option<String> {
+    let highest = modes
+        .modes
+        .iter()
+        .take(count)
+        .map(|m| m.frequency_hz)
+        .fold(0.0, f64::max);
+    modes.truncation.and_then(|t| t.note(highest))
+}
+
 /// The table `flexprr modes` prints without `--json`.
 fn table(modes: &MachineModes, count: usize, out: Option<&Path>) -> String {
     use std::fmt::Write as _;
@@ -260,6 +295,12 @@ fn table(modes: &MachineModes, count: usize, out: Option<&Path>) -> String {
     );
     if modes.chords.starts_with("elastic") {
         let _ = writeln!(s, "chords {}", modes.chords);
+    }
+    for note in &modes.notes {
+        let _ = writeln!(s, "note: {note}");
+    }
+    if let Some(note) = truncation_note(modes, count) {
+        let _ = writeln!(s, "note: {note}");
     }
     let _ = writeln!(
         s,

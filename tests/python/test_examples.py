@@ -83,3 +83,19 @@ def test_servo_tuning_beats_a_gain_grid_under_the_torque_limit(root):
     sliders = result.summary["control"]["sliders"]
     assert max(s["peak_torque_N_m"] for s in sliders) == pytest.approx(tune.peak_torque(result), rel=1e-12)
     assert np.mean([s["rms_error_m"] for s in sliders]) == pytest.approx(tune.rms_error(result), rel=1e-12)
+
+
+def test_lqr_servo_designs_a_stable_sampled_loop_with_margins(root):
+    """The LQR example (issue 35, item 8): the gains designed on the rigid sliders with
+    python-control give, on flexprr's discrete-time model of the flexible machine, a stable
+    loop whose setpoint step follows the design's to 0.1 of the step and whose loop at
+    slider 1 has a phase margin above 45 deg and a sensitivity peak below 2."""
+    pytest.importorskip("control")
+    mod = load_example(root, "lqr_servo")
+    out = mod.main(5e-4)
+    assert out["machine"].dt == pytest.approx(5e-4)
+    assert out["largest_pole"] < 1.0
+    assert out["step_difference"] < 0.1
+    m = out["margins"]
+    assert m.phase_margin_deg > 45 and m.sensitivity_peak < 2 and m.gain_margin > 2
+    assert out["rms_error_m"] < 2e-4

@@ -93,6 +93,28 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
         let _ = (force, velocity);
         None
     }
+    /// As [`Actuator::apply`], with the actuator's non-smooth friction (Coulomb friction,
+    /// whose smoothed slope at rest is an artefact of the smoothing, not a damper) evaluated
+    /// at the velocity `friction_velocity` instead of `velocity`: a linearisation holds it
+    /// at its value at the operating point (docs/linear.md, "Friction"). Actuators without
+    /// such a term: `apply` itself (the default).
+    fn apply_with_friction_at(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: f64,
+    ) -> ActuatorOutput {
+        let _ = friction_velocity;
+        self.apply(command, velocity)
+    }
+    /// Whether at the slider velocity `velocity` (m/s) the actuator's friction is within its
+    /// non-smooth range (Coulomb friction near zero speed, where a smoothed model's slope is
+    /// far steeper than any physical damping): what a linearisation reports when it leaves
+    /// that friction out. False without such a term (the default).
+    fn friction_is_non_smooth_at(&self, velocity: f64) -> bool {
+        let _ = velocity;
+        false
+    }
 }
 
 /// `kind = "force"`: the command is the force.
@@ -232,17 +254,35 @@ impl MotorBallScrew {
 
 impl Actuator for MotorBallScrew {
     fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput {
+        self.apply_with_friction_at(command, velocity, velocity)
+    }
+    /// The viscous friction at `velocity`, the Coulomb friction at `friction_velocity`.
+    fn apply_with_friction_at(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: f64,
+    ) -> ActuatorOutput {
         let g = self.ratio();
         let omega = g * velocity;
         let wanted = command / (g * self.efficiency);
         let peak = self.ratings.peak_torque;
         let torque = wanted.clamp(-peak, peak);
+        let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
+        let friction = self.viscous_friction * omega
+            + self.coulomb_friction * (g * friction_velocity / smoothing).tanh();
         ActuatorOutput {
-            force: g * self.efficiency * (torque - self.friction_torque(omega)),
+            force: g * self.efficiency * (torque - friction),
             torque: Some(torque),
             motor_speed: Some(velocity / self.lead),
             saturated: wanted.abs() > peak,
         }
+    }
+    /// Within four smoothing speeds of rest (`|rho'| / p < 4 omega_s`), where
+    /// `tanh(omega / omega_s)` is still 0.1 % or more short of the full Coulomb torque and
+    /// its slope `tau_C / omega_s` is the smoothing's, not the machine's.
+    fn friction_is_non_smooth_at(&self, velocity: f64) -> bool {
+        self.coulomb_friction > 0.0 && (velocity / self.lead).abs() < 4.0 * self.coulomb_smoothing
     }
     fn name(&self) -> &'static str {
         "motor_ballscrew"

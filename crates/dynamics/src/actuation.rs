@@ -21,6 +21,24 @@ pub struct Actuation {
     pub actuators: [Arc<dyn Actuator>; 3],
 }
 
+/// The sampled laws of a model with the slider law `actuated` (if any) and a vibration law
+/// of period `patch_period` (0 for none or a continuous one), at `t`.
+pub(crate) fn sampled_laws(
+    actuated: Option<&Actuated>,
+    patch_period: f64,
+    t: f64,
+) -> crate::SampledLaws {
+    let slider_period = actuated.map_or(0.0, Actuated::period);
+    crate::SampledLaws {
+        slider_period,
+        patch_period,
+        slider_states: match actuated {
+            Some(a) if slider_period > 0.0 => a.held_states(t),
+            _ => Vec::new(),
+        },
+    }
+}
+
 /// The force commands of the three sliders and what their actuators did with them.
 pub(crate) type Commands = ([f64; 3], [ActuatorOutput; 3]);
 
@@ -43,6 +61,21 @@ pub(crate) struct Actuated {
     hold: Hold<Sample>,
     /// Scratch for the law's state rates (continuous law: written into `dy`).
     rates: Vec<f64>,
+    /// What a linear analysis changes in the loop (none in a run).
+    overrides: LoopOverrides,
+}
+
+/// The changes a linear analysis makes to the slider loops ([`crate::ExternalLoads`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct LoopOverrides {
+    /// Added to the commanded positions the law sees (m).
+    reference: [f64; 3],
+    /// Added to the commanded velocities the law sees (m/s).
+    reference_rate: [f64; 3],
+    /// Force commands that replace the law's (N).
+    command: [Option<f64>; 3],
+    /// Velocities at which the actuators' Coulomb friction is evaluated (m/s).
+    friction_velocity: Option<[f64; 3]>,
 }
 
 /// The commanded sliders at `t` (the closed-form inverse kinematics of the trajectory) and
@@ -94,7 +127,42 @@ impl Actuated {
             slider_mass,
             hold: Hold::new(start, spec_period),
             rates,
+            overrides: LoopOverrides::default(),
         }
+    }
+
+    /// Takes the loop changes of `loads` (references, opened loops, friction held).
+    pub(crate) fn set_overrides(&mut self, loads: &crate::ExternalLoads) {
+        self.overrides = LoopOverrides {
+            reference: loads.reference,
+            reference_rate: loads.reference_rate,
+            command: loads.slider_command,
+            friction_velocity: loads.friction_velocity,
+        };
+    }
+
+    /// The law's command and state rates as at a sample at `input` with the law's states
+    /// `states` (a sampled law's discretisation: what it would hold from now).
+    pub(crate) fn law_sample(
+        &self,
+        input: &ControlInput<'_>,
+        states: &[f64],
+    ) -> ([f64; 3], Vec<f64>) {
+        let mut command = [0.0; 3];
+        let mut rates = vec![0.0; states.len()];
+        self.spec
+            .controller
+            .command(input, states, &mut command, &mut rates);
+        (command, rates)
+    }
+
+    /// The states of a sampled law held at `t` (those of its last sample at or before `t`;
+    /// the initial states before the first).
+    pub(crate) fn held_states(&self, t: f64) -> Vec<f64> {
+        self.hold.held(t).map_or_else(
+            || self.spec.controller.initial_states(),
+            |s| s.states.clone(),
+        )
     }
 
     /// Sample period (s), 0 for a continuous law.
@@ -124,9 +192,14 @@ impl Actuated {
         reference: &Reference,
         measured: [SliderState; 3],
     ) -> ControlInput<'a> {
+        let mut commanded = reference.sliders;
+        for (i, slider) in commanded.iter_mut().enumerate() {
+            slider.position += self.overrides.reference[i];
+            slider.velocity += self.overrides.reference_rate[i];
+        }
         ControlInput {
             t,
-            reference: reference.sliders,
+            reference: commanded,
             measured,
             feedforward: reference.feedforward,
             force_limit: std::array::from_fn(|i| self.spec.actuators[i].force_limit()),
@@ -209,7 +282,24 @@ impl Actuated {
         let reference = Reference::of(machine, self, rigid, t)?;
         let input = self.input(t, &reference, measured);
         let command = self.command(&input, states, rates);
-        Ok((command, self.apply(&command, measured.map(|m| m.velocity))))
+        let applied = std::array::from_fn(|i| self.overrides.command[i].unwrap_or(command[i]));
+        Ok((command, self.apply(&applied, measured.map(|m| m.velocity))))
+    }
+
+    /// The control input of a sample at `t` for the commanded state `rigid` and the
+    /// measured sliders (the law's view of the machine).
+    ///
+    /// # Errors
+    /// A singular rigid inverse dynamics of the commanded motion (the feedforward).
+    pub(crate) fn sample_input<L: AsRef<LegKinematics>>(
+        &self,
+        machine: &Machine,
+        rigid: &MachineState<L>,
+        t: f64,
+        measured: [SliderState; 3],
+    ) -> Result<ControlInput<'static>, DynamicsError> {
+        let reference = Reference::of(machine, self, rigid, t)?;
+        Ok(self.input(t, &reference, measured))
     }
 
     /// Takes a sampled law's sample when `t` is one of its sample times (see
@@ -241,6 +331,9 @@ impl Actuated {
 
     /// The actuator outputs for the force commands at the slider velocities.
     pub(crate) fn apply(&self, command: &[f64; 3], velocity: [f64; 3]) -> [ActuatorOutput; 3] {
-        std::array::from_fn(|i| self.spec.actuators[i].apply(command[i], velocity[i]))
+        let friction = self.overrides.friction_velocity.unwrap_or(velocity);
+        std::array::from_fn(|i| {
+            self.spec.actuators[i].apply_with_friction_at(command[i], velocity[i], friction[i])
+        })
     }
 }

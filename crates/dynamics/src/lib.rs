@@ -14,6 +14,7 @@
 
 mod actuation;
 mod axial;
+pub mod channel;
 mod column;
 mod coupled;
 mod error;
@@ -45,9 +46,9 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{
-    ActuatorState, ChordCompliance, ExternalLoads, MachineSnapshot, ModelCounters, ModelEnergies,
-    NONLINEAR_ADVICE_FRACTION, PointForce, SceneModel, SliderMotion, force_table,
-    platform_deviation_table,
+    AXIAL_MODES, ActuatorState, ChordCompliance, ExternalLoads, LawSample, MachineSnapshot,
+    ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION, PointForce, SampledLaws, SceneModel,
+    SliderMotion, force_table, platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
 pub use patches::{Patch, PatchControl, PatchState, modal_velocity_law};

@@ -115,6 +115,10 @@ pub(crate) struct PatchLaw {
     pub(crate) rates: Vec<f64>,
     commands: Vec<f64>,
     hold: Hold<Vec<f64>>,
+    /// Voltages added to the patches' (a linear model's inputs; empty in a run).
+    extra: Vec<f64>,
+    /// Voltage commands that replace the law's (its loop opened by a linear analysis).
+    open: Option<Vec<f64>>,
 }
 
 impl PatchLaw {
@@ -134,7 +138,32 @@ impl PatchLaw {
             rates: vec![0.0; count],
             commands: vec![0.0; count],
             hold,
+            extra: Vec::new(),
+            open: None,
         })
+    }
+
+    /// Takes the patch inputs and the opened loop of `loads`.
+    pub(crate) fn set_overrides(&mut self, loads: &crate::ExternalLoads) {
+        self.extra.clone_from(&loads.patch_voltage);
+        self.open.clone_from(&loads.patch_command);
+    }
+
+    /// The law's sample period (s; 0 for a continuous law).
+    pub(crate) fn period(&self) -> f64 {
+        self.hold.period()
+    }
+
+    /// The law's voltage commands from the current sensors, as at a sample.
+    pub(crate) fn law_voltages(&self, t: f64) -> Vec<f64> {
+        let input = VibrationInput {
+            t,
+            sensors: &self.sensors,
+            sensor_rates: &self.rates,
+        };
+        let mut commands = vec![0.0; self.sensors.len()];
+        self.spec.controller.voltages(&input, &mut commands);
+        commands
     }
 
     /// The patches.
@@ -167,8 +196,24 @@ impl PatchLaw {
 
     /// Patch `p`'s voltage after [`PatchLaw::drive`]: the command clipped at its limit.
     pub(crate) fn voltage(&self, p: usize) -> f64 {
-        let limit = self.spec.patches[p].voltage_limit;
-        self.commands[p].clamp(-limit, limit)
+        self.applied(p).clamp(
+            -self.spec.patches[p].voltage_limit,
+            self.spec.patches[p].voltage_limit,
+        )
+    }
+
+    /// Patch `p`'s voltage before its limit: the law's command (or the one that replaces
+    /// it) plus an input voltage.
+    fn applied(&self, p: usize) -> f64 {
+        let command = self
+            .open
+            .as_ref()
+            .and_then(|o| o.get(p).copied())
+            .unwrap_or(self.commands[p]);
+        match self.extra.get(p) {
+            Some(extra) => command + extra,
+            None => command,
+        }
     }
 
     /// A sample of a sampled law at `t` from the current sensors, when `t` is one of its
@@ -202,7 +247,7 @@ impl PatchLaw {
                     sensor_rate: self.rates[p],
                     command,
                     voltage,
-                    saturated: command.abs() > patch.voltage_limit,
+                    saturated: self.applied(p).abs() > patch.voltage_limit,
                     power: patch.actuator_constant / patch.sensor_constant
                         * voltage
                         * self.rates[p],
@@ -310,6 +355,22 @@ impl PatchLoop {
                 acceleration[off + j] += voltage * f;
             }
         }
+    }
+
+    /// The law.
+    pub(crate) fn law(&self) -> &PatchLaw {
+        &self.law
+    }
+
+    /// The law (with its overrides).
+    pub(crate) fn law_mut(&mut self) -> &mut PatchLaw {
+        &mut self.law
+    }
+
+    /// The law's voltage commands at `(t, eta, eta_dot)` as at a sample.
+    pub(crate) fn law_voltages(&mut self, t: f64, eta: &[f64], eta_dot: &[f64]) -> Vec<f64> {
+        self.sense(eta, eta_dot);
+        self.law.law_voltages(t)
     }
 
     /// A sample of a sampled law when `t` is one of its sample times.

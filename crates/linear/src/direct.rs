@@ -172,23 +172,62 @@ fn solve_shifted(h: &Dense, s: c64, w: &mut [c64], r: &mut [c64], m: usize) -> b
     true
 }
 
+/// Where the resolvent is evaluated at the frequency `f` (Hz): `s = i 2 pi f` in
+/// continuous time, `z = exp(i 2 pi f T)` in discrete time at the period `dt = T`.
+pub(crate) fn evaluation_point(dt: f64, f: f64) -> c64 {
+    let omega = std::f64::consts::TAU * f;
+    if dt > 0.0 {
+        let (sin, cos) = (omega * dt).sin_cos();
+        c64::new(cos, sin)
+    } else {
+        c64::new(0.0, omega)
+    }
+}
+
 /// The response of every output to every input at each frequency of `frequencies_hz`
 /// (`result[f][output][input]`), by Laub's Hessenberg method (module documentation): exact
-/// to round-off whatever the eigenvalues' multiplicity.
+/// to round-off whatever the eigenvalues' multiplicity. A discrete-time model (`dt > 0`) is
+/// evaluated at `z = exp(i omega T)`, up to the Nyquist frequency `1 / 2T`.
 ///
 /// # Errors
-/// A frequency that is not finite, or one at which `i omega I - A` is singular (an
-/// undamped mode exactly there: the response is infinite), or a response that is not
-/// finite.
+/// A frequency that is not finite (or above the Nyquist frequency of a discrete model), or
+/// one at which `s I - A` is singular (an undamped mode exactly there: the response is
+/// infinite), or a response that is not finite.
 pub fn frequency_response_direct(
     lin: &Linearization,
     frequencies_hz: &[f64],
+) -> Result<Vec<Vec<Vec<Complex>>>, LinearError> {
+    frequency_response_with_progress(lin, frequencies_hz, &mut |_| {})
+}
+
+/// [`frequency_response_direct`], calling `progress` with the share done (0 to 1) after
+/// every frequency.
+///
+/// # Errors
+/// As [`frequency_response_direct`].
+pub fn frequency_response_with_progress(
+    lin: &Linearization,
+    frequencies_hz: &[f64],
+    progress: &mut dyn FnMut(f64),
 ) -> Result<Vec<Vec<Vec<Complex>>>, LinearError> {
     if let Some(f) = frequencies_hz.iter().find(|f| !f.is_finite()) {
         return Err(LinearError::Channel(format!(
             "frequency {f} Hz: frequencies must be finite"
         )));
     }
+    if lin.dt > 0.0 {
+        let nyquist = 0.5 / lin.dt;
+        if let Some(f) = frequencies_hz
+            .iter()
+            .find(|f| f.abs() > nyquist * (1.0 + 1e-12))
+        {
+            return Err(LinearError::Channel(format!(
+                "frequency {f} Hz is above the Nyquist frequency {nyquist} Hz of the discrete-time                  model (the law's period {} s): a sampled loop's response repeats beyond it",
+                lin.dt
+            )));
+        }
+    }
+    progress(0.0);
     let n = lin.a.nrows();
     let (p, m) = (lin.c.nrows(), lin.b.ncols());
     // Balanced first (`D^-1 A D`, `D^-1 B`, `C D`, powers of two: exact), as for the
@@ -200,8 +239,10 @@ pub fn frequency_response_direct(
     let mut w = vec![c64::new(0.0, 0.0); n * n];
     let mut x = vec![c64::new(0.0, 0.0); n * m];
     let mut out = Vec::with_capacity(frequencies_hz.len());
-    for &f in frequencies_hz {
-        let s = c64::new(0.0, std::f64::consts::TAU * f);
+    let count = frequencies_hz.len().max(1) as f64;
+    for (done, &f) in frequencies_hz.iter().enumerate() {
+        progress(done as f64 / count);
+        let s = evaluation_point(lin.dt, f);
         for (k, v) in reduced.qtb.data.iter().enumerate() {
             x[k] = c64::new(*v, 0.0);
         }
@@ -231,6 +272,7 @@ pub fn frequency_response_direct(
         }
         out.push(rows);
     }
+    progress(1.0);
     Ok(out)
 }
 
@@ -267,20 +309,8 @@ mod tests {
         let q = Mat::<f64>::from_fn(5, 5, |i, j| {
             f64::from(u8::from(i == j)) - 2.0 * u[i] * u[j] / uu
         });
-        let lin = Linearization {
-            t: 0.0,
-            state: vec![0.0; 5],
-            coordinates: 2,
-            a: &q * &a * &q,
-            inputs: vec![],
-            b: &q * &b,
-            outputs: vec![],
-            c: &c * &q,
-            d: Mat::zeros(2, 1),
-            output_values: vec![0.0; 2],
-            elastic_chords: false,
-            derivatives: crate::Derivatives::Differences,
-        };
+        let lin =
+            Linearization::from_matrices(&q * &a * &q, &q * &b, &c * &q, Mat::zeros(2, 1), 0.0);
         for f in [0.0, 3.0, 9.9, 10.1, 250.0] {
             let h = frequency_response_direct(&lin, &[f]).unwrap();
             let s = c64::new(0.0, std::f64::consts::TAU * f);

@@ -16,4 +16,27 @@ pub enum LinearError {
     /// The eigenvalue problem or a frequency-response solve failed.
     #[error("{0}")]
     Numerics(String),
+    /// The dense linear analysis of this state would exceed the memory bound
+    /// ([`crate::cost`]).
+    #[error(
+        "a dense linear model of this scene has a state of {state}: estimated {memory_gb:.1} GB of \
+         memory and {seconds:.0} s for its modes, above the bound of {limit_gb:.1} GB \
+         (docs/linear.md, \"Cost\"); use fewer elements per link (model.elements) or modes"
+    )]
+    TooLarge {
+        /// The state's length.
+        state: usize,
+        /// Estimated peak memory (GB).
+        memory_gb: f64,
+        /// Estimated time of the eigenvalues (s).
+        seconds: f64,
+        /// The bound (GB).
+        limit_gb: f64,
+    },
+}
+
+impl From<flexprr_dynamics::channel::ChannelError> for LinearError {
+    fn from(e: flexprr_dynamics::channel::ChannelError) -> Self {
+        LinearError::Channel(e.0)
+    }
 }

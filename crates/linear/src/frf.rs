@@ -1,5 +1,5 @@
-//! Frequency responses `H(i omega) = C (i omega I - A)^-1 B + D` through the eigenvalues of
-//! `A`: with `A = V Lambda V^-1`, `H = (C V) (i omega - Lambda)^-1 (V^-1 B) + D`, formed once
+//! Frequency responses `H(i omega) = C (i omega I - A)^-1 B + D` (in discrete time at
+//! `z = exp(i omega T)`) through the eigenvalues of `A`: with `A = V Lambda V^-1`, `H = (C V) (i omega - Lambda)^-1 (V^-1 B) + D`, formed once
 //! and evaluated at each frequency in `O(n)` per input-output pair.
 
 use faer::linalg::solvers::{DenseSolveCore, Eigen};
@@ -112,7 +112,7 @@ pub fn frequency_response(
     Ok(frequencies_hz
         .iter()
         .map(|f| {
-            let s = c64::new(0.0, std::f64::consts::TAU * f);
+            let s = crate::direct::evaluation_point(lin.dt, *f);
             let weights: Vec<c64> = (0..n)
                 .map(|k| c64::new(1.0, 0.0) / (s - values[k]))
                 .collect();

@@ -1,5 +1,7 @@
 //! The linearisation of any scene model about a state: `x' = A x + B u`, `y = C x + D u`
-//! with `x` the deviation of the model's state from the operating point.
+//! with `x` the deviation of the model's state from the operating point, or, when the
+//! model's control law is sampled, the exact discrete-time model `x[k+1] = A x[k] + B u[k]`,
+//! `y[k] = C x[k] + D u[k]` of the sampled loop ([`crate::discrete`]).
 //!
 //! * `A` from the model's mechanical form `M`, `C`, `K` where the model says they are the
 //!   exact derivatives there ([`flexprr_dynamics::SceneModel::exact_mechanical_form`]: the
@@ -7,25 +9,66 @@
 //! * elsewhere `A = df/dy` by central differences with one Richardson extrapolation (error of fourth
 //!   order in the step; exact for the models' quadratic terms, Dahlquist & Bjorck,
 //!   *Numerical Methods in Scientific Computing*, 2008, 3.3.4);
-//! * `B`: the right-hand side is affine in the external loads
-//!   ([`flexprr_dynamics::SceneModel::set_loads`]), so the difference of the right-hand
-//!   sides with a unit load and without is exact;
-//! * `C`: outputs that are functions of the coordinates (slider positions and platform pose
-//!   from the model's snapshot, deflection and slope from the model) by the same differences;
-//!   the acceleration of a link point is `n . dr/dq q''` with `q''` the acceleration rows of
-//!   `A x + B u`, which gives its `C` and `D` rows.
+//! * `B`: central differences of the right-hand side in each input (forces, setpoints,
+//!   patch voltages); exact for the loads, in which the right-hand side is affine
+//!   ([`flexprr_dynamics::SceneModel::set_loads`]);
+//! * `C`: outputs that are functions of the state (slider positions and velocities, the
+//!   platform pose and its rates, tracking errors, deflections, slopes, patch sensors, the
+//!   law's command and the motor torque) by the same differences, and `D` by differences in
+//!   the inputs; the acceleration of a link point is `n . dr/dq q''` with `q''` the
+//!   acceleration rows of `A x + B u`, which gives its `C` and `D` rows.
+//!
+//! Non-smooth terms: the actuators' Coulomb friction is held at its value at the operating
+//! point by default ([`Coulomb::LeftOut`]: the slope of its smoothed form at rest is the
+//! smoothing's, not a damper), and the output says so ([`Linearization::notes`]); a
+//! saturated actuator or patch at the operating point is reported (its loop is open there).
 
 use faer::Mat;
-use flexprr_dynamics::{ExternalLoads, PointForce, SceneModel};
+use flexprr_dynamics::channel::{self, Input, Output};
+use flexprr_dynamics::{ExternalLoads, SceneModel};
 
-use crate::{Axis, Input, LinearError, Output};
+use crate::LinearError;
+use crate::relax::{Relaxation, relax_chords};
+
+/// How the actuators' Coulomb friction enters a linearisation.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Coulomb {
+    /// Held at its value at the operating point (the default): at zero slider speed the
+    /// smoothed `tanh` law's slope `tau_C / omega_s` is an artefact of the smoothing (a
+    /// stiff damper of about 1e5 N s/m for the shipped motor scenes); a real stuck slider
+    /// is neither free nor damped. Away from rest the slope is negligible anyway.
+    #[default]
+    LeftOut,
+    /// Its smoothed slope kept (the model as it is integrated).
+    Smoothed,
+}
+
+/// How a linearisation is made.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Settings {
+    /// How `A` is obtained.
+    pub derivatives: Derivatives,
+    /// The actuators' Coulomb friction.
+    pub coulomb: Coulomb,
+}
+
+/// A name of a state component: for readers and as an identifier (python-control's and
+/// MATLAB's signal names).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StateName {
+    /// What it is (`rate of modal coordinate of link 1, mode 2`).
+    pub name: String,
+    /// An identifier (`eta_1_2_rate`).
+    pub signal: String,
+}
 
 /// A linear model of a scene model about an operating point.
 #[derive(Debug, Clone)]
 pub struct Linearization {
     /// The time of the operating point (s).
     pub t: f64,
-    /// The operating point (the model's state).
+    /// The operating point: the model's state (with the relaxed chords' coordinates, 0), then
+    /// a sampled law's states.
     pub state: Vec<f64>,
     /// Number of generalized coordinates (the state holds them, their rates, then the
     /// control law's states).
@@ -47,56 +90,93 @@ pub struct Linearization {
     /// Whether the model's axially rigid chords were relaxed into the links' axial springs
     /// (a model that offers it, at rest: [`flexprr_dynamics::SceneModel::chord_compliance`]).
     /// Then the coordinates are the model's followed by the platform's deviation `(dx, dy,
-    /// dphi)` from the pose the rigid chords impose, and the state is those coordinates,
-    /// their rates, then the control law's states.
+    /// dphi)` from the pose the rigid chords impose (and the links' axial coordinates), and
+    /// the state is those coordinates, their rates, then the control law's states.
     pub elastic_chords: bool,
     /// How `A` was obtained.
     pub derivatives: Derivatives,
+    /// The sample period of a discrete-time model (s): the period of the model's sampled
+    /// control law; 0 for a continuous-time model.
+    pub dt: f64,
+    /// Number of states of a sampled control law at the end of the state (0 for a
+    /// continuous model, whose law's states are part of the model's state).
+    pub law_states: usize,
+    /// The name of each state component.
+    pub states: Vec<StateName>,
+    /// What the model leaves out or finds at the operating point (Coulomb friction held,
+    /// saturated actuators), one line each.
+    pub notes: Vec<String>,
+    /// Coordinates the relaxation of the chords added (after the model's own).
+    pub(crate) added: usize,
 }
 
-/// The number of coordinates the relaxed chords add (the platform deviation).
-const DEVIATION: usize = 3;
-
 impl Linearization {
-    /// The model's own state component of linear state component `k`, or `None` for a
-    /// coordinate or rate of the platform deviation that relaxed chords add.
-    pub fn model_component(&self, k: usize) -> Option<usize> {
-        if !self.elastic_chords {
-            return Some(k);
+    /// A linear model from its matrices (continuous for `dt = 0`, else discrete at `dt`),
+    /// without channels' names or an operating point: for tests and for models built
+    /// elsewhere. The states are named `x_1 ..`.
+    pub fn from_matrices(a: Mat<f64>, b: Mat<f64>, c: Mat<f64>, d: Mat<f64>, dt: f64) -> Self {
+        let n = a.nrows();
+        let p = c.nrows();
+        Self {
+            t: 0.0,
+            state: vec![0.0; n],
+            coordinates: n / 2,
+            a,
+            inputs: Vec::new(),
+            b,
+            outputs: Vec::new(),
+            c,
+            d,
+            output_values: vec![0.0; p],
+            elastic_chords: false,
+            derivatives: Derivatives::Differences,
+            dt,
+            law_states: 0,
+            states: (0..n)
+                .map(|k| StateName {
+                    name: format!("state {}", k + 1),
+                    signal: format!("x_{}", k + 1),
+                })
+                .collect(),
+            notes: Vec::new(),
+            added: 0,
         }
+    }
+
+    /// Whether the model is in discrete time.
+    pub fn is_discrete(&self) -> bool {
+        self.dt > 0.0
+    }
+
+    /// The model's own state component of linear state component `k`, or `None` for a
+    /// coordinate or rate the relaxed chords add, or a sampled law's state.
+    pub fn model_component(&self, k: usize) -> Option<usize> {
         let total = self.coordinates;
-        let own = total - DEVIATION;
-        if k < own {
+        let own = total - self.added;
+        let model_states = self.a.nrows() - self.law_states;
+        if k >= model_states {
+            None
+        } else if k < own {
             Some(k)
         } else if k < total {
             None
         } else if k < total + own {
-            Some(k - DEVIATION)
+            Some(k - self.added)
         } else if k < 2 * total {
             None
         } else {
-            Some(k - 2 * DEVIATION)
+            Some(k - 2 * self.added)
         }
     }
 
     /// A reader's name of linear state component `k` that the model does not have (the
-    /// platform deviation of relaxed chords), or `None` for the model's own components.
+    /// relaxed chords' coordinates, a sampled law's states), or `None` for the model's own
+    /// components.
     pub fn added_component_name(&self, k: usize) -> Option<String> {
         if self.model_component(k).is_some() {
             return None;
         }
-        let total = self.coordinates;
-        let (index, rate) = if k < total {
-            (k + DEVIATION - total, false)
-        } else {
-            (k + DEVIATION - 2 * total, true)
-        };
-        let axis = ["x", "y", "phi"][index];
-        Some(if rate {
-            format!("rate of the platform deviation {axis} on the elastic chords")
-        } else {
-            format!("platform deviation {axis} on the elastic chords")
-        })
+        self.states.get(k).map(|s| s.name.clone())
     }
 }
 
@@ -112,12 +192,16 @@ fn step(y: f64) -> f64 {
     RELATIVE_STEP * y.abs().max(STEP_FLOOR)
 }
 
+/// A function of the model under loads written into a slice, or the model's failure.
+pub(crate) type LoadsFunction<'a> =
+    dyn FnMut(&mut dyn SceneModel, &ExternalLoads, &mut [f64]) -> Result<(), LinearError> + 'a;
+
 /// A function of the state written into a slice, or the model's failure.
-type StateFunction<'a> = dyn FnMut(&[f64], &mut [f64]) -> Result<(), LinearError> + 'a;
+pub(crate) type StateFunction<'a> = dyn FnMut(&[f64], &mut [f64]) -> Result<(), LinearError> + 'a;
 
 /// `(g(y + h e_j) - g(y - h e_j)) / 2h` extrapolated from `h` and `h / 2`, for every `j` of
 /// `columns`, written column by column by `put(j, derivative)`.
-fn differentiate(
+pub(crate) fn differentiate(
     y: &[f64],
     columns: std::ops::Range<usize>,
     width: usize,
@@ -149,7 +233,12 @@ fn differentiate(
 }
 
 /// The right-hand side of `model` at `(t, y)`, or the model's failure there.
-fn rhs(model: &mut dyn SceneModel, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), LinearError> {
+pub(crate) fn rhs(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    dy: &mut [f64],
+) -> Result<(), LinearError> {
     model.rhs(t, y, dy);
     if let Some(e) = model.take_failure() {
         return Err(LinearError::Model(e));
@@ -163,108 +252,27 @@ fn rhs(model: &mut dyn SceneModel, t: f64, y: &[f64], dy: &mut [f64]) -> Result<
     Ok(())
 }
 
-/// The loads of one unit input.
-fn unit_load(input: &Input) -> ExternalLoads {
-    match *input {
-        Input::SliderForce(i) => {
-            let mut loads = ExternalLoads::default();
-            loads.slider[i] = 1.0;
-            loads
-        }
-        Input::PointForce { link, xi } => ExternalLoads {
-            point: vec![PointForce {
-                link,
-                xi,
-                force: 1.0,
-            }],
-            ..ExternalLoads::default()
-        },
-    }
-}
-
-/// Every output's value at `(t, y)` into `out`: those that are functions of the coordinates
-/// (all but accelerations) as they are, an acceleration as the position of its link point
-/// projected on its fixed normal `normals[k]`. The model's snapshot is taken once.
-fn output_values(
-    model: &mut dyn SceneModel,
-    t: f64,
-    y: &[f64],
-    outputs: &[Output],
-    normals: &[[f64; 2]],
-    out: &mut [f64],
-) -> Result<(), LinearError> {
-    let needs_snapshot = outputs
-        .iter()
-        .any(|o| !matches!(o, Output::Deflection { .. } | Output::Slope { .. }));
-    let snapshot = if needs_snapshot {
-        Some(model.snapshot(t, y)?)
-    } else {
-        None
-    };
-    for (k, output) in outputs.iter().enumerate() {
-        let machine = snapshot.as_ref();
-        out[k] = match (*output, machine) {
-            (Output::SliderPosition(i), Some(s)) => s.sliders[i].position,
-            (Output::Platform(axis), Some(s)) => match axis {
-                Axis::X => s.platform.pose.x,
-                Axis::Y => s.platform.pose.y,
-                Axis::Phi => s.platform.pose.phi,
-            },
-            (Output::Deflection { link, xi }, _) => model.deflection(t, link, xi, y)?,
-            (Output::Slope { link, xi }, _) => model.slope(t, link, xi, y)?,
-            (Output::Acceleration { link, xi }, Some(s)) => {
-                let (b, c) = chord_of(model, s, link);
-                let w = model.deflection(t, link, xi, y)?;
-                let (dx, dy) = (c[0] - b[0], c[1] - b[1]);
-                let length = dx.hypot(dy);
-                let point = [
-                    b[0] + xi * dx - w * dy / length,
-                    b[1] + xi * dy + w * dx / length,
-                ];
-                point[0] * normals[k][0] + point[1] * normals[k][1]
-            }
-            _ => unreachable!("the snapshot is taken for these outputs"),
-        };
-    }
-    Ok(())
-}
-
-/// The chord `B_i`, `C_i` of link `link` in the machine `snapshot`.
-fn chord_of(
-    model: &dyn SceneModel,
-    snapshot: &flexprr_dynamics::MachineSnapshot,
-    link: usize,
-) -> ([f64; 2], [f64; 2]) {
-    let leg = &model.machine().geometry.legs[link];
-    let u = leg.guide.direction.into_inner();
-    let rho = snapshot.sliders[link].position;
-    let b = leg.guide.anchor.coords + rho * u;
-    let pose = snapshot.platform.pose;
-    let (sin, cos) = pose.phi.sin_cos();
-    let a = leg.attachment;
-    let c = [
-        pose.x + cos * a.x - sin * a.y,
-        pose.y + sin * a.x + cos * a.y,
-    ];
-    ([b.x, b.y], c)
-}
-
 /// How `A` was (or is to be) obtained.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Derivatives {
     /// Central differences of the right-hand side with one Richardson extrapolation.
     Differences,
     /// From the model's exact mechanical form (`M`, `C`, `K`;
-    /// [`flexprr_dynamics::SceneModel::exact_mechanical_form`]).
+    /// [`flexprr_dynamics::SceneModel::exact_mechanical_form`]) where it is exact, else by
+    /// differences (the default).
+    #[default]
     Analytic,
 }
 
-/// Linearises `model` about its state `y` at `t` for `inputs` and `outputs`: `A` from the
-/// model's mechanical form where it is exact there, else by differences.
+/// Linearises `model` about its state `y` at `t` for `inputs` and `outputs` with the
+/// default [`Settings`]: `A` from the model's mechanical form where it is exact there, else
+/// by differences; Coulomb friction held; a sampled control law discretised exactly.
 ///
 /// # Errors
-/// The model fails near the operating point (kinematics, a singular pose), an input the
-/// model cannot take (the KED model takes no loads), or a non-finite right-hand side.
+/// The model fails near the operating point (kinematics, a singular pose), an input or
+/// output the model cannot give (a reference without a control law, a patch the scene does
+/// not have), a non-finite right-hand side, a model too large for a dense linear analysis
+/// ([`crate::cost`]).
 pub fn linearize(
     model: &mut dyn SceneModel,
     t: f64,
@@ -272,7 +280,28 @@ pub fn linearize(
     inputs: &[Input],
     outputs: &[Output],
 ) -> Result<Linearization, LinearError> {
-    linearize_with(model, t, y, inputs, outputs, Derivatives::Analytic)
+    linearize_with_settings(model, t, y, inputs, outputs, &Settings::default())
+}
+
+/// [`linearize`] with the derivatives asked for: [`Derivatives::Differences`] everywhere
+/// (the check of the analytic path, and of a model's claim that its form is exact), or
+/// [`Derivatives::Analytic`] where the model's form is exact (what [`linearize`] does).
+///
+/// # Errors
+/// As [`linearize`].
+pub fn linearize_with(
+    model: &mut dyn SceneModel,
+    t: f64,
+    y: &[f64],
+    inputs: &[Input],
+    outputs: &[Output],
+    wanted: Derivatives,
+) -> Result<Linearization, LinearError> {
+    let settings = Settings {
+        derivatives: wanted,
+        ..Settings::default()
+    };
+    linearize_with_settings(model, t, y, inputs, outputs, &settings)
 }
 
 /// `A = [0 I; -M^-1 K  -M^-1 C]` from the model's exact mechanical form into `a`, or
@@ -324,19 +353,96 @@ fn mechanical_a(
     Ok(true)
 }
 
-/// [`linearize`] with the derivatives asked for: [`Derivatives::Differences`] everywhere
-/// (the check of the analytic path, and of a model's claim that its form is exact), or
-/// [`Derivatives::Analytic`] where the model's form is exact (what [`linearize`] does).
+/// An input of the plant as the linearisation applies it: a user's input, or the command
+/// of a sampled law (its loop opened).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum PlantInput {
+    /// One of the linear model's inputs.
+    User(Input),
+    /// The force command of slider `i`, replacing the sampled law's.
+    SliderCommand(usize),
+    /// The voltage command of patch `p`, replacing the sampled vibration law's.
+    PatchCommand(usize),
+}
+
+impl PlantInput {
+    /// The difference step: 1 N for forces (exact: the right-hand side is affine in them),
+    /// 10 um and 0.1 mm/s for setpoints, 10 mV for voltages.
+    fn step(self) -> f64 {
+        match self {
+            PlantInput::User(input) => match input {
+                Input::SliderForce(_) | Input::PointForce { .. } => 1.0,
+                Input::Reference(_) => 1e-5,
+                Input::ReferenceRate(_) => 1e-4,
+                Input::PatchVoltage(_) => 1e-2,
+                Input::ActuatorCommand(_) => 1.0,
+            },
+            PlantInput::SliderCommand(_) => 1.0,
+            PlantInput::PatchCommand(_) => 1e-2,
+        }
+    }
+
+    /// `loads` with this input moved by `value`.
+    fn apply(self, loads: &ExternalLoads, value: f64, patches: usize) -> ExternalLoads {
+        let mut out = loads.clone();
+        match self {
+            PlantInput::User(input) => input.add_to(&mut out, value, patches),
+            PlantInput::SliderCommand(i) => {
+                out.slider_command[i] = Some(loads.slider_command[i].unwrap_or(0.0) + value);
+            }
+            PlantInput::PatchCommand(p) => {
+                if let Some(v) = out.patch_command.as_mut().and_then(|c| c.get_mut(p)) {
+                    *v += value;
+                }
+            }
+        }
+        out
+    }
+
+    /// Where a point force acts (its share on the relaxed chords' coordinates).
+    fn point(self) -> Option<(usize, f64)> {
+        match self {
+            PlantInput::User(Input::PointForce { link, xi }) => Some((link, xi)),
+            _ => None,
+        }
+    }
+}
+
+/// `(g(loads + h) - g(loads - h)) / 2h` for the plant input `input` of `g` evaluated with
+/// the model's loads set.
+pub(crate) fn input_derivative(
+    model: &mut dyn SceneModel,
+    base: &ExternalLoads,
+    input: PlantInput,
+    width: usize,
+    g: &mut LoadsFunction<'_>,
+) -> Result<Vec<f64>, LinearError> {
+    let h = input.step();
+    let patches = model.patch_count();
+    let (mut plus, mut minus) = (vec![0.0; width], vec![0.0; width]);
+    for (value, target) in [(h, &mut plus), (-h, &mut minus)] {
+        let loads = input.apply(base, value, patches);
+        model.set_loads(&loads).map_err(LinearError::Model)?;
+        let outcome = g(model, &loads, target);
+        set_loads(model, base)?;
+        outcome?;
+    }
+    Ok((0..width)
+        .map(|k| (plus[k] - minus[k]) / (2.0 * h))
+        .collect())
+}
+
+/// [`linearize`] with explicit [`Settings`].
 ///
 /// # Errors
 /// As [`linearize`].
-pub fn linearize_with(
+pub fn linearize_with_settings(
     model: &mut dyn SceneModel,
     t: f64,
     y: &[f64],
     inputs: &[Input],
     outputs: &[Output],
-    wanted: Derivatives,
+    settings: &Settings,
 ) -> Result<Linearization, LinearError> {
     let n = model.dim();
     if y.len() != n {
@@ -346,10 +452,101 @@ pub fn linearize_with(
             model.kind()
         )));
     }
+    crate::cost::check(n, outputs.len())?;
+    for input in inputs {
+        channel::check_input(model, input).map_err(|e| LinearError::Channel(e.0))?;
+    }
+    set_loads(model, &ExternalLoads::default())?;
+    for output in outputs {
+        channel::check_output(model, t, y, output).map_err(|e| LinearError::Channel(e.0))?;
+    }
+    let mut notes = Vec::new();
+    let laws = model.sampled_laws(t);
+    let period = crate::discrete::common_period(&laws)?;
+    // The loads that hold the operating point: friction held, sampled loops opened at
+    // their commands there.
+    let mut base = ExternalLoads::default();
+    if model.slider_law() {
+        let snapshot = model.snapshot(t, y)?;
+        let velocity = snapshot.sliders.map(|s| s.velocity);
+        if let Some(actuation) = model.actuation() {
+            let non_smooth: Vec<usize> = (0..3)
+                .filter(|&i| actuation.actuators[i].friction_is_non_smooth_at(velocity[i]))
+                .collect();
+            if settings.coulomb == Coulomb::LeftOut {
+                base.friction_velocity = Some(velocity);
+                if !non_smooth.is_empty() {
+                    notes.push(format!(
+                        "Coulomb friction left out at slider{} {} (at rest its smoothed slope \
+                         is the smoothing's, not a damper); --coulomb smoothed keeps it",
+                        if non_smooth.len() > 1 { "s" } else { "" },
+                        join(&non_smooth)
+                    ));
+                }
+            } else if !non_smooth.is_empty() {
+                notes.push(format!(
+                    "Coulomb friction kept with its smoothed slope at slider{} {} (a stiff \
+                     damper at rest: the smoothing's, not the machine's)",
+                    if non_smooth.len() > 1 { "s" } else { "" },
+                    join(&non_smooth)
+                ));
+            }
+        }
+        if period == 0.0 {
+            if let Some(actuators) = snapshot.actuators {
+                for (i, a) in actuators.iter().enumerate() {
+                    if a.output.saturated {
+                        notes.push(saturation_note(i, a.command, model));
+                    }
+                }
+                // A loop broken at its actuator: the actuator holds the law's command of
+                // the operating point, the input moves it.
+                for input in inputs {
+                    if let Input::ActuatorCommand(i) = *input {
+                        base.slider_command[i] = Some(actuators[i].command);
+                    }
+                }
+            }
+        }
+    }
+    let mut law = None;
+    if period > 0.0 {
+        set_loads(model, &base)?;
+        let sample = model.law_sample(t, y, &laws.slider_states)?;
+        if laws.slider_period > 0.0 {
+            base.slider_command = sample.slider_command.map(Some);
+            if let Some(actuation) = model.actuation() {
+                for i in 0..3 {
+                    let command = sample.slider_command[i];
+                    if actuation.actuators[i].apply(command, 0.0).saturated {
+                        notes.push(saturation_note(i, command, model));
+                    }
+                }
+            }
+        }
+        if laws.patch_period > 0.0 {
+            base.patch_command = Some(sample.patch_command.clone());
+        }
+        law = Some(sample);
+    }
+    if let Ok(patches) = model.patch_states(t, y) {
+        for (p, state) in patches.iter().enumerate() {
+            if state.saturated && period == 0.0 {
+                notes.push(format!(
+                    "patch {} saturated at the operating point (command {:.4} V beyond its \
+                     limit): its loop is open in this model",
+                    p + 1,
+                    state.command
+                ));
+            }
+        }
+    }
+    set_loads(model, &base)?;
     let coordinates = model.modes();
     let mut a = Mat::zeros(n, n);
-    model.set_loads(&ExternalLoads::default()).ok();
-    let analytic = wanted == Derivatives::Analytic && mechanical_a(model, t, y, &mut a)?;
+    let analytic = settings.derivatives == Derivatives::Analytic
+        && base == ExternalLoads::default()
+        && mechanical_a(model, t, y, &mut a)?;
     if !analytic {
         differentiate(
             y,
@@ -363,245 +560,168 @@ pub fn linearize_with(
             },
         )?;
     }
-    let mut f0 = vec![0.0; n];
-    rhs(model, t, y, &mut f0)?;
-    let mut b = Mat::zeros(n, inputs.len());
-    let mut loaded = vec![0.0; n];
-    for (k, input) in inputs.iter().enumerate() {
-        model.set_loads(&unit_load(input))?;
-        let outcome = rhs(model, t, y, &mut loaded);
-        model.set_loads(&ExternalLoads::default())?;
-        outcome?;
-        for i in 0..n {
-            b[(i, k)] = loaded[i] - f0[i];
+    let mut plant_inputs: Vec<PlantInput> = Vec::new();
+    if laws.slider_period > 0.0 {
+        plant_inputs.extend((0..3).map(PlantInput::SliderCommand));
+    }
+    if laws.patch_period > 0.0 {
+        plant_inputs.extend((0..model.patch_count()).map(PlantInput::PatchCommand));
+    }
+    let commands = plant_inputs.len();
+    // The commands of a sampled law that a loop broken at its actuator takes from an input
+    // instead.
+    let opened: Vec<bool> = plant_inputs
+        .iter()
+        .map(|p| match p {
+            PlantInput::SliderCommand(i) => inputs.contains(&Input::ActuatorCommand(*i)),
+            _ => false,
+        })
+        .collect();
+    plant_inputs.extend(inputs.iter().map(|i| PlantInput::User(*i)));
+    let mut b = Mat::zeros(n, plant_inputs.len());
+    for (k, input) in plant_inputs.iter().enumerate() {
+        let column = input_derivative(model, &base, *input, n, &mut |m, _, out| rhs(m, t, y, out))?;
+        for (i, v) in column.into_iter().enumerate() {
+            b[(i, k)] = v;
         }
     }
     let compliance = model.chord_compliance(t, y).map_err(LinearError::Model)?;
-    let (a, b, state, total) = match &compliance {
-        Some(cc) => {
-            let (a, b) = relax_chords(&a, &b, coordinates, cc, inputs)?;
-            let mut state = vec![0.0; n + 2 * DEVIATION];
-            for (k, v) in y.iter().enumerate() {
-                state[relaxed_index(k, coordinates)] = *v;
-            }
-            (a, b, state, coordinates + DEVIATION)
+    let points: Vec<Option<(usize, f64)>> = plant_inputs.iter().map(|i| i.point()).collect();
+    let relaxation = Relaxation::new(compliance.as_ref(), coordinates, n);
+    let (a, b) = match &compliance {
+        Some(cc) => relax_chords(&a, &b, coordinates, cc, &points)?,
+        None => (a, b),
+    };
+    let outputs_of = crate::outputs::plant_outputs(
+        model,
+        t,
+        y,
+        &base,
+        &relaxation,
+        &a,
+        &b,
+        &plant_inputs,
+        commands,
+        outputs,
+        laws.slider_period > 0.0,
+    )?;
+    let mut outputs_of = outputs_of;
+    for (k, open) in opened.iter().enumerate() {
+        if !open {
+            continue;
         }
-        None => (a, b, y.to_vec(), coordinates),
+        // The applied command of a broken loop is an input (its D columns); only the law's
+        // own command stays composed with the law.
+        for (row, output) in outputs.iter().enumerate() {
+            if !matches!(output, Output::SliderCommand(i) if plant_inputs[k] == PlantInput::SliderCommand(*i))
+            {
+                outputs_of.g_u[(row, k)] = 0.0;
+            }
+        }
+    }
+    let mut states = crate::names::state_names(model, &relaxation);
+    let mut state = relaxation.state(y);
+    let (a, b, c, d, law_states) = match law {
+        None => (a, b, outputs_of.c, outputs_of.d, 0),
+        Some(sample) => {
+            let closed = crate::discrete::close_sampled_loop(
+                model,
+                t,
+                y,
+                &base,
+                &relaxation,
+                &laws,
+                &sample,
+                period,
+                &a,
+                &b,
+                commands,
+                &plant_inputs[commands..],
+                &outputs_of,
+                &opened,
+            )?;
+            let z = laws.slider_states.len();
+            state.extend_from_slice(&laws.slider_states);
+            let law_name = model
+                .actuation()
+                .map_or_else(|| "control".to_string(), |a| a.controller.name());
+            states.extend((0..z).map(|k| StateName {
+                name: format!("state {} of the sampled {law_name} law", k + 1),
+                signal: format!("law_{}", k + 1),
+            }));
+            (closed.a, closed.b, closed.c, closed.d, z)
+        }
     };
-    let added = Added {
-        own: coordinates,
-        total,
-        compliance: compliance.as_ref(),
-    };
-    let (c, d, output_values) = output_matrices(model, t, y, &added, &a, &b, outputs)?;
+    if period > 0.0 {
+        notes.insert(
+            0,
+            format!(
+                "discrete time at the law's period T = {} s (zero-order hold; the command of \
+                 a sample acts from that sample on): poles z, frequencies from s = ln(z) / T, \
+                 those above the Nyquist frequency {} Hz fold below it",
+                period,
+                (0.5 / period * 1e6).round() / 1e6
+            ),
+        );
+    }
+    set_loads(model, &ExternalLoads::default())?;
     Ok(Linearization {
         t,
         state,
-        coordinates: total,
+        coordinates: relaxation.total,
         a,
         inputs: inputs.to_vec(),
         b,
         outputs: outputs.to_vec(),
         c,
         d,
-        output_values,
+        output_values: outputs_of.values,
         elastic_chords: compliance.is_some(),
         derivatives: if analytic {
             Derivatives::Analytic
         } else {
             Derivatives::Differences
         },
+        dt: period,
+        law_states,
+        states,
+        notes,
+        added: relaxation.total - relaxation.own,
     })
 }
 
-/// The index in the relaxed state (coordinates, deviation, their rates, the law's states)
-/// of the model's state component `k` (`coordinates` coordinates, their rates, the law's).
-fn relaxed_index(k: usize, coordinates: usize) -> usize {
-    if k < coordinates {
-        k
-    } else if k < 2 * coordinates {
-        k + DEVIATION
-    } else {
-        k + 2 * DEVIATION
-    }
-}
-
-/// `A` and `B` of the model with its chords relaxed ([`flexprr_dynamics::ChordCompliance`]):
-/// the model's generalized forces `F = M (A, B)` on its coordinates' acceleration rows, the
-/// chords' springs and the point loads' share on the deviation, solved with the mass of
-/// the coordinates and the deviation together.
-fn relax_chords(
-    a: &Mat<f64>,
-    b: &Mat<f64>,
-    coordinates: usize,
-    cc: &flexprr_dynamics::ChordCompliance,
-    inputs: &[Input],
-) -> Result<(Mat<f64>, Mat<f64>), LinearError> {
-    use faer::linalg::solvers::Solve;
-    let (n, m, nz) = (a.nrows(), b.ncols(), coordinates);
-    let total = nz + DEVIATION;
-    let (n_new, map) = (n + 2 * DEVIATION, |k| relaxed_index(k, nz));
-    let mut forces = Mat::<f64>::zeros(total, n_new);
-    let mut load_forces = Mat::<f64>::zeros(total, m);
-    for i in 0..nz {
-        for col in 0..n {
-            forces[(i, map(col))] = (0..nz).map(|k| cc.mass[(i, k)] * a[(nz + k, col)]).sum();
-        }
-        for col in 0..m {
-            load_forces[(i, col)] = (0..nz).map(|k| cc.mass[(i, k)] * b[(nz + k, col)]).sum();
-        }
-    }
-    for q in 0..DEVIATION {
-        for r in 0..DEVIATION {
-            forces[(nz + q, nz + r)] = -cc.stiffness[(q, r)];
-        }
-        for (col, input) in inputs.iter().enumerate() {
-            if let Input::PointForce { link, xi } = *input {
-                load_forces[(nz + q, col)] = xi * cc.joint_normal[link][q];
-            }
-        }
-    }
-    let mass = Mat::from_fn(total, total, |i, j| match (i < nz, j < nz) {
-        (true, true) => cc.mass[(i, j)],
-        (true, false) => cc.coupling[(i, j - nz)],
-        (false, true) => cc.coupling[(j, i - nz)],
-        (false, false) => cc.deviation_mass[(i - nz, j - nz)],
-    });
-    let llt = mass.llt(faer::Side::Lower).map_err(|_| {
-        LinearError::Channel(
-            "the mass matrix of the machine with elastic chords is not positive definite".into(),
-        )
-    })?;
-    let accelerations = llt.solve(&forces);
-    let load_accelerations = llt.solve(&load_forces);
-    let mut relaxed = Mat::<f64>::zeros(n_new, n_new);
-    let mut relaxed_b = Mat::<f64>::zeros(n_new, m);
-    for i in 0..total {
-        relaxed[(i, total + i)] = 1.0;
-        for col in 0..n_new {
-            relaxed[(total + i, col)] = accelerations[(i, col)];
-        }
-        for col in 0..m {
-            relaxed_b[(total + i, col)] = load_accelerations[(i, col)];
-        }
-    }
-    for row in 2 * nz..n {
-        for col in 0..n {
-            relaxed[(map(row), map(col))] = a[(row, col)];
-        }
-        for col in 0..m {
-            relaxed_b[(map(row), col)] = b[(row, col)];
-        }
-    }
-    Ok((relaxed, relaxed_b))
-}
-
-/// The coordinates a relaxation added to the model's, for the outputs' gradients.
-struct Added<'a> {
-    /// The model's own coordinates (the first ones).
-    own: usize,
-    /// All coordinates (the model's and the added ones).
-    total: usize,
-    compliance: Option<&'a flexprr_dynamics::ChordCompliance>,
-}
-
-impl Added<'_> {
-    /// The gradient of `output` in the platform deviation (zero without it): the platform
-    /// pose moves with it, and a link point at `xi` moves by `xi` times its joint's motion.
-    fn gradient(&self, output: &Output) -> [f64; DEVIATION] {
-        let Some(cc) = self.compliance else {
-            return [0.0; DEVIATION];
-        };
-        match *output {
-            Output::Platform(axis) => {
-                let mut g = [0.0; DEVIATION];
-                g[match axis {
-                    Axis::X => 0,
-                    Axis::Y => 1,
-                    Axis::Phi => 2,
-                }] = 1.0;
-                g
-            }
-            Output::Acceleration { link, xi } => cc.joint_normal[link].map(|v| xi * v),
-            _ => [0.0; DEVIATION],
-        }
-    }
-}
-
-/// `C`, `D` and the outputs' values.
-type OutputRows = (Mat<f64>, Mat<f64>, Vec<f64>);
-
-/// `C`, `D` and the outputs' values at the operating point.
-fn output_matrices(
+/// Sets `loads` on `model`; a model that takes none (the KED model) is left alone when
+/// they are the default.
+pub(crate) fn set_loads(
     model: &mut dyn SceneModel,
-    t: f64,
-    y: &[f64],
-    added: &Added<'_>,
-    a: &Mat<f64>,
-    b: &Mat<f64>,
-    outputs: &[Output],
-) -> Result<OutputRows, LinearError> {
-    let n = a.ncols();
-    let (p, m) = (outputs.len(), b.ncols());
-    let mut c = Mat::zeros(p, n);
-    let mut d = Mat::zeros(p, m);
-    let mut values = vec![0.0; p];
-    if p == 0 {
-        return Ok((c, d, values));
+    loads: &ExternalLoads,
+) -> Result<(), LinearError> {
+    match model.set_loads(loads) {
+        Err(_) if *loads == ExternalLoads::default() => Ok(()),
+        other => other.map_err(LinearError::Model),
     }
-    let snapshot = model.snapshot(t, y)?;
-    let normals: Vec<[f64; 2]> = outputs
-        .iter()
-        .map(|o| match *o {
-            Output::Acceleration { link, .. } => {
-                let (b, c) = chord_of(model, &snapshot, link);
-                let (dx, dy) = (c[0] - b[0], c[1] - b[1]);
-                let length = dx.hypot(dy);
-                [-dy / length, dx / length]
-            }
-            _ => [0.0; 2],
-        })
-        .collect();
-    output_values(model, t, y, outputs, &normals, &mut values)?;
-    // The gradients of every output in the model's coordinates, one difference per
-    // coordinate for all outputs at once, then those in the added coordinates.
-    let mut gradient = Mat::<f64>::zeros(p, added.total);
-    differentiate(
-        y,
-        0..added.own,
-        p,
-        &mut |probe, out| output_values(model, t, probe, outputs, &normals, out),
-        &mut |j, column| {
-            for (row, v) in column.iter().enumerate() {
-                gradient[(row, j)] = *v;
-            }
-        },
-    )?;
-    if added.compliance.is_some() {
-        for (row, output) in outputs.iter().enumerate() {
-            for (k, g) in added.gradient(output).into_iter().enumerate() {
-                gradient[(row, added.own + k)] = g;
-            }
-        }
+}
+
+/// `1, 2 and 3` (1-based).
+fn join(items: &[usize]) -> String {
+    let words: Vec<String> = items.iter().map(|i| (i + 1).to_string()).collect();
+    match words.len() {
+        0 => String::new(),
+        1 => words[0].clone(),
+        k => format!("{} and {}", words[..k - 1].join(", "), words[k - 1]),
     }
-    for (row, output) in outputs.iter().enumerate() {
-        if let Output::Acceleration { .. } = output {
-            // n . r'' = (d(n . r)/dq) q'' at rest: the acceleration rows of A x + B u.
-            for j in 0..added.total {
-                let g = gradient[(row, j)];
-                for col in 0..n {
-                    c[(row, col)] += g * a[(added.total + j, col)];
-                }
-                for col in 0..m {
-                    d[(row, col)] += g * b[(added.total + j, col)];
-                }
-            }
-            values[row] = 0.0;
-        } else {
-            for j in 0..added.total {
-                c[(row, j)] = gradient[(row, j)];
-            }
-        }
-    }
-    Ok((c, d, values))
+}
+
+/// The note of a saturated actuator.
+fn saturation_note(i: usize, command: f64, model: &dyn SceneModel) -> String {
+    let limit = model
+        .actuation()
+        .map_or(f64::INFINITY, |a| a.actuators[i].force_limit());
+    format!(
+        "slider {}'s actuator is saturated at the operating point (command {:.4e} N, limit \
+         {:.4e} N): its loop is open in this model",
+        i + 1,
+        command,
+        limit
+    )
 }

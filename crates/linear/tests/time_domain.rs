@@ -228,3 +228,123 @@ fn a_servo_mode_decays_at_its_linear_damping_ratio() {
         assert!(dz.abs() < 1e-4, "{dz}");
     }
 }
+
+/// The step response of the discrete-time model of a sampled loop against the time run of
+/// the same model with its law sampled: a 1 N step force on slider 1 (about 5 um of
+/// motion), the coupled machine under a sampled PD law and under a sampled PID law (whose
+/// integral is a state of the law, advanced at each sample), at 1 ms; the slider's position
+/// and the law's tracking error at the sample times.
+#[test]
+fn a_sampled_loop_steps_as_its_discrete_model() {
+    use flexprr_integrators::Integrator;
+    let at = Pose::new(-0.05, 0.02, 40f64.to_radians());
+    let period = 1e-3;
+    for (name, law) in [
+        ("pd", Pid::pd(2.0e5, 400.0, true, period).unwrap()),
+        ("pid", Pid::new(2.0e5, 400.0, 4.0e6, true, period).unwrap()),
+    ] {
+        let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
+        let force: Arc<dyn Actuator> = Arc::new(IdealForce);
+        let actuation = Actuation {
+            controller: Arc::new(law),
+            actuators: [force.clone(), force.clone(), force],
+        };
+        let mut model: Box<dyn SceneModel> = Box::new(
+            CoupledSystem::new(
+                machine,
+                rest(at),
+                ModalDamping::none(),
+                CoupledOptions::full(),
+            )
+            .unwrap()
+            .with_actuation(actuation, 0.0)
+            .unwrap(),
+        );
+        let y0 = model.initial_state();
+        let outputs = [Output::SliderPosition(0), Output::SliderError(0)];
+        let lin = linearize(
+            model.as_mut(),
+            0.0,
+            &y0,
+            &[flexprr_linear::Input::SliderForce(0)],
+            &outputs,
+        )
+        .unwrap();
+        assert!((lin.dt - period).abs() < 1e-15, "{}", lin.dt);
+        assert_eq!(lin.law_states, if name == "pid" { 3 } else { 0 });
+        // The discrete step response: x[k+1] = A x[k] + B, y[k] = C x[k] + D.
+        let samples = 60;
+        let n = lin.a.nrows();
+        let mut x = vec![0.0; n];
+        let mut linear = Vec::with_capacity(samples);
+        for _ in 0..samples {
+            linear.push(
+                (0..2)
+                    .map(|o| lin.d[(o, 0)] + (0..n).map(|j| lin.c[(o, j)] * x[j]).sum::<f64>())
+                    .collect::<Vec<_>>(),
+            );
+            x = (0..n)
+                .map(|i| lin.b[(i, 0)] + (0..n).map(|j| lin.a[(i, j)] * x[j]).sum::<f64>())
+                .collect();
+        }
+        // The time run: the same step force from t = 0, the law sampling at its stops.
+        model
+            .set_loads(&ExternalLoads {
+                slider: [1.0, 0.0, 0.0],
+                ..ExternalLoads::default()
+            })
+            .unwrap();
+        let times: Vec<f64> = (0..samples).map(|k| k as f64 * period).collect();
+        let stops = model.stop_times(0.0, times[samples - 1]);
+        let solver = Rk45::new(Options::default().rtol(1e-11).atol(1e-16));
+        let run = solver
+            .solve_observed(model.as_mut(), 0.0, &y0, &times, &stops, &mut ())
+            .unwrap();
+        let mut worst = [0.0f64; 2];
+        let mut peak = [0.0f64; 2];
+        let mut measured = [0.0; 2];
+        for k in 0..samples {
+            flexprr_dynamics::channel::measure(
+                model.as_mut(),
+                times[k],
+                run.y(k),
+                &ExternalLoads::default(),
+                &outputs,
+                &[[0.0; 2]; 2],
+                &mut measured,
+            )
+            .unwrap();
+            let zero = [lin.output_values[0], lin.output_values[1]];
+            for o in 0..2 {
+                let got = measured[o] - zero[o];
+                worst[o] = worst[o].max((got - linear[k][o]).abs());
+                peak[o] = peak[o].max(got.abs());
+            }
+        }
+        println!(
+            "{name}: slider 1 peak {:.3e} m, largest difference {:.2e} ({:.1e} of the peak); error peak {:.3e} m, difference {:.2e}",
+            peak[0],
+            worst[0],
+            worst[0] / peak[0],
+            peak[1],
+            worst[1]
+        );
+        for o in 0..2 {
+            assert!(
+                peak[o] > 1e-6,
+                "{name}: the step moves the slider: {}",
+                peak[o]
+            );
+            assert!(
+                worst[o] < 2e-5 * peak[o],
+                "{name}, output {o}: {} of {}",
+                worst[o],
+                peak[o]
+            );
+        }
+        // Its poles: the servo's well inside the unit circle, the undamped links' on it.
+        for m in modes(&lin).unwrap() {
+            assert!(m.z.unwrap().norm() < 1.0 + 1e-4, "{name}: {m:?}");
+        }
+    }
+}

@@ -38,6 +38,7 @@ fn flexprr_native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(beam::link_frequencies, m)?)?;
     m.add_function(wrap_pyfunction!(study::run_study, m)?)?;
     m.add_function(wrap_pyfunction!(linear::linearize, m)?)?;
+    m.add_function(wrap_pyfunction!(linear::frequency_response, m)?)?;
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add("RunError", py.get_type::<errors::RunError>())?;
     m.add("KinematicsError", py.get_type::<errors::KinematicsError>())?;

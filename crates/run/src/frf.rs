@@ -87,6 +87,8 @@ pub struct FrfRequest {
     pub grid: Grid,
     /// Number of mode shapes to identify from the responses (0: none).
     pub identify: usize,
+    /// How the model is linearised.
+    pub settings: flexprr_linear::Settings,
 }
 
 /// The frequency responses of a scene at an operating point.
@@ -182,6 +184,72 @@ fn about_modes(modes: &[Mode], from: f64, to: f64) -> Vec<f64> {
         }
     }
     out
+}
+
+/// [`resolve_grid`] for a model sampled at the period `dt` (0: continuous): the default
+/// upper end stops at the Nyquist frequency `1 / 2 dt`, and a grid beyond it is refused.
+///
+/// # Errors
+/// As [`resolve_grid`]; a frequency above the Nyquist frequency of a discrete model.
+pub fn resolve_grid_for(
+    grid: &Grid,
+    modes: &[Mode],
+    dt: f64,
+) -> Result<(Vec<f64>, Value), RunError> {
+    if dt <= 0.0 {
+        return resolve_grid(grid, modes);
+    }
+    let nyquist = 0.5 / dt;
+    let capped = match grid {
+        Grid::Spaced {
+            from_hz,
+            to_hz: None,
+            points,
+            log,
+        } => Grid::Spaced {
+            from_hz: *from_hz,
+            to_hz: Some(default_upper_hz(modes).min(nyquist)),
+            points: *points,
+            log: *log || (from_hz.is_none() && points.is_none()),
+        },
+        other => other.clone(),
+    };
+    let defaulted = matches!(
+        grid,
+        Grid::Spaced {
+            from_hz: None,
+            to_hz: None,
+            points: None,
+            ..
+        }
+    );
+    let (f, mut description) = resolve_grid(&capped, modes)?;
+    if let Some(top) = f.iter().copied().find(|f| *f > nyquist * (1.0 + 1e-12)) {
+        let key = if matches!(grid, Grid::Listed { .. }) {
+            "--frequencies"
+        } else {
+            "--to"
+        };
+        return Err(bad(
+            key,
+            format!(
+                "{top} Hz is above the Nyquist frequency {nyquist} Hz of the discrete-time model                  (the control law samples every {dt} s): a sampled loop's response repeats beyond it"
+            ),
+        ));
+    }
+    if defaulted {
+        let mut f = f;
+        f.extend(about_modes(modes, f[0], nyquist));
+        f.retain(|v| *v <= nyquist);
+        f.sort_by(f64::total_cmp);
+        f.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs());
+        description["kind"] = json!("default");
+        description["nyquist_hz"] = json!(nyquist);
+        description["points"] = json!(f.len());
+        return Ok((f, description));
+    }
+    description["nyquist_hz"] = json!(nyquist);
+    Ok((f, description))
 }
 
 /// The grid's frequencies and its description for `frf.json`.
@@ -304,6 +372,19 @@ pub fn check_listed(f: &[f64]) -> Result<(), String> {
 /// allow (bad input); a response that is infinite at a grid frequency (an undamped mode
 /// exactly there).
 pub fn frequency_responses(scene: &Scene, request: &FrfRequest) -> Result<Frf, RunError> {
+    frequency_responses_with_progress(scene, request, &mut |_, _| {})
+}
+
+/// [`frequency_responses`], calling `progress(stage, share)` as it goes: `"linear model"`
+/// (0 at its start), then `"responses"` with the share of the frequencies done.
+///
+/// # Errors
+/// As [`frequency_responses`].
+pub fn frequency_responses_with_progress(
+    scene: &Scene,
+    request: &FrfRequest,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Result<Frf, RunError> {
     if request.inputs.is_empty() || request.outputs.is_empty() {
         return Err(bad(
             if request.inputs.is_empty() {
@@ -322,10 +403,21 @@ pub fn frequency_responses(scene: &Scene, request: &FrfRequest) -> Result<Frf, R
     } else {
         None
     };
-    let lin = linear_model(scene, request.at, &request.inputs, &request.outputs)?;
+    progress("linear model", 0.0);
+    let lin = linear_model(
+        scene,
+        request.at,
+        &request.inputs,
+        &request.outputs,
+        &request.settings,
+    )?;
     let modes = modes(&lin).map_err(numerics)?;
-    let (frequencies_hz, grid) = resolve_grid(&request.grid, &modes)?;
-    let response = frequency_response_direct(&lin, &frequencies_hz).map_err(numerics)?;
+    let (frequencies_hz, grid) = resolve_grid_for(&request.grid, &modes, lin.dt)?;
+    let response =
+        flexprr_linear::frequency_response_with_progress(&lin, &frequencies_hz, &mut |share| {
+            progress("responses", share);
+        })
+        .map_err(numerics)?;
     let identified = layout.map(|xi| {
         modal_test::identify(
             &frequencies_hz,
@@ -352,9 +444,11 @@ pub fn token(channel: &str) -> String {
     channel.replace(':', "_").replace('@', "_xi")
 }
 
-/// A unit as a header token (`m/s^2` -> `m_s2`).
+/// A unit as a header token (`m/s^2` -> `m_s2`, `N m` -> `Nm`).
 fn unit_token(unit: &str) -> String {
-    unit.replace("/s^2", "_s2").replace('/', "_")
+    unit.replace("/s^2", "_s2")
+        .replace('/', "_")
+        .replace(' ', "")
 }
 
 /// The magnitude's unit (`m/N`, `m/s^2/N`) and its header token (`m_N`, `m_s2_N`).
@@ -463,7 +557,13 @@ pub fn frf_json(scene: &Scene, frf: &Frf) -> Value {
             "name": o.to_string(), "unit": o.unit(), "value_at_operating_point": v,
         })).collect::<Vec<_>>(),
         "grid": frf.grid,
-        "method": "H(i w) = C (i w I - A)^-1 B + D, Hessenberg method (Laub 1981); A, B, C, D from flexprr-linear",
+        "dt_s": lin.dt,
+        "notes": lin.notes,
+        "method": if lin.dt > 0.0 {
+            "H(z) = C (z I - A)^-1 B + D at z = exp(i w dt) (the discrete-time model of the sampled loop), Hessenberg method (Laub 1981); A, B, C, D from flexprr-linear"
+        } else {
+            "H(i w) = C (i w I - A)^-1 B + D, Hessenberg method (Laub 1981); A, B, C, D from flexprr-linear"
+        },
         "columns": columns,
         "modes": modes_json(&frf.modes.iter().filter(|m| m.frequency_hz <= top).cloned().collect::<Vec<_>>()),
     });

@@ -257,7 +257,7 @@ fn channels<T>(
     at: &dyn Fn(&str, String) -> ScenarioError,
 ) -> Result<Vec<T>, ScenarioError>
 where
-    T: std::str::FromStr<Err = flexprr_linear::LinearError>,
+    T: std::str::FromStr<Err = flexprr_linear::ChannelError>,
 {
     names
         .iter()

@@ -109,11 +109,8 @@ impl Map {
             }
             Ok(r.values())
         };
-        if let Some(phi) = c.phi_deg.filter(|p| !p.is_finite()) {
-            return Err((
-                "map.phi_deg".into(),
-                format!("expected a finite orientation (deg), got {phi:?}"),
-            ));
+        if let Some(Err(message)) = c.phi_deg.map(flexprr_run::linear::check_orientation_deg) {
+            return Err(("map.phi_deg".into(), message));
         }
         Ok(Self {
             x: axis("x", &c.x)?,

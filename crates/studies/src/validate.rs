@@ -507,29 +507,47 @@ pub(crate) fn check_map(
     }
     let phi = map.phi(&scene);
     let geometry = &scene.machine.geometry;
-    let reachable = |pose: &flexprr_kinematics::Pose| {
-        geometry
-            .inverse_kinematics(&flexprr_kinematics::PlatformMotion::at_rest(*pose))
-            .is_ok()
-    };
-    if !map.poses(phi).iter().any(reachable) {
-        return Err(context.at.input(
-            "map",
-            format!(
-                "none of the {} x {} poses of the grid (x from {} to {} m, y from {} to {} m) \
-                 is within reach at phi = {} deg: {}",
-                map.x.len(),
-                map.y.len(),
-                map.x[0],
-                map.x[map.x.len() - 1],
-                map.y[0],
-                map.y[map.y.len() - 1],
-                phi.to_degrees(),
-                reachable_box(geometry, phi)
-            ),
-        ));
+    let poses = map.poses(phi);
+    let (mut singular, mut example) = (0, None);
+    for pose in &poses {
+        match flexprr_run::machine_modes::rest_pose(&scene, *pose) {
+            Ok(_) => return Ok(()),
+            Err(flexprr_run::machine_modes::RestFrequency::Singular(reason)) => {
+                singular += 1;
+                example.get_or_insert((*pose, reason));
+            }
+            Err(_) => {}
+        }
     }
-    Ok(())
+    let grid = format!(
+        "{} x {} poses of the grid (x from {} to {} m, y from {} to {} m)",
+        map.x.len(),
+        map.y.len(),
+        map.x[0],
+        map.x[map.x.len() - 1],
+        map.y[0],
+        map.y[map.y.len() - 1],
+    );
+    let message = match example {
+        Some((pose, reason)) => format!(
+            "none of the {grid} can be mapped at phi = {} deg: {singular} {} singular, where \
+             the links do not hold the platform (e.g. at ({} m, {} m): {reason}), and {} out of \
+             reach; a map needs poses away from the singularity loci (another orientation \
+             map.phi_deg, or another region): {}",
+            phi.to_degrees(),
+            if singular == 1 { "is" } else { "are" },
+            pose.x,
+            pose.y,
+            poses.len() - singular,
+            reachable_box(geometry, phi)
+        ),
+        None => format!(
+            "none of the {grid} is within reach at phi = {} deg: {}",
+            phi.to_degrees(),
+            reachable_box(geometry, phi)
+        ),
+    };
+    Err(context.at.input("map", message))
 }
 
 /// Where the platform reaches at orientation `phi`, in words: the bounding box of the

@@ -513,7 +513,59 @@ impl CoupledSystem {
             applied.modal = modal;
         }
         self.loads = applied;
+        if let Some(actuated) = self.actuated.as_mut() {
+            actuated.set_overrides(loads);
+        }
+        if let Some(patches) = self.patches.as_mut() {
+            patches.law_mut().set_overrides(loads);
+        }
         Ok(())
+    }
+
+    /// Number of piezoelectric patches.
+    pub fn patch_count(&self) -> usize {
+        self.patches.as_ref().map_or(0, |p| p.law().patches().len())
+    }
+
+    /// The sampled laws at `t` (see [`crate::SceneModel::sampled_laws`]).
+    pub fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
+        crate::actuation::sampled_laws(
+            self.actuated.as_ref(),
+            self.patches.as_ref().map_or(0.0, |p| p.law().period()),
+            t,
+        )
+    }
+
+    /// What the sampled laws command at a sample at `(t, y)` (see
+    /// [`crate::SceneModel::law_sample`]).
+    ///
+    /// # Errors
+    /// A kinematic failure, or a singular rigid inverse dynamics (the feedforward).
+    pub fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<crate::LawSample, DynamicsError> {
+        self.check_state(y)?;
+        let mut sample = crate::LawSample::default();
+        if let Some(actuated) = self.actuated.as_ref().filter(|a| a.period() > 0.0) {
+            let rigid = self
+                .machine
+                .geometry
+                .inverse_kinematics_unchecked(&self.trajectory.motion(t))
+                .map_err(|source| DynamicsError::Kinematics { t, source })?;
+            let input =
+                actuated.sample_input(&self.machine, &rigid, t, self.measured_sliders(y))?;
+            (sample.slider_command, sample.slider_rates) =
+                actuated.law_sample(&input, slider_states);
+        }
+        let (eta, eta_dot) = self.elastic_state(y);
+        let (eta, eta_dot) = (eta.to_vec(), eta_dot.to_vec());
+        if let Some(patches) = self.patches.as_mut().filter(|p| p.law().period() > 0.0) {
+            sample.patch_command = patches.law_voltages(t, &eta, &eta_dot);
+        }
+        Ok(sample)
     }
 
     /// The same model with piezoelectric patches on the links under a vibration control law

@@ -84,6 +84,23 @@ impl SceneModel for CoupledSystem {
     fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
         self.sample_times(t0, t1)
     }
+    fn actuation(&self) -> Option<&crate::Actuation> {
+        CoupledSystem::actuation(self)
+    }
+    fn patch_count(&self) -> usize {
+        CoupledSystem::patch_count(self)
+    }
+    fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
+        CoupledSystem::sampled_laws(self, t)
+    }
+    fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<crate::LawSample, DynamicsError> {
+        CoupledSystem::law_sample(self, t, y, slider_states)
+    }
     /// The modal energies and the kinetic energy of the whole machine: sliders (with the
     /// actuators' reflected inertia), platform, and each link's
     /// `int rhoA |r'|^2 / 2 dx` for `r' = rho' u + x b' n + w' n - w b' e` (the velocity of the

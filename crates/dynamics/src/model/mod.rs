@@ -13,7 +13,7 @@ mod coupled;
 mod ked;
 mod nonlinear;
 
-pub use compliance::ChordCompliance;
+pub use compliance::{AXIAL_MODES, ChordCompliance};
 pub use coupled::NONLINEAR_ADVICE_FRACTION;
 
 use flexprr_integrators::{OdeSystem, Solution};
@@ -98,7 +98,9 @@ pub struct PointForce {
     pub force: f64,
 }
 
-/// External loads on a model: the inputs of its linear models (docs/linear.md).
+/// External loads on a model, and the changes to its control loops, that its linear models
+/// apply (docs/linear.md): the inputs (forces, setpoints, patch voltages) and what a
+/// linearisation holds fixed or opens. The default changes nothing.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ExternalLoads {
     /// Force on each slider along its guide (N); a prescribed or locked slider takes it in
@@ -106,6 +108,50 @@ pub struct ExternalLoads {
     pub slider: [f64; 3],
     /// Transverse point forces on the links.
     pub point: Vec<PointForce>,
+    /// Added to the commanded slider positions the slider control law sees (m).
+    pub reference: [f64; 3],
+    /// Added to the commanded slider velocities the slider control law sees (m/s).
+    pub reference_rate: [f64; 3],
+    /// Added to each patch's actuator voltage before its limit (V), in the scene's patch
+    /// order (shorter: the rest 0).
+    pub patch_voltage: Vec<f64>,
+    /// Force commands that replace the slider control law's (N) for the sliders given: the
+    /// loop opened at that actuator (a sampled law's discretisation, a loop gain). The law
+    /// still runs (its states follow the error) and reports its own command.
+    pub slider_command: [Option<f64>; 3],
+    /// Voltage commands that replace the vibration control law's (V), when given: its loop
+    /// opened.
+    pub patch_command: Option<Vec<f64>>,
+    /// The slider velocities (m/s) at which the actuators' non-smooth friction (Coulomb) is
+    /// evaluated instead of the actual ones: a linearisation holds it at its value at the
+    /// operating point ([`flexprr_control::Actuator::apply_with_friction_at`]).
+    pub friction_velocity: Option<[f64; 3]>,
+}
+
+/// The sampled control laws of a model at an instant (docs/linear.md, "Discrete time").
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SampledLaws {
+    /// Sample period of the slider control law (s); 0 when it is continuous or absent.
+    pub slider_period: f64,
+    /// Sample period of the vibration control law of the patches (s); 0 when it is
+    /// continuous or absent.
+    pub patch_period: f64,
+    /// The states of a sampled slider law held at the instant (empty for a law without
+    /// states or a continuous one, whose states are in the model's state).
+    pub slider_states: Vec<f64>,
+}
+
+/// What the sampled control laws command at a sample ([`SceneModel::law_sample`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LawSample {
+    /// The slider law's force commands (N) (0 without a sampled slider law).
+    pub slider_command: [f64; 3],
+    /// The rates of the slider law's states (advanced by `rate * period` to the next
+    /// sample).
+    pub slider_rates: Vec<f64>,
+    /// The vibration law's voltage commands (V), one per patch (empty without a sampled
+    /// vibration law).
+    pub patch_command: Vec<f64>,
 }
 
 /// Energies of a model's state (J).
@@ -352,6 +398,63 @@ pub trait SceneModel: OdeSystem + Send {
                 .contains(&index)
                 .then(|| (link, index - range.start, rate))
         })
+    }
+    /// The sliders' actuators and control law, when the sliders are driven by them (`None`
+    /// where the sliders are prescribed or locked, the default).
+    fn actuation(&self) -> Option<&crate::Actuation> {
+        None
+    }
+    /// Whether the sliders are driven by actuators under a control law.
+    fn slider_law(&self) -> bool {
+        self.actuation().is_some()
+    }
+    /// Number of piezoelectric patches on the links (0 without, the default).
+    fn patch_count(&self) -> usize {
+        0
+    }
+    /// The model's sampled control laws at `t`: their periods and the slider law's states
+    /// held there (docs/linear.md, "Discrete time"). None by default.
+    fn sampled_laws(&self, t: f64) -> SampledLaws {
+        let _ = t;
+        SampledLaws::default()
+    }
+    /// What the sampled control laws would command at a sample at `(t, y)`, the slider law
+    /// with the states `slider_states`, under the loads set ([`SceneModel::set_loads`]:
+    /// references added): the discretisation of a sampled loop differentiates it.
+    ///
+    /// # Errors
+    /// A model without sampled laws (the default), a kinematic failure, a singular rigid
+    /// inverse dynamics (the feedforward).
+    fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<LawSample, DynamicsError> {
+        let _ = (t, y, slider_states);
+        Err(DynamicsError::Inconsistent(format!(
+            "the {} model has no sampled control law",
+            self.kind()
+        )))
+    }
+    /// A reader's name (`link 1, mode 2`) and an identifier (`eta_1_2`) of generalized
+    /// coordinate `k` (`k < modes()`): by default through [`Self::component_place`], and
+    /// the sliders' positions after the links' coordinates when they are actuated.
+    fn coordinate_label(&self, k: usize) -> (String, String) {
+        match self.component_place(k) {
+            Some((link, mode, _)) => (
+                format!("modal coordinate of link {}, mode {}", link + 1, mode + 1),
+                format!("eta_{}_{}", link + 1, mode + 1),
+            ),
+            None if self.slider_law() && k + 3 >= self.modes() && k < self.modes() => {
+                let i = k + 3 - self.modes();
+                (
+                    format!("position of slider {}", i + 1),
+                    format!("rho_{}", i + 1),
+                )
+            }
+            None => (format!("coordinate {}", k + 1), format!("q_{}", k + 1)),
+        }
     }
     /// A reader's name for state component `component`, for messages: the link, the mode and
     /// whether it is the coordinate `eta` or its rate (see [`Self::component_place`]).

@@ -108,6 +108,53 @@ impl SceneModel for NonlinearSystem {
     fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
         self.sample_times(t0, t1)
     }
+    fn actuation(&self) -> Option<&crate::Actuation> {
+        NonlinearSystem::actuation(self)
+    }
+    fn patch_count(&self) -> usize {
+        NonlinearSystem::patch_count(self)
+    }
+    fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
+        NonlinearSystem::sampled_laws(self, t)
+    }
+    fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<crate::LawSample, DynamicsError> {
+        NonlinearSystem::law_sample(self, t, y, slider_states)
+    }
+    /// The platform's `x`, `y`, `phi`; each link's nodal coordinates (the first node's
+    /// angle, the inner nodes' `x`, `y`, angle, the last node's angle); the sliders.
+    fn coordinate_label(&self, k: usize) -> (String, String) {
+        if k < 3 {
+            let axis = ["x", "y", "phi"][k];
+            return (format!("platform {axis}"), format!("platform_{axis}"));
+        }
+        for link in 0..3 {
+            let range = NonlinearSystem::link_range(self, link);
+            if range.contains(&k) {
+                let j = k - range.start;
+                let last = range.len() - 1;
+                let (node, what) = match j {
+                    0 => (0, "angle"),
+                    j if j == last => (j.div_ceil(3), "angle"),
+                    j => ((j - 1) / 3 + 1, ["x", "y", "angle"][(j - 1) % 3]),
+                };
+                let short = if what == "angle" { "theta" } else { what };
+                return (
+                    format!("link {}, node {node} {what}", link + 1),
+                    format!("{short}_{}_{node}", link + 1),
+                );
+            }
+        }
+        let i = k.saturating_sub(self.coordinates() - 3);
+        (
+            format!("position of slider {}", i + 1),
+            format!("rho_{}", i + 1),
+        )
+    }
     /// The kinetic energy of the nodes and the platform, the strain energy of each link.
     fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
         let out = self.output(t, y)?;

@@ -702,7 +702,63 @@ impl NonlinearSystem {
         }
         self.point_loads = points;
         self.slider_loads = loads.slider;
+        if let Some(actuated) = self.actuated.as_mut() {
+            actuated.set_overrides(loads);
+        }
+        if let Some((law, _)) = self.patches.as_mut() {
+            law.set_overrides(loads);
+        }
         Ok(())
+    }
+
+    /// Number of piezoelectric patches.
+    pub fn patch_count(&self) -> usize {
+        self.patches
+            .as_ref()
+            .map_or(0, |(law, _)| law.patches().len())
+    }
+
+    /// The sampled laws at `t` (see [`crate::SceneModel::sampled_laws`]).
+    pub fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
+        crate::actuation::sampled_laws(
+            self.actuated.as_ref(),
+            self.patches.as_ref().map_or(0.0, |(law, _)| law.period()),
+            t,
+        )
+    }
+
+    /// What the sampled laws command at a sample at `(t, y)` (see
+    /// [`crate::SceneModel::law_sample`]).
+    ///
+    /// # Errors
+    /// A wrong state length, a kinematic failure, or a singular rigid inverse dynamics (the
+    /// feedforward).
+    pub fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<crate::LawSample, DynamicsError> {
+        self.check_state(y)?;
+        let frame = self.frame(t, y)?;
+        let mut sample = crate::LawSample::default();
+        if let Some(actuated) = self.actuated.as_ref().filter(|a| a.period() > 0.0) {
+            let input =
+                actuated.sample_input(&self.machine, &frame.rigid, t, self.measured_sliders(y))?;
+            (sample.slider_command, sample.slider_rates) =
+                actuated.law_sample(&input, slider_states);
+        }
+        if self
+            .patches
+            .as_ref()
+            .is_some_and(|(law, _)| law.period() > 0.0)
+        {
+            self.sense_patches(y, &frame);
+            if let Some((law, _)) = &self.patches {
+                sample.patch_command = law.law_voltages(t);
+            }
+        }
+        Ok(sample)
     }
 
     /// The same model with piezoelectric patches on the links under a vibration control law

@@ -12,7 +12,6 @@ docs/linear.md.
 
 import os as _os
 from concurrent.futures import Executor as _Executor
-from typing import NamedTuple as _NamedTuple
 
 import numpy as _np
 
@@ -32,17 +31,20 @@ from ._flexprr import (
     run_study,
     singularity,
 )
-from ._flexprr import _linearize
+from ._linear import LinearModel, LinearModels, LoopMargins, Modes, SliderLoop, linearize, slider_loop
 from ._flexprr import run_many_threads as _run_many_threads
 
 __all__ = [
     "KinematicsError",
     "LinearModel",
+    "LinearModels",
+    "LoopMargins",
     "Modes",
     "RunError",
     "RunResult",
     "Scene",
     "SceneError",
+    "SliderLoop",
     "StudyError",
     "Table",
     "__version__",
@@ -54,6 +56,7 @@ __all__ = [
     "run_many",
     "run_study",
     "singularity",
+    "slider_loop",
 ]
 
 
@@ -152,103 +155,3 @@ def run_many(scenes, threads=None, return_exceptions=False, progress=None, proce
     return _run_many_threads(scenes, threads=threads, return_exceptions=return_exceptions, progress=progress)
 
 
-class Modes(_NamedTuple):
-    """The modes of a :class:`LinearModel`, sorted by frequency, rigid-body (zero) modes left
-    out: ``frequency_hz = |lambda| / 2 pi`` (the undamped natural frequency) and
-    ``damping_ratio = -Re(lambda) / |lambda|``, as MATLAB's ``damp`` and python-control's
-    ``damp`` report them, and the eigenvalues ``lambda`` (1/s, upper half-plane)."""
-
-    frequency_hz: "_np.ndarray"
-    damping_ratio: "_np.ndarray"
-    eigenvalue: "_np.ndarray"
-
-
-class LinearModel:
-    """A scene's linear model ``x' = A x + B u``, ``y = C x + D u`` about an operating point
-    (:func:`linearize`): ``x`` the model's state less ``x0`` (coordinates, their rates, then
-    the control law's states; ``states`` names them), ``u`` the input forces (N), ``y`` the
-    outputs less ``y0``. ``A``, ``B``, ``C``, ``D`` are float64 arrays that
-    ``scipy.signal.StateSpace(A, B, C, D)`` and ``control.ss(A, B, C, D)`` take as they are.
-    Plain data: pickles.
-    """
-
-    def __init__(self, data):
-        self.A = data["A"]
-        self.B = data["B"]
-        self.C = data["C"]
-        self.D = data["D"]
-        self.x0 = data["x0"]
-        self.y0 = data["y0"]
-        self.inputs = list(data["inputs"])
-        self.outputs = list(data["outputs"])
-        self.states = list(data["states"])
-        self.input_units = list(data["input_units"])
-        self.output_units = list(data["output_units"])
-        self.operating_point = dict(data["operating_point"])
-        self.t = data["t"]
-        self.model = data["model"]
-        self.scene = data["scene"]
-        self.elastic_chords = bool(data["elastic_chords"])
-        self._modes = Modes(
-            _np.asarray(data["frequency_hz"]),
-            _np.asarray(data["damping_ratio"]),
-            _np.asarray(data["eigenvalue_re"]) + 1j * _np.asarray(data["eigenvalue_im"]),
-        )
-
-    def modes(self) -> Modes:
-        """Natural frequencies (Hz), damping ratios and eigenvalues of ``A``, by frequency."""
-        return self._modes
-
-    def frequency_response(self, frequencies_hz):
-        """``H(i w) = C (i w I - A)^-1 B + D`` at each frequency (Hz): a complex array
-        ``[frequency, output, input]``."""
-        f = _np.atleast_1d(_np.asarray(frequencies_hz, dtype=float))
-        n = self.A.shape[0]
-        out = _np.empty((f.size, self.C.shape[0], self.B.shape[1]), dtype=complex)
-        for k, fk in enumerate(f):
-            x = _np.linalg.solve(2j * _np.pi * fk * _np.eye(n) - self.A, self.B)
-            out[k] = self.C @ x + self.D
-        return out
-
-    def __repr__(self):
-        lowest = ", ".join(f"{f:.2f} Hz" for f in self._modes.frequency_hz[:3])
-        return (
-            f"LinearModel({self.scene!r}, {self.model} model, {self.A.shape[0]} states, "
-            f"inputs {self.inputs}, outputs {self.outputs}, lowest modes {lowest})"
-        )
-
-
-def linearize(scene, pose=None, t=None, inputs=(), outputs=(), rigid_chords=False):
-    """The linear model of ``scene`` (a :class:`Scene` or the path of a scene file) about an
-    operating point, as :class:`LinearModel`.
-
-    - ``pose=(x_m, y_m, phi_deg)``: the platform at rest there, sliders locked, or held by the
-      scene's ``[control]`` law (its ``kp``/``kd`` act along the guides);
-    - ``t=...`` (s): the state of the scene's motion at that time (its axial loads,
-      centrifugal and gyroscopic terms, its controller);
-    - neither: at rest where the scene's motion starts.
-
-    At rest the coupled model's chords are the links' axial springs ``EA/l`` with the
-    platform free on them (its deviation is three more coordinates; ``elastic_chords`` is
-    then true); ``rigid_chords=True`` keeps them rigid, the paper's pinned-pinned
-    idealisation (docs/linear.md, "Elastic chords").
-
-    ``inputs`` and ``outputs`` are the names of ``flexprr frf``/``flexprr statespace``:
-    ``slider_force:I``, ``point_force:LINK@XI``; ``slider:I``, ``platform:x|y|phi``,
-    ``deflection:LINK@XI``, ``slope:LINK@XI``, ``acceleration:LINK@XI``. Raises
-    :class:`SceneError` for a bad name, pose or scene (a KED scene has no whole-machine
-    model) and :class:`RunError` when the model fails (along the motion: a failed run).
-    The work runs in Rust with the GIL released.
-    """
-    if isinstance(inputs, str) or isinstance(outputs, str):
-        raise TypeError("inputs and outputs are lists of names, e.g. inputs=['slider_force:1']")
-    return LinearModel(
-        _linearize(
-            scene,
-            pose=pose,
-            t=t,
-            inputs=list(inputs),
-            outputs=list(outputs),
-            rigid_chords=bool(rigid_chords),
-        )
-    )

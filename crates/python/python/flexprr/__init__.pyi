@@ -2,7 +2,7 @@
 
 from concurrent.futures import Executor
 from os import PathLike
-from typing import Any, Callable, Dict, Iterable, List, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, NamedTuple, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -123,34 +123,65 @@ def run_study(
 ) -> Dict[str, Any]: ...
 
 class Modes(NamedTuple):
-    """Modes of a LinearModel: frequencies (Hz), damping ratios, eigenvalues (1/s)."""
+    """Modes of a LinearModel: frequencies (Hz), damping ratios, eigenvalues (1/s; of a
+    discrete-time model ln(z) / dt)."""
 
     frequency_hz: npt.NDArray[np.float64]
     damping_ratio: npt.NDArray[np.float64]
     eigenvalue: npt.NDArray[np.complex128]
 
 class LinearModel:
-    """x' = A x + B u, y = C x + D u about an operating point; pickles."""
+    """x' = A x + B u, y = C x + D u about an operating point (dt = 0), or the exact
+    discrete-time model of a sampled loop (dt > 0); pickles."""
 
     A: npt.NDArray[np.float64]
     B: npt.NDArray[np.float64]
     C: npt.NDArray[np.float64]
     D: npt.NDArray[np.float64]
+    dt: float
     x0: npt.NDArray[np.float64]
     y0: npt.NDArray[np.float64]
+    state_scale: npt.NDArray[np.float64]
+    realization: str
     inputs: List[str]
     outputs: List[str]
     states: List[str]
+    input_signals: List[str]
+    output_signals: List[str]
+    state_signals: List[str]
     input_units: List[str]
     output_units: List[str]
+    notes: List[str]
     operating_point: Dict[str, Any]
     t: float
     model: str
     scene: str
     elastic_chords: bool
     def modes(self) -> Modes: ...
-    def frequency_response(self, frequencies_hz: npt.ArrayLike) -> npt.NDArray[np.complex128]: ...
+    def is_discrete(self) -> bool: ...
+    def frequency_response(self, omega: npt.ArrayLike) -> npt.NDArray[np.complex128]:
+        """C (sI - A)^-1 B + D at s = i omega (z = exp(i omega dt)), omega in rad/s; shape
+        (outputs, inputs, len(omega))."""
+    def to_control(self, name: Optional[str] = None) -> Any:
+        """A named control.StateSpace with dt."""
+    def to_scipy(self) -> Any:
+        """scipy.signal.StateSpace (with dt in discrete time)."""
+    def physical(self) -> "LinearModel": ...
 
+class LinearModels:
+    """Linear models along a motion at several times, from one integration."""
+
+    models: List[LinearModel]
+    t: npt.NDArray[np.float64]
+    A: npt.NDArray[np.float64]
+    B: npt.NDArray[np.float64]
+    C: npt.NDArray[np.float64]
+    D: npt.NDArray[np.float64]
+    def __len__(self) -> int: ...
+    def __getitem__(self, k: int) -> LinearModel: ...
+    def __iter__(self) -> Any: ...
+
+@overload
 def linearize(
     scene: Union[Scene, _Path],
     pose: Optional[Tuple[float, float, float]] = None,
@@ -158,4 +189,45 @@ def linearize(
     inputs: Sequence[str] = (),
     outputs: Sequence[str] = (),
     rigid_chords: bool = False,
+    coulomb: str = "left-out",
+    realization: str = "scaled",
 ) -> LinearModel: ...
+@overload
+def linearize(
+    scene: Union[Scene, _Path],
+    pose: None = None,
+    t: Sequence[float] = ...,
+    inputs: Sequence[str] = (),
+    outputs: Sequence[str] = (),
+    rigid_chords: bool = False,
+    coulomb: str = "left-out",
+    realization: str = "scaled",
+) -> LinearModels: ...
+
+class LoopMargins(NamedTuple):
+    """Gain and phase margins (python-control) and the sensitivity peak of one slider loop."""
+
+    gain_margin: float
+    phase_margin_deg: float
+    gain_crossover_hz: float
+    phase_crossover_hz: float
+    sensitivity_peak: float
+    sensitivity_peak_hz: float
+
+class SliderLoop:
+    """One slider's loop broken at its actuator."""
+
+    slider: int
+    model: LinearModel
+    def loop_gain(self) -> Any:
+        """L = -slider_command / actuator_command as a control.StateSpace."""
+    def margins(self, omega: Optional[npt.ArrayLike] = None) -> LoopMargins: ...
+
+def slider_loop(
+    scene: Union[Scene, _Path],
+    slider: int,
+    pose: Optional[Tuple[float, float, float]] = None,
+    t: Optional[float] = None,
+    rigid_chords: bool = False,
+    coulomb: str = "left-out",
+) -> SliderLoop: ...

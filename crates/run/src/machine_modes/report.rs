@@ -21,6 +21,9 @@ fn mode_head(k: usize, m: &MachineMode) -> serde_json::Map<String, Value> {
         "eigenvalue".into(),
         json!([finite(m.eigenvalue.re), finite(m.eigenvalue.im)]),
     );
+    if let Some(z) = m.z {
+        map.insert("z".into(), json!([finite(z.re), finite(z.im)]));
+    }
     map.insert("kind".into(), json!(m.kind));
     map
 }
@@ -97,8 +100,21 @@ pub fn modes_json(modes: &MachineModes, count: usize) -> Value {
         "coordinates": modes.coordinates,
         "modes_found": modes.modes.len(),
         "modes_written": list.len(),
+        "dt_s": modes.dt,
+        "notes": modes.notes,
+        "truncation": modes.truncation.map(|t| {
+            let highest = list_highest(modes, count);
+            json!({
+                "modes_per_link": t.modes_per_link,
+                "first_missing_family_hz": t.first_missing_hz,
+                "highest_mode_written_hz": highest,
+                "complete": t.complete(highest),
+                "modes_per_link_for_the_written_modes": t.recommended(highest),
+                "note": t.note(highest),
+            })
+        }),
         "definitions": {
-            "frequency_hz": "|lambda| / (2 pi), the undamped natural frequency of the eigenvalue lambda of A",
+            "frequency_hz": "|lambda| / (2 pi), the undamped natural frequency of the eigenvalue lambda of A (of a discrete-time model, dt_s > 0: lambda = ln(z) / dt for its pole z, principal branch, so frequencies above the Nyquist frequency 1 / (2 dt) fold below it)",
             "damping_ratio": "-Re(lambda) / |lambda| (MATLAB's damp)",
             "shape": "real, scaled so that the largest displacement (a slider, a platform coordinate, the platform's rotation times its radius, or a link's deflection) is 1; sliders along their guides, platform x, y and phi (rad per unit), each platform joint's motion, each link's deflection from its chord at xi; imaginary: the largest imaginary part left (0 for an undamped mode)",
             "kind": "servo (the sliders move at least half as much as anything else), platform (the platform's kinetic energy exceeds the links' bending kinetic energy), or bending of the links that bend by at least a quarter of the largest deflection, with the half-waves of the most deflected one",
@@ -111,6 +127,16 @@ pub fn modes_json(modes: &MachineModes, count: usize) -> Value {
         "xi": modes.xi,
         "modes": list,
     })
+}
+
+/// The highest frequency of the lowest `count` modes (Hz).
+fn list_highest(modes: &MachineModes, count: usize) -> f64 {
+    modes
+        .modes
+        .iter()
+        .take(count)
+        .map(|m| m.frequency_hz)
+        .fold(0.0, f64::max)
 }
 
 /// `modes.csv`: one row per mode (the lowest `count`): its frequency, damping ratio,

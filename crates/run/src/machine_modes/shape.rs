@@ -2,7 +2,7 @@
 //! platform pose, link deflections), and a short classification of it.
 
 use flexprr_dynamics::Machine;
-use flexprr_kinematics::{Geometry, Pose};
+use flexprr_kinematics::Pose;
 use flexprr_linear::Complex;
 
 /// The shape of one mode: real, scaled so that the largest displacement it gives (a
@@ -23,6 +23,9 @@ pub struct ModeShape {
     /// The largest imaginary part left after the scaling (0 for an undamped mode, small
     /// for a lightly damped one): how far the shape is from a standing wave.
     pub imaginary: f64,
+    /// `sum m_i / 2 sum_k |a_ik|^2` (twice the kinetic energy per `omega^2`, kg m^2) of the
+    /// links' axial modes of relaxed chords, on the scale of the shape; 0 without them.
+    pub axial: [f64; 3],
 }
 
 impl ModeShape {
@@ -31,10 +34,12 @@ impl ModeShape {
     /// the platform pose `pose`.
     pub(crate) fn from_outputs(
         seen: &[Complex],
+        added: &[Complex],
         points: usize,
         pose: Pose,
-        geometry: &Geometry,
+        machine: &flexprr_dynamics::Machine,
     ) -> Self {
+        let geometry = &machine.geometry;
         let (sin, cos) = pose.phi.sin_cos();
         let arms: [[f64; 2]; 3] = std::array::from_fn(|i| {
             let c = geometry.legs[i].attachment;
@@ -66,7 +71,24 @@ impl ModeShape {
                 platform[1] + platform[2] * a[0],
             ]
         });
+        // The links' axial modes (after the platform's deviation), on the shape's scale.
+        let per_link = added.len().saturating_sub(3) / 3;
+        let axial = std::array::from_fn(|i| {
+            let energy: f64 = (0..per_link)
+                .map(|k| {
+                    let a = added[3 + i * per_link + k];
+                    let a = if reference.norm() > 0.0 {
+                        a / reference
+                    } else {
+                        a
+                    };
+                    a.re * a.re + a.im * a.im
+                })
+                .sum();
+            0.5 * machine.links[i].mass() * energy
+        });
         Self {
+            axial,
             sliders: [re(0), re(1), re(2)],
             platform,
             joints,
@@ -120,10 +142,26 @@ impl ModeShape {
     pub(crate) fn kind(&self, machine: &Machine) -> String {
         let (sliders, platform, links) = self.amplitudes();
         let bending = links.iter().fold(0.0_f64, |m, v| m.max(*v));
+        let (platform_energy, bending_energy) = self.kinetic(machine);
+        let slider_energy: f64 = (0..3)
+            .map(|i| machine.slider_mass[i] * self.sliders[i] * self.sliders[i])
+            .sum();
+        let axial: f64 = self.axial.iter().sum();
+        if axial > platform_energy.max(bending_energy).max(slider_energy) {
+            let largest = self.axial.iter().fold(0.0_f64, |m, v| m.max(*v));
+            let involved: Vec<String> = (0..3)
+                .filter(|&k| self.axial[k] >= 0.25 * largest)
+                .map(|k| (k + 1).to_string())
+                .collect();
+            return format!(
+                "axial link{} {}",
+                if involved.len() == 1 { "" } else { "s" },
+                involved.join(", ")
+            );
+        }
         if sliders >= 0.5 * platform.max(bending) && sliders > 0.0 {
             return "servo".to_string();
         }
-        let (platform_energy, bending_energy) = self.kinetic(machine);
         if platform_energy > bending_energy {
             return "platform".to_string();
         }
