@@ -772,3 +772,147 @@ fn an_frf_below_every_mode_says_so() {
     // The lowest mode of the paper's machine is 116.4 Hz (docs/linear.md).
     assert!(stdout.contains("no mode up to 100 Hz"), "{stdout}");
 }
+
+// ---------------------------------------------------------------------------------------
+// Issue 34: runs that never mislead. Each test names the defect it guards against; a
+// reviewer extends them by adding a scene, a method or a tolerance to the lists.
+
+/// `text` with every line that starts with `key = ` replaced by `key = value`.
+fn with_key(text: &str, key: &str, value: &str) -> String {
+    let start = format!("{key} = ");
+    assert!(
+        text.lines().any(|l| l.starts_with(&start)),
+        "no {key} in the scene"
+    );
+    text.lines()
+        .map(|l| {
+            if l.starts_with(&start) {
+                format!("{key} = {value}")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The columns of a CSV file written by a run: its header and its rows.
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// Runs `scene` (text) and checks that its outcome agrees with the data it wrote: a run that
+/// completes wrote every sample; a collapse is reported at a time within the last output
+/// interval of the data, with a mid-point deflection at the limit (`limit` m) or a type-II
+/// pose, while every written mid-point deflection is within the limit. Returns the collapse
+/// time, if any.
+fn outcome_agrees_with_data(dir: &Path, scene: &str, label: &str, limit: f64) -> Option<f64> {
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let out = run_in(dir, &["run", "s.toml", "--out", "o", "--quiet", "--force"]);
+    let stderr = stderr_of(&out);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("o/summary.json")).unwrap())
+            .unwrap();
+    let (header, rows) = read_csv(&dir.join("o/deflections.csv"));
+    let mids: Vec<usize> = (1..=3)
+        .map(|i| {
+            header
+                .iter()
+                .position(|h| h.starts_with(&format!("w_{i}_")))
+                .unwrap_or_else(|| panic!("{label}: no w_{i} in {header:?}"))
+        })
+        .collect();
+    for row in &rows {
+        for &c in &mids {
+            assert!(
+                row[c].abs() <= limit * (1.0 + 1e-9),
+                "{label}: written deflection {} at t = {} beyond the limit {limit}",
+                row[c],
+                row[0]
+            );
+        }
+    }
+    let last = rows.last().unwrap()[0];
+    match out.status.code() {
+        Some(0) => None,
+        Some(1) => {
+            let failure = &summary["failure"];
+            assert_eq!(failure["kind"], "collapse", "{label}: {stderr}");
+            let t = failure["time_s"].as_f64().unwrap();
+            let w = failure["deflection_m"].as_f64().unwrap();
+            let measure = failure["type_ii_measure"].as_f64().unwrap_or(f64::NAN);
+            let step = rows[1][0] - rows[0][0];
+            assert!(
+                t >= last && t < last + step * (1.0 + 1e-9),
+                "{label}: collapse at t = {t} s but data up to {last} s: {stderr}"
+            );
+            assert!(
+                (w.abs() - limit).abs() <= 1e-6 * limit || measure < 1e-2 || measure.is_nan(),
+                "{label}: collapse with deflection {w} m (limit {limit}) and measure {measure}: {stderr}"
+            );
+            Some(t)
+        }
+        code => panic!("{label}: exit {code:?}: {stderr}"),
+    }
+}
+
+/// A failure seen on a trial step that the integrator then rejected was reported as the
+/// run's outcome: the 30 Hz collapse under generalized-alpha at rtol 1e-2 said "collapsed at
+/// t = 1.1 ms: link 1 deflection 364.8 mm" while its data ran to 29.7 ms, and an actuated
+/// scene at 2 Hz (which does not collapse) said "collapsed at t = 84.3 ms: link 3 deflection
+/// 15.0 mm (7.5 %), type-II measure 0" under RK45 at rtol 0.1. Every method, loose and tight:
+/// the outcome now agrees with the data written, and at the tight tolerance the collapse is
+/// where the external model puts it (29.9 ms, `validation/data/collapse_f30.csv` passing
+/// 20 mm).
+#[test]
+fn failures_are_decided_on_accepted_steps_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let nonlinear = std::fs::read_to_string(configs().join("nonlinear_f30.toml")).unwrap();
+    let nonlinear = with_key(&with_key(&nonlinear, "elements", "4"), "end", "0.04");
+    for method in ["abm", "rk45", "bdf", "generalized_alpha"] {
+        for rtol in ["1e-2", "1e-6"] {
+            let scene = with_key(
+                &with_key(&nonlinear, "method", &format!("{method:?}")),
+                "rtol",
+                rtol,
+            );
+            let label = format!("nonlinear, {method} at rtol {rtol}");
+            let t = outcome_agrees_with_data(dir, &scene, &label, 0.02);
+            if rtol == "1e-6" {
+                let t = t.unwrap_or_else(|| panic!("{label}: no collapse"));
+                assert!((t - 0.0299).abs() < 0.5e-3, "{label}: collapse at {t} s");
+            }
+        }
+    }
+    // The actuated scene: sliders on motors under PD control (a control law's states: no
+    // generalized-alpha), at 2 Hz (no collapse at any sound tolerance).
+    let servo = std::fs::read_to_string(configs().join("servo_motor_f2.toml")).unwrap();
+    let servo = with_key(&with_key(&servo, "end", "0.2"), "plots", "false");
+    let servo = servo.replace(", \"viewer\"", "");
+    for method in ["abm", "rk45", "bdf"] {
+        for rtol in ["1e-1", "1e-6"] {
+            let scene = with_key(
+                &with_key(&servo, "method", &format!("{method:?}")),
+                "rtol",
+                rtol,
+            );
+            let label = format!("servo, {method} at rtol {rtol}");
+            let t = outcome_agrees_with_data(dir, &scene, &label, 0.02);
+            if rtol == "1e-6" {
+                assert_eq!(t, None, "{label}");
+            }
+        }
+    }
+}

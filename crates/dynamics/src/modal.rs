@@ -356,8 +356,9 @@ impl ModalSystem {
     pub fn initial_state(&self) -> Vec<f64> {
         vec![0.0; 2 * self.modes]
     }
-    /// The first failure met inside the right-hand side (which then writes NaN so the
-    /// integrator stops with a non-finite error): use it to report the real cause.
+    /// The latest failure met inside the right-hand side since the last accepted step
+    /// (which then writes NaN so the integrator rejects the trial): use it to report the
+    /// real cause of a failed integration.
     pub fn take_failure(&mut self) -> Option<DynamicsError> {
         self.failure.take()
     }
@@ -548,10 +549,10 @@ impl ModalSystem {
         e
     }
 
+    /// Records `error` (the latest one met since the last accepted step: the one closest to
+    /// where the integration stopped) and writes NaN so the integrator rejects the trial.
     fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {
-        if self.failure.is_none() {
-            self.failure = Some(error);
-        }
+        self.failure = Some(error);
         dy.fill(f64::NAN);
     }
 }
@@ -580,6 +581,11 @@ impl OdeSystem for ModalSystem {
         if let Some(patches) = self.patches.as_mut() {
             patches.accelerate(t, &y[..n], &y[n..], acc);
         }
+    }
+
+    /// A failure met in a rejected trial is forgotten once a step is accepted.
+    fn step_accepted(&mut self, _t: f64, _y: &[f64]) {
+        self.failure = None;
     }
 
     fn segment_start(&mut self, t: f64, y: &[f64]) {
@@ -612,9 +618,7 @@ impl OdeSystem for ModalSystem {
         let loads = match loaded {
             Ok((_, loads)) => loads,
             Err(e) => {
-                if self.failure.is_none() {
-                    self.failure = Some(e);
-                }
+                self.failure = Some(e);
                 jac.fill(f64::NAN);
                 return;
             }

@@ -61,6 +61,9 @@ impl Observer for RunObserver<'_> {
         self.progress.on_step(t, y);
         self.guard.on_step(t, y)
     }
+    fn on_output(&mut self, index: usize, t: f64, y: &[f64]) -> Flow {
+        self.guard.on_output(index, t, y)
+    }
 }
 
 /// The times at which every integration of `scene` stops and restarts: the trajectory's
@@ -149,6 +152,13 @@ pub fn integrate_model(
                                 "stopped by an observer".to_string(),
                             ),
                         }),
+                    Interruption::Event { t } => match model.take_failure() {
+                        Some(cause) => RunError::Model(cause),
+                        None => RunError::Integrator {
+                            method: integrator.name().to_string(),
+                            source: flexprr_integrators::IntegratorError::TerminalEvent { t },
+                        },
+                    },
                     Interruption::Failed(source) => match model.take_failure() {
                         Some(cause) => RunError::Model(cause),
                         None => match source {

@@ -79,7 +79,8 @@ fn the_collapse_quantity_reports_what_a_direct_run_does() {
     assert!((recorded - t).abs() <= 1e-9 * t, "{recorded} vs {t}");
     assert_eq!(value(1, "collapse_link"), "1");
     let w: f64 = value(1, "collapse_deflection_m").parse().unwrap();
-    assert!(w.abs() > 0.02 && w.abs() < 0.0201, "{w}");
+    // The crossing of the 20 mm limit, located on the accepted step's dense output.
+    assert!((w.abs() - 0.02).abs() < 1e-6 * 0.02, "{w}");
     let peak: f64 = value(1, "w_peak_1_m").parse().unwrap();
     assert!(peak < 0.02 && peak > 0.015, "{peak}");
 
