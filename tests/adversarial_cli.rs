@@ -916,3 +916,57 @@ fn failures_are_decided_on_accepted_steps_only() {
         }
     }
 }
+
+/// The motor check used the output samples only: the 2.5 Hz circle on BM200-like motors
+/// needs 103.8 rev/s against a 100 rev/s limit, and with `output_step = 0.1` (three samples)
+/// it reported `"feasible": true` and no warning. The check is now made on the commanded
+/// motion itself: infeasible, from the time and on the leg where the slider speed of
+/// `flexprr kinematics` (sampled every 10 us, an independent evaluation of the same motion)
+/// passes 1 m/s, with its peak; and the whole `feasibility` section is the same whatever
+/// the output step.
+#[test]
+fn motor_limits_are_checked_between_the_output_samples() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let base = std::fs::read_to_string(configs().join("servo_motor_f20.toml")).unwrap();
+    let base = with_key(&with_key(&base, "frequency", "2.5"), "plots", "false");
+    let feasibility = |output_step: &str| {
+        let scene = with_key(&base, "output_step", output_step);
+        std::fs::write(dir.join("m.toml"), &scene).unwrap();
+        let out = run_in(dir, &["run", "m.toml", "--out", "o", "--quiet", "--force"]);
+        assert!(out.status.success(), "{}", stderr_of(&out));
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("o/summary.json")).unwrap())
+                .unwrap();
+        (summary["feasibility"].clone(), stderr_of(&out))
+    };
+    let (coarse, stderr) = feasibility("0.1");
+    assert_eq!(coarse["feasible"], false, "{coarse}");
+    assert!(
+        stderr.contains("max_speed of 100 rev/s") && stderr.contains("on leg 2"),
+        "{stderr}"
+    );
+    let (fine, _) = feasibility("1e-4");
+    assert_eq!(coarse, fine, "the check depends on output_step");
+    // The independent evaluation: the slider speeds every 10 us.
+    std::fs::write(dir.join("k.toml"), with_key(&base, "output_step", "1e-5")).unwrap();
+    let out = run_in(dir, &["kinematics", "k.toml", "--out", "k.csv"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let (header, rows) = read_csv(&dir.join("k.csv"));
+    let c = header.iter().position(|h| h == "rho_dot_2_m_s").unwrap();
+    let lead = 0.01;
+    let k = rows.iter().position(|r| r[c].abs() / lead > 100.0).unwrap();
+    let (a, b) = (rows[k - 1][c].abs() / lead, rows[k][c].abs() / lead);
+    let crossing = rows[k - 1][0] + (100.0 - a) / (b - a) * (rows[k][0] - rows[k - 1][0]);
+    let first = &coarse["first_over_max_speed"];
+    assert_eq!(first["leg"], 2);
+    let t = first["t_s"].as_f64().unwrap();
+    assert!((t - crossing).abs() < 1e-8, "{t} vs {crossing}");
+    let peak = rows.iter().map(|r| r[c].abs() / lead).fold(0.0, f64::max);
+    let reported = coarse["legs"][1]["peak_speed_rev_s"].as_f64().unwrap();
+    assert!(
+        reported >= peak && reported - peak < 1e-6 * peak,
+        "{reported} vs {peak}"
+    );
+    assert!((reported - 103.843).abs() < 1e-3, "{reported}");
+}
