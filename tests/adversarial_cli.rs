@@ -970,3 +970,98 @@ fn motor_limits_are_checked_between_the_output_samples() {
     );
     assert!((reported - 103.843).abs() < 1e-3, "{reported}");
 }
+
+/// Errors located at the key that is wrong, with numbers a reader can read: `lead = 1e-300`
+/// under control failed at t = 0 as a singular mass matrix; a huge rotor inertia printed
+/// "RMS torque reaches inf N m"; a patch's bad `xi_end` was reported at `xi_start`; angles of
+/// any size were taken; `modal_velocity` with a mode its patches cannot see, or a mode named
+/// twice, blamed "modes = 3" or "modes = 6" (the count over all links). Each is now one
+/// located line at its key, without `inf`, `NaN` or a hundred digits.
+#[test]
+fn each_error_names_the_key_that_is_wrong() {
+    let motor = std::fs::read_to_string(configs().join("servo_motor_f2.toml")).unwrap();
+    let piezo = std::fs::read_to_string(configs().join("piezo_f20.toml")).unwrap();
+    let paper = std::fs::read_to_string(configs().join("paper_f20.toml")).unwrap();
+    let modal = |modes: &str, ratios: &str| {
+        let gain = piezo.lines().find(|l| l.starts_with("gain = ")).unwrap();
+        piezo
+            .replace("kind = \"strain_rate\"", "kind = \"modal_velocity\"")
+            .replace(gain, &format!("modes = {modes}\ndamping_ratio = {ratios}"))
+    };
+    let cases: Vec<(String, &str, Vec<&str>)> = vec![
+        (
+            with_key(&motor, "lead", "1e-300"),
+            "lead",
+            vec!["actuators.lead", "1e-300", "at least 1e-6 m/rev"],
+        ),
+        (
+            with_key(&motor, "rotor_inertia", "1e200"),
+            "rotor_inertia",
+            vec!["actuators.rotor_inertia", "1e200"],
+        ),
+        (
+            with_key(&motor, "efficiency", "1e-300"),
+            "efficiency",
+            vec!["actuators.efficiency", "1e-300"],
+        ),
+        (
+            with_key(&piezo, "xi_end", "0.4"),
+            "xi_end",
+            vec!["links.patches.0.xi_end", "xi_start < xi_end"],
+        ),
+        (
+            with_key(&piezo, "xi_end", "2.0"),
+            "xi_end",
+            vec!["links.patches.0.xi_end", "0 < xi_end <= 1"],
+        ),
+        (
+            with_key(&paper, "phi_deg", "7245.0"),
+            "phi_deg",
+            vec!["trajectory.phi_deg", "7245 deg", "(45 deg)"],
+        ),
+        (
+            with_key(&paper, "alpha_deg", "[150.0, 270.0, 1e19]"),
+            "alpha_deg",
+            vec!["machine.alpha_deg.2", "1e19 deg"],
+        ),
+        (
+            modal("[2]", "[0.05]"),
+            "modes",
+            vec!["vibration_control.modes", "mode 2 of link 1", "cannot see"],
+        ),
+        (
+            modal("[1, 1]", "[0.05, 0.05]"),
+            "modes",
+            vec!["vibration_control.modes", "mode 1 is named twice"],
+        ),
+        (
+            modal("[1, 2]", "[0.05, 0.05]"),
+            "modes",
+            vec![
+                "vibration_control.modes",
+                "2 modes (1, 2) on link 1",
+                "1 patch",
+            ],
+        ),
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    for (text, key, words) in cases {
+        // The line of the key that is wrong.
+        let start = if key == "modes" { "modes = [" } else { key };
+        let line = line_of(&text, start);
+        std::fs::write(tmp.path().join("e.toml"), &text).unwrap();
+        let out = run_in(tmp.path(), &["check", "e.toml"]);
+        let mut all = words.clone();
+        let at = format!("e.toml:{line}:");
+        all.push(&at);
+        assert_bad_input(&out, &all);
+        let stderr = stderr_of(&out);
+        let long = stderr
+            .split(|c: char| !c.is_ascii_digit())
+            .any(|run| run.len() > 12);
+        assert!(
+            !long && !stderr.contains("inf") && !stderr.contains("NaN"),
+            "{stderr}"
+        );
+    }
+}

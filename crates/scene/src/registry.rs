@@ -212,7 +212,7 @@ impl<'a> TableParams<'a> {
     pub fn control_error(&self, error: ControlError) -> ScenarioError {
         match error {
             ControlError::InvalidParameter { name, value, rule } => {
-                self.error(name, format!("{rule}, got {value}"))
+                self.error(name, format!("{rule}, got {}", crate::error::number(value)))
             }
             other => self.error("", other.to_string()),
         }

@@ -162,6 +162,32 @@ impl Checker<'_> {
             ))
         }
     }
+    /// An angle in degrees: finite and within [`MAX_ANGLE_DEG`] of zero. Beyond a few turns
+    /// an angle keeps fewer of its digits for the part that matters (`1e19` degrees has
+    /// none left), and every angle the scene takes is a direction or an orientation, whose
+    /// value within a turn is what counts.
+    fn angle(&self, key: &str, value: f64) -> Result<f64, ScenarioError> {
+        self.finite(key, value)?;
+        if value.abs() > MAX_ANGLE_DEG {
+            let advice = if value.abs() < 1e9 {
+                format!(
+                    "write it reduced to a turn ({} deg), which is the same direction",
+                    crate::error::number(value.rem_euclid(360.0))
+                )
+            } else {
+                "at this size the number keeps no digits within a turn".to_string()
+            };
+            return Err(self.error(
+                key,
+                format!(
+                    "expected an angle within two turns (|angle| <= {MAX_ANGLE_DEG} deg), got \
+                     {} deg: {advice}",
+                    crate::error::number(value)
+                ),
+            ));
+        }
+        Ok(value)
+    }
     fn finite(&self, key: &str, value: f64) -> Result<f64, ScenarioError> {
         if value.is_finite() {
             Ok(value)
@@ -170,6 +196,9 @@ impl Checker<'_> {
         }
     }
 }
+
+/// The largest angle (deg, either sign) a scene key takes: two turns.
+pub const MAX_ANGLE_DEG: f64 = 720.0;
 
 fn pose_from(values: [f64; 3]) -> Pose {
     Pose::new(values[0], values[1], values[2].to_radians())
@@ -382,6 +411,20 @@ fn build_link(
 }
 
 /// `[machine]`: the guides' geometry and the rigid-body inertia.
+/// The machine of `raw` with its links' patch layers, and its patches with the vibration
+/// control law (`[[links.patches]]`, `[vibration_control]`), as validation builds them: for
+/// checking a changed `vibration_control` table against the law's own keys.
+pub(crate) fn build_patches(
+    c: &Checker<'_>,
+    registry: &Registry,
+    raw: &SceneFile,
+) -> Result<(), ScenarioError> {
+    let link = build_link(c, registry, &raw.links)?;
+    let link_models = crate::piezo::with_patch_layers(c, raw, link)?;
+    let machine = build_machine(c, &raw.machine, link_models)?;
+    crate::piezo::build_piezo(c, registry, raw, &machine).map(|_| ())
+}
+
 fn build_machine(
     c: &Checker<'_>,
     m: &MachineConfig,
@@ -413,7 +456,7 @@ fn radial_geometry(
     length: f64,
 ) -> Result<Geometry, ScenarioError> {
     for (k, a) in m.alpha_deg.iter().enumerate() {
-        c.finite(&format!("machine.alpha_deg.{k}"), *a)?;
+        c.angle(&format!("machine.alpha_deg.{k}"), *a)?;
     }
     c.positive("machine.platform_side", m.platform_side, "m")?;
     c.positive("machine.half_travel", m.half_travel, "m")?;
@@ -456,6 +499,7 @@ fn general_geometry(
                 c.finite(&format!("{key}.{field}"), *v)?;
             }
         }
+        c.angle(&format!("{key}.direction_deg"), leg.direction_deg)?;
         let a = leg.direction_deg.to_radians();
         legs.push(Leg {
             guide: Guide {
@@ -792,7 +836,8 @@ fn spectral_radius(
             key,
             format!(
                 "expected a spectral radius at infinite frequency from 0 (most numerical \
-                 dissipation) to 1 (none), got {rho}"
+                 dissipation) to 1 (none), got {}",
+                crate::error::number(rho)
             ),
         ));
     }
@@ -864,7 +909,10 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
         if !(0.0..=1.0).contains(xi) {
             return Err(c.error(
                 &format!("output.deflection_xi.{k}"),
-                format!("expected a position xi in [0, 1] along the link, got {xi}"),
+                format!(
+                    "expected a position xi in [0, 1] along the link, got {}",
+                    crate::error::number(*xi)
+                ),
             ));
         }
     }
@@ -929,7 +977,8 @@ fn build_trajectory(
         } => {
             c.non_negative("trajectory.radius", *radius, "m")?;
             c.positive("trajectory.frequency", *frequency, "Hz")?;
-            c.finite("trajectory.phi_deg", *phi_deg)?;
+            c.angle("trajectory.phi_deg", *phi_deg)?;
+            c.angle("trajectory.start_angle_deg", *start_angle_deg)?;
             Arc::new(
                 Circle::new(
                     Point2::new(centre[0], centre[1]),
@@ -942,6 +991,7 @@ fn build_trajectory(
             )
         }
         TrajectoryConfig::Line { from, velocity } => {
+            c.angle("trajectory.from.2", from[2])?;
             let v = [velocity[0], velocity[1], velocity[2].to_radians()];
             Arc::new(
                 Line::new(pose_from(*from), nalgebra::Vector3::from(v), 0.0)
@@ -956,6 +1006,8 @@ fn build_trajectory(
             profile,
         } => {
             c.positive("trajectory.duration", *duration, "s")?;
+            c.angle("trajectory.from.2", from[2])?;
+            c.angle("trajectory.to.2", to[2])?;
             let profile = match profile {
                 ProfileChoice::Quintic => Profile::Quintic,
                 ProfileChoice::Cycloidal => Profile::Cycloidal,
@@ -966,6 +1018,9 @@ fn build_trajectory(
             )
         }
         TrajectoryConfig::Waypoints { points } => {
+            for (k, p) in points.iter().enumerate() {
+                c.angle(&format!("trajectory.points.{k}.3"), p[3])?;
+            }
             let pts: Vec<(f64, Pose)> = points
                 .iter()
                 .map(|p| (p[0], pose_from([p[1], p[2], p[3]])))

@@ -125,15 +125,26 @@ impl Grid<'_> {
             .fold(0.0, f64::max)
     }
 
-    /// The RMS value of `channel` over the span: Simpson's rule on each segment.
+    /// The RMS value of `channel` over the span: Simpson's rule on each segment, on the
+    /// values scaled by their largest magnitude (so that squares of huge values do not
+    /// overflow).
     fn rms(&self, channel: usize) -> f64 {
+        let mut scale = 0.0_f64;
+        for s in 0..self.edges.len() - 1 {
+            for k in 0..=self.intervals[s] {
+                scale = scale.max(self.value(s, k, channel).abs());
+            }
+        }
+        if scale == 0.0 || !scale.is_finite() {
+            return scale;
+        }
         let mut integral = 0.0;
         for s in 0..self.edges.len() - 1 {
             let n = self.intervals[s];
             let h = (self.edges[s + 1] - self.edges[s]) / n as f64;
             let mut sum = 0.0;
             for k in 0..=n {
-                let x = self.value(s, k, channel);
+                let x = self.value(s, k, channel) / scale;
                 let w = if k == 0 || k == n {
                     1.0
                 } else if k % 2 == 1 {
@@ -146,7 +157,7 @@ impl Grid<'_> {
             integral += sum * h / 3.0;
         }
         let span = self.edges[self.edges.len() - 1] - self.edges[0];
-        (integral / span).max(0.0).sqrt()
+        scale * (integral / span).max(0.0).sqrt()
     }
 
     /// The grid points (segment, index) where `|f_channel|` has a local maximum of at least
