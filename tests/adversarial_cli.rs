@@ -1065,3 +1065,34 @@ fn each_error_names_the_key_that_is_wrong() {
         );
     }
 }
+
+/// A tiny `control.period` (or `vibration_control.period`) built every sample time up front:
+/// the process aborted on allocation. The samples are now generated as the run goes, and a
+/// period with more samples than a run can take is refused at its key, with the period
+/// that would do, before anything is computed.
+#[test]
+fn a_sample_period_below_what_a_run_resolves_is_refused_at_its_key() {
+    let servo = std::fs::read_to_string(configs().join("servo_f20.toml")).unwrap();
+    let piezo = std::fs::read_to_string(configs().join("piezo_f20.toml")).unwrap();
+    let gain = piezo.lines().find(|l| l.starts_with("gain = ")).unwrap();
+    let sampled_piezo = piezo.replace(gain, &format!("{gain}\nperiod = 1e-12"));
+    let tmp = tempfile::tempdir().unwrap();
+    for (text, key) in [
+        (with_key(&servo, "period", "1e-12"), "control.period"),
+        (sampled_piezo, "vibration_control.period"),
+    ] {
+        std::fs::write(tmp.path().join("p.toml"), &text).unwrap();
+        let line = line_of(&text, "period = 1e-12");
+        let out = run_in(tmp.path(), &["run", "p.toml", "--out", "o", "--quiet"]);
+        assert_bad_input(
+            &out,
+            &[
+                &format!("p.toml:{line}:"),
+                key,
+                "2e11 samples",
+                "at least 4e-8 s",
+            ],
+        );
+        assert!(!tmp.path().join("o").exists());
+    }
+}

@@ -519,11 +519,9 @@ impl ModalSystem {
             .map_or_else(Vec::new, |p| p.states(t, &y[..n], &y[n..2 * n]))
     }
 
-    /// The sample times of a sampled vibration law strictly inside `(t0, t1)`.
-    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.patches
-            .as_ref()
-            .map_or_else(Vec::new, |p| p.sample_times(t0, t1))
+    /// The first sample time of a sampled vibration law strictly after `t`.
+    pub fn next_sample(&self, t: f64) -> Option<f64> {
+        self.patches.as_ref().and_then(|p| p.next_sample(t))
     }
 
     /// Counts one rigid inverse-dynamics solve made for this system's outputs.
@@ -581,6 +579,11 @@ impl OdeSystem for ModalSystem {
         if let Some(patches) = self.patches.as_mut() {
             patches.accelerate(t, &y[..n], &y[n..], acc);
         }
+    }
+
+    /// A sampled vibration law's next sample ([`ModalSystem::next_sample`]).
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        self.next_sample(t)
     }
 
     /// A failure met in a rejected trial is forgotten once a step is accepted.

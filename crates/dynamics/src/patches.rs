@@ -158,9 +158,9 @@ impl PatchLaw {
         &self.spec.patches
     }
 
-    /// The sample times of a sampled law strictly inside `(t0, t1)`.
-    pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.hold.sample_times(t0, t1)
+    /// The first sample time of a sampled law strictly after `t`.
+    pub(crate) fn next_sample(&self, t: f64) -> Option<f64> {
+        self.hold.next_sample(t)
     }
 
     /// The voltages at `t` from the current sensors (held for a sampled law), clipped at
@@ -289,9 +289,9 @@ impl PatchLoop {
         })
     }
 
-    /// The sample times of a sampled law strictly inside `(t0, t1)`.
-    pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.law.sample_times(t0, t1)
+    /// The first sample time of a sampled law strictly after `t`.
+    pub(crate) fn next_sample(&self, t: f64) -> Option<f64> {
+        self.law.next_sample(t)
     }
 
     /// The sensors and their rates from the modal coordinates `eta` and rates `eta_dot`.

@@ -289,6 +289,34 @@ fn interior_stops(t0: f64, t_end: f64, stops: &[f64]) -> Result<Vec<f64>, Integr
     Ok(inside)
 }
 
+/// The end of the segment that starts at `t_start`: the first of the listed stops (sorted,
+/// `next` the first not yet passed), the system's own next stop ([`OdeSystem::next_stop`],
+/// forwards in time only) and `t_end`, ignoring times indistinguishable from the start or
+/// from an earlier candidate.
+fn next_stop<S: OdeSystem + ?Sized>(
+    system: &S,
+    stops: &[f64],
+    next: &mut usize,
+    t_start: f64,
+    t_end: f64,
+) -> f64 {
+    let dir = (t_end - t_start).signum();
+    while *next < stops.len()
+        && ((stops[*next] - t_start) * dir <= 0.0 || !distinct(stops[*next], t_start))
+    {
+        *next += 1;
+    }
+    let listed = stops.get(*next).copied().unwrap_or(t_end);
+    if dir > 0.0 {
+        if let Some(own) = system.next_stop(t_start) {
+            if own > t_start && own < listed && distinct(own, t_start) && distinct(own, listed) {
+                return own;
+            }
+        }
+    }
+    listed
+}
+
 /// The stepping loop behind [`Integrator::solve_observed`] (see there).
 #[allow(
     clippy::result_large_err,
@@ -366,8 +394,9 @@ pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
     let mut buf = vec![0.0; n];
     let mut t_start = t0;
     let mut y_start = y0.to_vec();
-    for seg in 0..=stops.len() {
-        let t_stop = stops.get(seg).copied().unwrap_or(t_end);
+    let mut next_listed = 0;
+    while (t_end - t_start) * dir > 0.0 {
+        let t_stop = next_stop(system, &stops, &mut next_listed, t_start, t_end);
         system.segment_start(t_start, &y_start);
         let mut stepper = match integrator.start(system, t_start, &y_start, t_stop) {
             Ok(s) => s,

@@ -96,6 +96,17 @@ pub trait OdeSystem {
         let _ = (t, y);
     }
 
+    /// The system's own next stop time strictly after `t` (forwards in time), when it has
+    /// stop times (`None`, the default, when not): a sampled controller's next sample time,
+    /// where its zero-order hold jumps. The stepping loop asks for it at the start of every
+    /// integration segment and ends the segment there (as for a listed stop time, see
+    /// [`crate::Integrator::solve_observed`]), so a system with a million samples never
+    /// lists them: they are generated as the run goes.
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        let _ = t;
+        None
+    }
+
     /// Called by the stepping loop after every accepted step with its end time and state,
     /// before the step's outputs and observers. What the right-hand side met in the trial
     /// evaluations of rejected attempts (a failure it recorded to explain the NaN it wrote)
@@ -171,6 +182,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     }
     fn step_accepted(&mut self, t: f64, y: &[f64]) {
         (**self).step_accepted(t, y);
+    }
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        (**self).next_stop(t)
     }
     fn terminal_event(&mut self, t: f64, y: &[f64]) -> Option<f64> {
         (**self).terminal_event(t, y)

@@ -278,3 +278,61 @@ fn an_event_at_the_start_ends_the_run_at_once() {
     assert!(matches!(stopped.reason, Interruption::Event { t } if t.abs() < 1e-300));
     assert_eq!(stopped.solution.len(), 1);
 }
+
+/// `q'' = -q` with its own stop times every `period` (a sampled controller's samples).
+struct Sampled {
+    period: f64,
+    starts: usize,
+}
+
+impl OdeSystem for Sampled {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) {
+        dy[0] = y[1];
+        dy[1] = -y[0];
+    }
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        // The first multiple of the period beyond t (a time on a sample gives the next).
+        let k = (t / self.period).floor() + 1.0;
+        let next = k * self.period;
+        Some(if next <= t * (1.0 + 1e-12) {
+            next + self.period
+        } else {
+            next
+        })
+    }
+    fn segment_start(&mut self, _t: f64, _y: &[f64]) {
+        self.starts += 1;
+    }
+}
+
+/// A system's own stop times are generated as the run goes: a period of 1 ms over 0.1 s
+/// gives 100 segments, and a period of 1e-15 s (1e15 samples over a second, which a list
+/// would never hold) runs into `max_steps` at once instead of allocating them.
+#[test]
+fn a_systems_stop_times_are_generated_as_the_run_goes() {
+    use flexprr_integrators::Integrator;
+    let mut system = Sampled {
+        period: 1e-3,
+        starts: 0,
+    };
+    let sol = flexprr_integrators::Rk45::new(Options::default().rtol(1e-10).atol(1e-12))
+        .solve_observed(&mut system, 0.0, &[1.0, 0.0], &[0.1], &[0.05], &mut ())
+        .unwrap();
+    assert_eq!(sol.stats.segments, 100);
+    assert_eq!(system.starts, 100);
+    assert!((sol.y(0)[0] - 0.1_f64.cos()).abs() < 1e-9);
+    let mut tiny = Sampled {
+        period: 1e-15,
+        starts: 0,
+    };
+    let e = flexprr_integrators::Abm::new(Options::default().max_steps(1000))
+        .solve_observed(&mut tiny, 0.0, &[1.0, 0.0], &[1.0], &[], &mut ())
+        .unwrap_err();
+    assert!(
+        matches!(e.reason, Interruption::Failed(IntegratorError::TooManySteps { t, .. }) if t < 1e-11),
+        "{e}"
+    );
+}

@@ -322,6 +322,19 @@ impl Scene {
         let control = build_control(&c, registry, &raw, model.coupling)?;
         let piezo = crate::piezo::build_piezo(&c, registry, &raw, &machine)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
+        let span = (output_times[0], output_times[output_times.len() - 1]);
+        if let Some(law) = &control.controller {
+            check_sample_period(&c, "control", law.period(), span, options.max_steps)?;
+        }
+        if let Some(law) = &piezo.controller {
+            check_sample_period(
+                &c,
+                "vibration_control",
+                law.period(),
+                span,
+                options.max_steps,
+            )?;
+        }
         // `auto` becomes its choice for the model; a linear-only method needs the KED model
         // (an actuated model is never linear: it is coupled or nonlinear).
         let mut model_name = match control.controller {
@@ -580,6 +593,53 @@ fn build_stops(
     stops.sort_by(f64::total_cmp);
     stops.dedup_by(|a, b| (*a - *b).abs() <= f64::EPSILON * a.abs().max(1.0));
     Ok(stops)
+}
+
+/// The most samples a sampled law may take over a run: as many as output samples, and never
+/// more than the integration's steps (each sample restarts the integration).
+const MAX_SAMPLES: f64 = 5e6;
+
+/// A sampled law's `period` (the key `{table}.period`) against what a run can resolve: its
+/// samples are stop times of the integration, generated as the run goes, and each is kept
+/// for the outputs, so their number over the time span must stay within
+/// `integrator.max_steps` and [`MAX_SAMPLES`].
+fn check_sample_period(
+    c: &Checker<'_>,
+    table: &str,
+    period: f64,
+    (t0, t1): (f64, f64),
+    max_steps: usize,
+) -> Result<(), ScenarioError> {
+    if period.is_nan() || period <= 0.0 {
+        return Ok(());
+    }
+    let samples = (t1 - t0) / period;
+    let limit = MAX_SAMPLES.min(max_steps as f64);
+    if samples > limit {
+        let key = format!("{table}.period");
+        let why = if (max_steps as f64) < MAX_SAMPLES {
+            format!("each sample restarts the integration, and integrator.max_steps is {max_steps}")
+        } else {
+            format!(
+                "each sample restarts the integration and is kept for the outputs: at most {} \
+                 samples, as for output samples",
+                crate::error::number(MAX_SAMPLES)
+            )
+        };
+        return Err(c.error(
+            &key,
+            format!(
+                "a sample period of {} s gives {} samples over the {} s time span, more than \
+                 a run can resolve ({why}); use a period of at least {} s, or 0 for a \
+                 continuous law",
+                crate::error::number(period),
+                crate::error::number(samples.round()),
+                crate::error::number(t1 - t0),
+                crate::error::number((t1 - t0) / limit)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// `[trajectory]`, checked over the whole time span against the machine's workspace.

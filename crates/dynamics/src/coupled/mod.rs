@@ -569,19 +569,13 @@ impl CoupledSystem {
         (&y[..n], &y[coordinates..coordinates + n])
     }
 
-    /// The sample times of a sampled controller strictly inside `(t0, t1)`: where the
-    /// integration must stop for the zero-order hold.
-    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        let mut times = self
-            .actuated
-            .as_ref()
-            .map_or_else(Vec::new, |a| a.sample_times(t0, t1));
-        if let Some(p) = &self.patches {
-            times.extend(p.sample_times(t0, t1));
-            times.sort_by(f64::total_cmp);
-            times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t1.abs().max(1.0));
-        }
-        times
+    /// The first sample time of a sampled controller (slider or vibration law) strictly
+    /// after `t`: where the integration must stop next for the zero-order hold.
+    pub fn next_sample(&self, t: f64) -> Option<f64> {
+        crate::hold::earliest(
+            self.actuated.as_ref().and_then(|a| a.next_sample(t)),
+            self.patches.as_ref().and_then(|p| p.next_sample(t)),
+        )
     }
 
     /// The measured sliders of `y` (actuated sliders).
@@ -718,6 +712,11 @@ impl OdeSystem for CoupledSystem {
         if forces.is_some() {
             dy[coordinates + n..2 * coordinates].copy_from_slice(z.r.as_slice());
         }
+    }
+
+    /// A sampled controller's next sample ([`CoupledSystem::next_sample`]).
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        self.next_sample(t)
     }
 
     /// A failure met in a rejected trial is forgotten once a step is accepted.

@@ -81,9 +81,6 @@ impl SceneModel for CoupledSystem {
     ) -> Result<Option<crate::ChordCompliance>, DynamicsError> {
         CoupledSystem::chord_compliance(self, t, y)
     }
-    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.sample_times(t0, t1)
-    }
     /// The modal energies and the kinetic energy of the whole machine: sliders (with the
     /// actuators' reflected inertia), platform, and each link's
     /// `int rhoA |r'|^2 / 2 dx` for `r' = rho' u + x b' n + w' n - w b' e` (the velocity of the

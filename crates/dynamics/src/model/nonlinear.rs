@@ -105,9 +105,6 @@ impl SceneModel for NonlinearSystem {
     fn slope(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
         self.slope_at(t, link, xi, y)
     }
-    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.sample_times(t0, t1)
-    }
     /// The kinetic energy of the nodes and the platform, the strain energy of each link.
     fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
         let out = self.output(t, y)?;

@@ -386,19 +386,15 @@ impl NonlinearSystem {
     pub fn actuation(&self) -> Option<&Actuation> {
         self.actuated.as_ref().map(|a| &a.spec)
     }
-    /// The sample times of a sampled controller (slider or vibration law) strictly inside
-    /// `(t0, t1)`.
-    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        let mut times = self
-            .actuated
-            .as_ref()
-            .map_or_else(Vec::new, |a| a.sample_times(t0, t1));
-        if let Some((law, _)) = &self.patches {
-            times.extend(law.sample_times(t0, t1));
-            times.sort_by(f64::total_cmp);
-            times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t1.abs().max(1.0));
-        }
-        times
+    /// The first sample time of a sampled controller (slider or vibration law) strictly
+    /// after `t`: where the integration must stop next for the zero-order hold.
+    pub fn next_sample(&self, t: f64) -> Option<f64> {
+        crate::hold::earliest(
+            self.actuated.as_ref().and_then(|a| a.next_sample(t)),
+            self.patches
+                .as_ref()
+                .and_then(|(law, _)| law.next_sample(t)),
+        )
     }
     /// Range of link `link`'s nodal coordinates (0-based link) among the generalized
     /// coordinates; the platform's three come first.
@@ -1160,6 +1156,11 @@ impl OdeSystem for NonlinearSystem {
             }
         }
         true
+    }
+
+    /// A sampled controller's next sample ([`NonlinearSystem::next_sample`]).
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        self.next_sample(t)
     }
 
     /// A failure met in a rejected trial is forgotten once a step is accepted.
