@@ -1096,3 +1096,116 @@ fn a_sample_period_below_what_a_run_resolves_is_refused_at_its_key() {
         assert!(!tmp.path().join("o").exists());
     }
 }
+
+/// A k-section search said "bracketed" while its own probes above the bracket did not reach
+/// the limit, and its probes (and answer) depended on `--threads`. The collapse of the 30 Hz
+/// circle within 30 ms is not monotone in the circle's start angle (a direct sweep: it
+/// collapses from 0 to 60 deg and from 220 to 240 deg, not in between or after): the search
+/// over 80..360 deg now reports "non-monotone" in `search.json` and on stderr with the probes
+/// that show it, answers with the interval that holds every change of outcome it saw, and
+/// writes the same `search.json` for 1 and 3 threads.
+#[test]
+fn a_search_checks_its_answer_against_every_probe() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::copy(configs().join("coupled_f20.toml"), dir.join("c.toml")).unwrap();
+    let study = "base = \"c.toml\"\n[set.output]\nrequests = [\"deflections\"]\nplots = false\n\
+                 [set.time]\noutput_step = 1e-3\n[set.trajectory]\nkind = \"circle\"\n\
+                 centre = [-0.05, 0.0]\nradius = 0.05\nfrequency = 30.0\nphi_deg = 45.0\n\
+                 [search]\nkey = \"trajectory.start_angle_deg\"\nlow = 80.0\nhigh = 360.0\n\
+                 tolerance = 2.0\ntime = 0.03\nprobes_per_round = 7\n";
+    std::fs::write(dir.join("s.toml"), study).unwrap();
+    let mut jsons = Vec::new();
+    for threads in ["1", "3"] {
+        let out_dir = format!("o{threads}");
+        let out = run_in(
+            dir,
+            &[
+                "study",
+                "s.toml",
+                "--out",
+                &out_dir,
+                "--threads",
+                threads,
+                "--quiet",
+            ],
+        );
+        assert!(out.status.success(), "{}", stderr_of(&out));
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("search non-monotone"), "{stdout}");
+        let stderr = stderr_of(&out);
+        assert!(
+            stderr.contains("warning: ")
+                && stderr.contains("not monotone in trajectory.start_angle_deg"),
+            "{stderr}"
+        );
+        let json: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(&out_dir).join("search.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(json["status"], "non-monotone");
+        let v = &json["verification"];
+        assert_eq!(v["monotone"], false);
+        let (below, above) = (
+            json["below"].as_f64().unwrap(),
+            json["at_or_above"].as_f64().unwrap(),
+        );
+        // Every change of outcome between neighbouring probes lies in the answer, and
+        // agrees with the probes themselves.
+        let probes: Vec<(f64, bool)> = json["probes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| {
+                (
+                    p["value"].as_f64().unwrap(),
+                    p["reached"].as_bool().unwrap(),
+                )
+            })
+            .collect();
+        let mut sorted = probes.clone();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let changes: Vec<(f64, f64)> = sorted
+            .windows(2)
+            .filter(|w| w[0].1 != w[1].1)
+            .map(|w| (w[0].0, w[1].0))
+            .collect();
+        assert!(changes.len() >= 2, "{sorted:?}");
+        assert_eq!(v["transitions"].as_array().unwrap().len(), changes.len());
+        for (a, b) in changes {
+            assert!(
+                below <= a && b <= above,
+                "change ({a}, {b}] outside ({below}, {above}]"
+            );
+        }
+        let contradicting = v["contradicting"].as_array().unwrap();
+        assert!(!contradicting.is_empty());
+        // A direct run at a contradicting probe agrees with the search's record of it.
+        let angle = contradicting[0].as_f64().unwrap();
+        let recorded = probes
+            .iter()
+            .find(|p| p.0.total_cmp(&angle).is_eq())
+            .unwrap()
+            .1;
+        let scene = std::fs::read_to_string(configs().join("coupled_f20.toml"))
+            .unwrap()
+            .replace(
+                "frequency = 20.0",
+                &format!("frequency = 30.0\nstart_angle_deg = {angle:?}"),
+            )
+            .replace("end = 0.2", "end = 0.03")
+            .replace("output_step = 1e-4", "output_step = 1e-3");
+        std::fs::write(dir.join("direct.toml"), scene).unwrap();
+        let direct = run_in(
+            dir,
+            &["run", "direct.toml", "--out", "d", "--quiet", "--force"],
+        );
+        assert_eq!(
+            direct.status.code(),
+            Some(if recorded { 1 } else { 0 }),
+            "{angle}"
+        );
+        jsons.push(json);
+    }
+    assert_eq!(jsons[0], jsons[1], "the search depends on --threads");
+}
