@@ -51,7 +51,8 @@
 //! ([`SecondOrderForm::structure`](crate::SecondOrderForm::structure)), and the products with
 //! `M` use the same storage; otherwise dense LU with partial pivoting (faer's `lu_in_place`
 //! into preallocated storage) and dense products. A form whose matrices have a non-zero
-//! entry outside the structure it declared is refused. The convergence test is CVODE's: the
+//! entry outside the structure it declared at the first evaluation is refused; later
+//! evaluations zero, check and read only the entries inside the structure. The convergence test is CVODE's: the
 //! rate `R` from successive corrections and `min(1, R) |dx|_w <= 0.002`, where `|.|_w` is
 //! the weighted RMS norm of the position corrections `beta' h^2 dx` with the error test's
 //! weights (velocities are not tested: an unresolved mode's velocity is `omega` times its
@@ -355,9 +356,22 @@ impl GeneralizedAlphaStepper {
         &mut self,
         system: &mut S,
     ) -> Result<(), AttemptFailure> {
-        self.mass.fill(0.0);
-        self.damping.fill(0.0);
-        self.stiffness.fill(0.0);
+        // With a structure, after the first evaluation has shown that the form writes inside
+        // it, only the entries inside are zeroed, checked and read (the dense storage of
+        // the form's interface is n^2 per matrix; its structured part O(n p)).
+        let first = !self.matrices_valid;
+        match &self.algebra {
+            Algebra::Structured { mass, .. } if !first => {
+                mass.zero_within(&mut self.mass);
+                mass.zero_within(&mut self.damping);
+                mass.zero_within(&mut self.stiffness);
+            }
+            _ => {
+                self.mass.fill(0.0);
+                self.damping.fill(0.0);
+                self.stiffness.fill(0.0);
+            }
+        }
         if let Some(form) = system.second_order_form() {
             form.matrices(
                 self.span.t,
@@ -379,15 +393,24 @@ impl GeneralizedAlphaStepper {
                 self.stiffness.col_as_slice(j),
             ];
             for column in columns {
-                // `v * 0` is NaN exactly for a non-finite `v`: one vectorized sum, and the
-                // position only when there is one.
-                if column.iter().map(|v| v * 0.0).sum::<f64>().is_nan() {
-                    let row = column.iter().position(|v| !v.is_finite()).unwrap_or(0);
-                    return Err(AttemptFailure::NonFiniteMatrix { row });
-                }
-                if let Algebra::Structured { mass, .. } = &self.algebra {
-                    if let Some(row) = mass.first_outside(j, column) {
-                        return Err(AttemptFailure::OutsideStructure { row, column: j });
+                match &self.algebra {
+                    Algebra::Structured { mass, .. } if !first => {
+                        if let Some(row) = mass.first_non_finite_within(j, column) {
+                            return Err(AttemptFailure::NonFiniteMatrix { row });
+                        }
+                    }
+                    algebra => {
+                        // `v * 0` is NaN exactly for a non-finite `v`: one vectorized sum,
+                        // and the position only when there is one.
+                        if column.iter().map(|v| v * 0.0).sum::<f64>().is_nan() {
+                            let row = column.iter().position(|v| !v.is_finite()).unwrap_or(0);
+                            return Err(AttemptFailure::NonFiniteMatrix { row });
+                        }
+                        if let Algebra::Structured { mass, .. } = algebra {
+                            if let Some(row) = mass.first_outside(j, column) {
+                                return Err(AttemptFailure::OutsideStructure { row, column: j });
+                            }
+                        }
                     }
                 }
             }
