@@ -775,9 +775,10 @@ fn build_model_section(
     })
 }
 
-/// Default elements per link of the nonlinear model (docs/coupled.md: 32 elements put the
-/// 20 Hz mid-point deflections 0.46 % from the external ANCF model, 16 elements 1.6 %).
-pub const DEFAULT_ELEMENTS: usize = 32;
+/// Default elements per link of the nonlinear model: the dynamics crate's
+/// [`flexprr_dynamics::nonlinear::DEFAULT_ELEMENTS`] (one default for code, docs and scenes;
+/// docs/scenes.md, "elements", and docs/performance.md give its error and cost).
+pub const DEFAULT_ELEMENTS: usize = flexprr_dynamics::nonlinear::DEFAULT_ELEMENTS;
 
 /// Default collapse limit: 10 % of the link length, the external model's criterion
 /// (validation/data/collapse_speeds.json) and where the coupled model is still within 2 % of it.
