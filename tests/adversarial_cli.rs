@@ -976,8 +976,9 @@ fn motor_limits_are_checked_between_the_output_samples() {
 /// under control failed at t = 0 as a singular mass matrix; a huge rotor inertia printed
 /// "RMS torque reaches inf N m"; a patch's bad `xi_end` was reported at `xi_start`; angles of
 /// any size were taken; `modal_velocity` with a mode its patches cannot see, or a mode named
-/// twice, blamed "modes = 3" or "modes = 6" (the count over all links). Each is now one
-/// located line at its key, without `inf`, `NaN` or a hundred digits.
+/// twice, blamed "modes = 3" or "modes = 6" (the count over all links); `kp = 1e300` failed at
+/// t = 0 with a step size of zero. Each is now one located line at its key, without `inf`,
+/// `NaN` or a hundred digits.
 #[test]
 fn each_error_names_the_key_that_is_wrong() {
     let motor = std::fs::read_to_string(configs().join("servo_motor_f2.toml")).unwrap();
@@ -999,6 +1000,11 @@ fn each_error_names_the_key_that_is_wrong() {
             with_key(&motor, "rotor_inertia", "1e200"),
             "rotor_inertia",
             vec!["actuators.rotor_inertia", "1e200"],
+        ),
+        (
+            with_key(&motor, "kp", "1e300"),
+            "kp",
+            vec!["control.kp", "1e300", "at most 1e12 N/m"],
         ),
         (
             with_key(&motor, "efficiency", "1e-300"),
