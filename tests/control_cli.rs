@@ -117,7 +117,7 @@ fn motors_beyond_their_ratings_are_warned_about_on_stderr() {
     assert!(
         stderr.contains("warning: infeasible motion")
             && stderr.contains("max_speed of 100 rev/s (6000 rpm) from t = 0 ms on leg 1")
-            && stderr.contains("49844 rpm"),
+            && stderr.contains("49845 rpm"),
         "{stderr}"
     );
     let summary: serde_json::Value =

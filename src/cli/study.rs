@@ -299,6 +299,15 @@ fn probe_line(study: &Study, search: &SearchOutcome, probe: &Probe, start: Insta
     )
 }
 
+/// The searched key of a search study (empty for another study).
+fn search_key(study: &Study) -> String {
+    study
+        .search
+        .as_ref()
+        .map(|s| s.key.clone())
+        .unwrap_or_default()
+}
+
 /// Runs a speed-search study: a line per probe on stderr (unless `--quiet`; each probe is a
 /// whole run, up to minutes for the nonlinear model), then one line per search with its
 /// bracket, and `search.md` with the speeds side by side.
@@ -330,6 +339,14 @@ fn search(study: &Study, args: &StudyArgs, options: &StudyOptions) -> Result<(),
             s.probes.len(),
             s.rounds
         );
+        if s.status == "non-monotone" {
+            eprintln!(
+                "warning: {} [{}]: {}",
+                study.name,
+                s.case_label(),
+                flexprr_studies::search::non_monotone_note(&search_key(study), s)
+            );
+        }
     }
     println!(
         "table {}; side by side in {}",

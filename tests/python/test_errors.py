@@ -85,3 +85,33 @@ def test_run_many_returns_exceptions_in_place(root):
     assert isinstance(out[1], flexprr.SceneError) and out[1].key.startswith("time")
     with pytest.raises(flexprr.SceneError):
         flexprr.run_many([good, bad])
+
+
+@pytest.mark.parametrize("where", [{}, {"processes": 2}])
+def test_run_many_keeps_every_result_in_its_place(root, tmp_path, where):
+    """Issue 34: one missing or unparsable path raised at once and every other scene's result
+    was lost. Each entry now gets its own outcome in its place, and every other scene runs."""
+    good = flexprr.Scene.load(root / "configs" / "paper_f20.toml")
+    good.set("output.requests", ["kinematics"]).set("output.plots", False).set("time.end", 0.01)
+    syntax = tmp_path / "syntax.toml"
+    syntax.write_text("[trajectory\nkind = 1\n")
+    bad_value = good.copy().set("time.end", -1.0)
+    collapse = flexprr.Scene.load(root / "configs" / "coupled_f20.toml")
+    collapse.set("trajectory.frequency", 30.0).set("time.end", 0.06).set("output.plots", False)
+    entries = [good, tmp_path / "missing.toml", syntax, bad_value, collapse, 42, str(root / "configs" / "paper_f10.toml")]
+    out = flexprr.run_many(entries, return_exceptions=True, **where)
+    assert len(out) == len(entries)
+    assert isinstance(out[0], flexprr.RunResult) and out[0].summary["status"] == "ok"
+    assert isinstance(out[1], flexprr.SceneError) and "missing.toml" in str(out[1])
+    assert isinstance(out[2], flexprr.SceneError) and "syntax.toml:1" in str(out[2])
+    assert isinstance(out[3], flexprr.SceneError) and out[3].key.startswith("time")
+    assert isinstance(out[4], flexprr.RunError) and out[4].kind == "collapse"
+    assert out[4].partial.summary["status"] == "failed"
+    assert isinstance(out[5], TypeError)
+    assert isinstance(out[6], flexprr.RunResult)
+    # The same good scene alone gives the same data.
+    alone = flexprr.run(good)
+    np.testing.assert_array_equal(out[0].table("kinematics").to_numpy(), alone.table("kinematics").to_numpy())
+    # Without return_exceptions an entry that cannot be read is raised at once.
+    with pytest.raises(flexprr.SceneError, match="missing.toml"):
+        flexprr.run_many([good, tmp_path / "missing.toml"], **where)

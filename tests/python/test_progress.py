@@ -94,3 +94,32 @@ def test_the_gil_is_released_during_a_run_with_a_callback(scene):
     lo = span["start"] + 0.25 * (span["end"] - span["start"])
     hi = span["start"] + 0.75 * (span["end"] - span["start"])
     assert len([t for t in ticks if lo < t < hi]) >= 5
+
+
+def test_run_study_reports_each_pose_of_a_map_and_each_probe_of_a_search(root, tmp_path):
+    """Issue 34: run_study on a map reported progress once, at the end. It reports after each
+    pose of a map, and after each probe of a speed search."""
+    study = tmp_path / "map.toml"
+    study.write_text(
+        f'base = "{(root / "configs" / "servo_f20.toml").as_posix()}"\n'
+        "[map]\n"
+        "x = { start = -0.05, end = 0.05, count = 3 }\n"
+        "y = { start = -0.05, end = 0.05, count = 2 }\n"
+        "phi_deg = 45.0\n"
+        'quantity = "lowest_frequency"\n'
+    )
+    calls = []
+    flexprr.run_study(study, tmp_path / "map_out", threads=2, progress=calls.append)
+    assert calls[-1] == 1.0 and calls == sorted(calls)
+    assert {round(c * 6) for c in calls[:-1]} >= {1, 2, 3, 4, 5}
+    search = tmp_path / "search.toml"
+    search.write_text(
+        f'base = "{(root / "configs" / "coupled_f20.toml").as_posix()}"\n'
+        '[set.model]\ncoupling = "ked"\n'
+        '[search]\nkey = "trajectory.frequency"\nlow = 20.0\nhigh = 34.0\ntolerance = 0.5\ntime = 0.5\n'
+    )
+    calls = []
+    summary = flexprr.run_study(search, tmp_path / "search_out", threads=2, progress=calls.append)
+    # Bisection over 14 Hz to 0.5 Hz: the two ends and 5 halvings, one call per probe.
+    assert summary["total"] == 7
+    assert len(calls) == 8 and calls[-1] == 1.0 and calls == sorted(calls)

@@ -170,3 +170,20 @@ def test_control_keys_are_set_and_checked_like_any_other(root):
     with pytest.raises(flexprr.SceneError) as info:
         scene.validate()
     assert info.value.key == "control" and "coupled" in str(info.value)
+
+
+def test_vibration_control_keys_and_types_are_checked_at_set(root):
+    """Issue 34: Scene.set accepted unknown vibration_control keys; the law's keys are now
+    checked at once against the scene's patches, as validation checks them."""
+    scene = flexprr.Scene.load(root / "configs" / "piezo_f20.toml")
+    before = scene.to_dict()
+    for key, value, expected in [
+        ("vibration_control.gian", 0.01, "unknown field `gian`"),
+        ("vibration_control.gain", "high", "gain"),
+    ]:
+        with pytest.raises(flexprr.SceneError) as info:
+            scene.set(key, value)
+        assert info.value.key == key and expected in str(info.value)
+        assert scene.to_dict() == before
+    scene.set("vibration_control.gain", 0.01)
+    assert scene.get("vibration_control.gain") == 0.01

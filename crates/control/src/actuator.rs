@@ -237,6 +237,74 @@ impl MotorBallScrew {
             true,
             "must be finite and > 0 (rev/s)",
         )?;
+        // Bounds far beyond any motor and screw (by orders of magnitude), which keep the
+        // torque, the reflected inertia `J (2 pi / p)^2` and their squares (the RMS torque)
+        // finite: a value beyond them is a unit slip, and would overflow.
+        for (name, value, max, rule) in [
+            (
+                "rotor_inertia",
+                self.rotor_inertia,
+                1e3,
+                "must be at most 1e3 kg m^2 (servo rotors are 1e-6 to 1e-1)",
+            ),
+            (
+                "lead",
+                self.lead,
+                10.0,
+                "must be at most 10 m/rev (ball screws have 1 to 50 mm)",
+            ),
+            (
+                "peak_torque",
+                r.peak_torque,
+                1e6,
+                "must be at most 1e6 N m (servo motors give 0.1 to 1e3)",
+            ),
+            (
+                "max_speed",
+                r.max_speed,
+                1e5,
+                "must be at most 1e5 rev/s (servo motors turn up to about 300)",
+            ),
+            (
+                "viscous_friction",
+                self.viscous_friction,
+                1e6,
+                "must be at most 1e6 N m s/rad",
+            ),
+            (
+                "coulomb_friction",
+                self.coulomb_friction,
+                1e6,
+                "must be at most 1e6 N m",
+            ),
+            (
+                "coulomb_smoothing",
+                self.coulomb_smoothing,
+                1e5,
+                "must be at most 1e5 rev/s",
+            ),
+        ] {
+            if value > max {
+                return Err(ControlError::InvalidParameter { name, value, rule });
+            }
+        }
+        if self.lead < 1e-6 {
+            return Err(ControlError::InvalidParameter {
+                name: "lead",
+                value: self.lead,
+                rule: "must be at least 1e-6 m/rev (1 um per turn; ball screws have 1 to 50 mm): \
+                       a finer lead makes the reflected rotor inertia J (2 pi / lead)^2 and the \
+                       friction torque overflow",
+            });
+        }
+        if self.efficiency < 0.01 {
+            return Err(ControlError::InvalidParameter {
+                name: "efficiency",
+                value: self.efficiency,
+                rule: "must be in [0.01, 1] (screws have 0.2 to 0.95): the torque is the force \
+                       divided by it",
+            });
+        }
         Ok(self)
     }
 

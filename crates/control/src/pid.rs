@@ -37,7 +37,8 @@ impl Pid {
     /// A PID law: as [`Pid::pd`] with the integral gain `ki` (N/(m s)).
     ///
     /// # Errors
-    /// A negative or non-finite gain or period.
+    /// A negative, non-finite or absurdly large gain (`kp` above 1e12 N/m, `kd` above 1e9
+    /// N s/m, `ki` above 1e15 N/(m s)), or a negative or non-finite period.
     pub fn new(
         kp: f64,
         kd: f64,
@@ -45,6 +46,28 @@ impl Pid {
         feedforward: bool,
         period: f64,
     ) -> Result<Self, ControlError> {
+        // Bounds far beyond any servo (stiffer than a steel bar by orders of magnitude):
+        // beyond them the loop's frequency, sqrt(kp / m), is out of any step's reach and the
+        // run would fail at its start with a step size of zero instead of here.
+        for (name, value, max, rule) in [
+            (
+                "kp",
+                kp,
+                1e12,
+                "a gain must be at most 1e12 N/m (servo loops are 1e4 to 1e8)",
+            ),
+            (
+                "kd",
+                kd,
+                1e9,
+                "a gain must be at most 1e9 N s/m (servo loops are 1e1 to 1e5)",
+            ),
+            ("ki", ki, 1e15, "a gain must be at most 1e15 N/(m s)"),
+        ] {
+            if value > max {
+                return Err(ControlError::InvalidParameter { name, value, rule });
+            }
+        }
         Ok(Self {
             kp: check("kp", kp, 0.0, false, "a gain must be finite and >= 0")?,
             kd: check("kd", kd, 0.0, false, "a gain must be finite and >= 0")?,

@@ -17,20 +17,18 @@ use flexprr_dynamics::{
 };
 use flexprr_integrators::{Integrator, OdeSystem, Options, Rk45, Stepper};
 
-/// Integrates to `t_end` or the first failure; returns (end time, rhs evaluations, steps).
+/// Integrates to `t_end`, the system's terminal event (a collapse limit) or the first
+/// failure; returns (end time, rhs evaluations, steps).
 fn run<S: OdeSystem>(s: &mut S, y0: &[f64], t_end: f64, rtol: f64) -> (f64, usize, usize) {
     let rk = Rk45::new(Options::default().rtol(rtol).atol(rtol * 1e-3));
-    let mut st = rk.start(s, 0.0, y0, t_end).expect("start");
-    while st.t() < t_end {
-        if st.step(s).is_err() {
-            break;
-        }
+    match rk.solve_observed(s, 0.0, y0, &[t_end], &[], &mut ()) {
+        Ok(sol) => (t_end, sol.stats.rhs_evaluations, sol.stats.accepted_steps),
+        Err(e) => (
+            e.last_time().unwrap_or(0.0),
+            e.solution.stats.rhs_evaluations,
+            e.solution.stats.accepted_steps,
+        ),
     }
-    (
-        st.t(),
-        st.stats().rhs_evaluations,
-        st.stats().accepted_steps,
-    )
 }
 
 fn main() {

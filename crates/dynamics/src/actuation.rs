@@ -179,10 +179,10 @@ impl Actuated {
         }
     }
 
-    /// The sample times of a sampled law strictly inside `(t0, t1)`: breakpoints of the
-    /// integration.
-    pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.hold.sample_times(t0, t1)
+    /// The first sample time of a sampled law strictly after `t`: the next breakpoint of
+    /// the integration.
+    pub(crate) fn next_sample(&self, t: f64) -> Option<f64> {
+        self.hold.next_sample(t)
     }
 
     /// The control input at `t` for the measured sliders `measured`.

@@ -4,6 +4,14 @@
 //! an integration segment starts at one ([`flexprr_integrators::OdeSystem::segment_start`]),
 //! and kept, so that outputs computed after the run see the value held at any time.
 
+/// The earlier of two optional times.
+pub(crate) fn earliest(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
 /// The samples of a sampled law, in time order.
 #[derive(Debug, Clone)]
 pub(crate) struct Hold<T> {
@@ -37,17 +45,19 @@ impl<T> Hold<T> {
         1e-9 * self.period
     }
 
-    /// The sample times strictly inside `(t0, t1)`: breakpoints of the integration.
-    pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
+    /// The first sample time strictly after `t` (beyond the hold's tolerance, so a time
+    /// on a sample gives the next one): where the integration must stop next. `None` for a
+    /// continuous law. The samples are generated one at a time, never listed.
+    pub(crate) fn next_sample(&self, t: f64) -> Option<f64> {
         if !self.is_sampled() {
-            return Vec::new();
+            return None;
         }
-        let first = ((t0 - self.start) / self.period).floor().max(0.0) as usize + 1;
-        (first..)
-            .map(|k| self.start + k as f64 * self.period)
-            .take_while(|t| *t < t1)
-            .filter(|t| *t > t0)
-            .collect()
+        let k = (((t - self.start) / self.period).floor() + 1.0).max(1.0);
+        let mut next = self.start + k * self.period;
+        if next <= t + self.tolerance() {
+            next = self.start + (k + 1.0) * self.period;
+        }
+        Some(next)
     }
 
     /// Whether `t` is one of the sample times.
@@ -88,7 +98,11 @@ mod tests {
     #[test]
     fn a_hold_samples_on_its_grid_and_holds_between() {
         let mut hold = Hold::new(0.1, 0.01);
-        assert_eq!(hold.sample_times(0.1, 0.135).len(), 3);
+        assert!((hold.next_sample(0.1).unwrap() - 0.11).abs() < 1e-15);
+        assert!((hold.next_sample(0.11).unwrap() - 0.12).abs() < 1e-15);
+        assert!((hold.next_sample(0.1234).unwrap() - 0.13).abs() < 1e-15);
+        assert!((hold.next_sample(0.0).unwrap() - 0.11).abs() < 1e-15);
+        assert_eq!(Hold::<u8>::new(0.0, 0.0).next_sample(0.5), None);
         assert!(hold.is_sample_time(0.12) && !hold.is_sample_time(0.125));
         hold.push(0.1, 1);
         hold.push(0.11, 2);

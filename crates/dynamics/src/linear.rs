@@ -153,9 +153,7 @@ impl LinearSecondOrder for ModalSystem {
     /// inverse kinematics (and the rigid inverse dynamics if the axial model needs it).
     fn coefficients(&mut self, t: f64, stiffness: &mut [f64], forcing: &mut [f64]) {
         let fail = |system: &mut Self, e: DynamicsError, s: &mut [f64], f: &mut [f64]| {
-            if system.failure.is_none() {
-                system.failure = Some(e);
-            }
+            system.failure = Some(e);
             s.fill(f64::NAN);
             f.fill(f64::NAN);
         };

@@ -356,8 +356,9 @@ impl ModalSystem {
     pub fn initial_state(&self) -> Vec<f64> {
         vec![0.0; 2 * self.modes]
     }
-    /// The first failure met inside the right-hand side (which then writes NaN so the
-    /// integrator stops with a non-finite error): use it to report the real cause.
+    /// The latest failure met inside the right-hand side since the last accepted step
+    /// (which then writes NaN so the integrator rejects the trial): use it to report the
+    /// real cause of a failed integration.
     pub fn take_failure(&mut self) -> Option<DynamicsError> {
         self.failure.take()
     }
@@ -518,11 +519,9 @@ impl ModalSystem {
             .map_or_else(Vec::new, |p| p.states(t, &y[..n], &y[n..2 * n]))
     }
 
-    /// The sample times of a sampled vibration law strictly inside `(t0, t1)`.
-    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.patches
-            .as_ref()
-            .map_or_else(Vec::new, |p| p.sample_times(t0, t1))
+    /// The first sample time of a sampled vibration law strictly after `t`.
+    pub fn next_sample(&self, t: f64) -> Option<f64> {
+        self.patches.as_ref().and_then(|p| p.next_sample(t))
     }
 
     /// Counts one rigid inverse-dynamics solve made for this system's outputs.
@@ -548,10 +547,10 @@ impl ModalSystem {
         e
     }
 
+    /// Records `error` (the latest one met since the last accepted step: the one closest to
+    /// where the integration stopped) and writes NaN so the integrator rejects the trial.
     fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {
-        if self.failure.is_none() {
-            self.failure = Some(error);
-        }
+        self.failure = Some(error);
         dy.fill(f64::NAN);
     }
 }
@@ -580,6 +579,16 @@ impl OdeSystem for ModalSystem {
         if let Some(patches) = self.patches.as_mut() {
             patches.accelerate(t, &y[..n], &y[n..], acc);
         }
+    }
+
+    /// A sampled vibration law's next sample ([`ModalSystem::next_sample`]).
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        self.next_sample(t)
+    }
+
+    /// A failure met in a rejected trial is forgotten once a step is accepted.
+    fn step_accepted(&mut self, _t: f64, _y: &[f64]) {
+        self.failure = None;
     }
 
     fn segment_start(&mut self, t: f64, y: &[f64]) {
@@ -612,9 +621,7 @@ impl OdeSystem for ModalSystem {
         let loads = match loaded {
             Ok((_, loads)) => loads,
             Err(e) => {
-                if self.failure.is_none() {
-                    self.failure = Some(e);
-                }
+                self.failure = Some(e);
                 jac.fill(f64::NAN);
                 return;
             }

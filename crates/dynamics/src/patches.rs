@@ -59,11 +59,27 @@ impl Patch {
         if self.link > 2 {
             return Err(invalid("link", self.link as f64 + 1.0, "must be 1, 2 or 3"));
         }
-        if !(self.xi_start >= 0.0 && self.xi_end <= 1.0 && self.xi_start < self.xi_end) {
+        // Each end at its own key: a start outside [0, 1), an end outside (0, 1], an end
+        // at or before the start (the end is the one named then).
+        if !(self.xi_start >= 0.0 && self.xi_start < 1.0) {
             return Err(invalid(
                 "xi_start",
                 self.xi_start,
-                "the patch must span 0 <= xi_start < xi_end <= 1",
+                "the patch must start within the link: 0 <= xi_start < 1",
+            ));
+        }
+        if !(self.xi_end > 0.0 && self.xi_end <= 1.0) {
+            return Err(invalid(
+                "xi_end",
+                self.xi_end,
+                "the patch must end within the link: 0 < xi_end <= 1",
+            ));
+        }
+        if self.xi_end <= self.xi_start {
+            return Err(invalid(
+                "xi_end",
+                self.xi_end,
+                "the patch must end after it starts: xi_start < xi_end",
             ));
         }
         for (name, v) in [
@@ -171,9 +187,9 @@ impl PatchLaw {
         &self.spec.patches
     }
 
-    /// The sample times of a sampled law strictly inside `(t0, t1)`.
-    pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.hold.sample_times(t0, t1)
+    /// The first sample time of a sampled law strictly after `t`.
+    pub(crate) fn next_sample(&self, t: f64) -> Option<f64> {
+        self.hold.next_sample(t)
     }
 
     /// The voltages at `t` from the current sensors (held for a sampled law), clipped at
@@ -318,9 +334,9 @@ impl PatchLoop {
         })
     }
 
-    /// The sample times of a sampled law strictly inside `(t0, t1)`.
-    pub(crate) fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.law.sample_times(t0, t1)
+    /// The first sample time of a sampled law strictly after `t`.
+    pub(crate) fn next_sample(&self, t: f64) -> Option<f64> {
+        self.law.next_sample(t)
     }
 
     /// The sensors and their rates from the modal coordinates `eta` and rates `eta_dot`.
@@ -457,6 +473,52 @@ pub fn modal_velocity_law(
                 .collect()
         })
         .collect();
+    // Name what is wrong before the modal filter would only find it singular: each link's
+    // patches sense (and force) a mode through its slope difference over the patch, so a
+    // link needs at least as many patches as targeted modes, and each targeted mode must
+    // change its slope over one of them.
+    for &link in &links {
+        let on_link: Vec<&Patch> = patches.iter().filter(|p| p.link == link).collect();
+        let spans = on_link
+            .iter()
+            .map(|p| format!("[{}, {}]", p.xi_start, p.xi_end))
+            .collect::<Vec<_>>()
+            .join(", ");
+        if modes.len() > on_link.len() {
+            return Err(DynamicsError::Inconsistent(format!(
+                "modal velocity control targets {} modes ({}) on link {}, which has {} patch{} \
+                 ({spans}): a link's patches sense at most as many modes as there are \
+                 patches; add patches on link {} or target fewer modes",
+                modes.len(),
+                modes
+                    .iter()
+                    .map(|j| (j + 1).to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                link + 1,
+                on_link.len(),
+                if on_link.len() == 1 { "" } else { "es" },
+                link + 1
+            )));
+        }
+        for &j in modes {
+            let seen = on_link
+                .iter()
+                .map(|p| slope(p, j).abs() * machine.links[link].length())
+                .fold(0.0_f64, f64::max);
+            if seen <= 1e-9 {
+                return Err(DynamicsError::Inconsistent(format!(
+                    "modal velocity control targets mode {} of link {}, which its patches \
+                     ({spans}) cannot see: the mode's slope is the same at both ends of each \
+                     patch, so it bends none of them (a patch placed symmetrically about a \
+                     node of the mode's curvature); move a patch or leave mode {} out",
+                    j + 1,
+                    link + 1,
+                    j + 1
+                )));
+            }
+        }
+    }
     let forcing: Vec<Vec<f64>> = targets
         .iter()
         .map(|&(link, j)| {
@@ -472,6 +534,19 @@ pub fn modal_velocity_law(
                 .collect()
         })
         .collect();
-    flexprr_control::ModalVelocity::new(&sensing, &forcing, &gains, period)
-        .map_err(|e| DynamicsError::Inconsistent(format!("modal velocity control: {e}")))
+    flexprr_control::ModalVelocity::new(&sensing, &forcing, &gains, period).map_err(|e| {
+        DynamicsError::Inconsistent(format!(
+            "modal velocity control of modes {} on the patches of links {}: {e}",
+            modes
+                .iter()
+                .map(|j| (j + 1).to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            links
+                .iter()
+                .map(|l| (l + 1).to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })
 }

@@ -18,7 +18,7 @@ use flexprr_dynamics::{
     CoupledOptions, CoupledSystem, DynamicsError, Machine, ModalDamping, NonlinearOptions,
     NonlinearSystem, paper,
 };
-use flexprr_integrators::{Integrator, OdeSystem, Options, Rk45, Stepper};
+use flexprr_integrators::{Integrator, OdeSystem, Options, Rk45};
 use flexprr_kinematics::Trajectory;
 
 // --- allocation counting on the current thread only (tests run in parallel threads) ---
@@ -79,23 +79,19 @@ fn sample<S: OdeSystem>(
     rtol: f64,
 ) -> (Vec<f64>, Vec<Vec<f64>>, Option<String>) {
     let rk = Rk45::new(Options::default().rtol(rtol).atol(rtol * 1e-3));
-    let mut stepper = rk.start(system, 0.0, y0, t_end).unwrap();
     let n_out = (t_end / dt).round() as usize;
-    let (mut times, mut states) = (vec![0.0], vec![y0.to_vec()]);
-    let mut k = 1;
-    let mut buf = vec![0.0; y0.len()];
-    while k <= n_out {
-        if let Err(e) = stepper.step(system) {
-            return (times, states, Some(e.to_string()));
+    let t_out: Vec<f64> = (0..=n_out).map(|k| k as f64 * dt).collect();
+    let (solution, failure) = match rk.solve_observed(system, 0.0, y0, &t_out, &[], &mut ()) {
+        Ok(solution) => (solution, None),
+        Err(e) => {
+            let text = e.to_string();
+            (e.solution, Some(text))
         }
-        while k <= n_out && (k as f64) * dt <= stepper.t() + 1e-15 {
-            stepper.interpolate(k as f64 * dt, &mut buf);
-            times.push(k as f64 * dt);
-            states.push(buf.clone());
-            k += 1;
-        }
-    }
-    (times, states, None)
+    };
+    let states = (0..solution.len())
+        .map(|k| solution.y(k).to_vec())
+        .collect();
+    (solution.t, states, failure)
 }
 
 /// `||a - b|| / ||b||` over all samples and links.

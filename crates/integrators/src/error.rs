@@ -61,6 +61,13 @@ pub enum IntegratorError {
         /// Estimate of `|h lambda|` on the step that fired the test.
         h_lambda: f64,
     },
+    /// The system's terminal event ([`crate::OdeSystem::terminal_event`]) was reached: the
+    /// integration ended there as the system asked (what it means is the system's to say).
+    #[error("the system's terminal event was reached at t = {t} s")]
+    TerminalEvent {
+        /// The located time of the event.
+        t: f64,
+    },
     /// An option is out of range.
     #[error("invalid integrator option: {0}")]
     InvalidOptions(String),
@@ -79,7 +86,8 @@ impl IntegratorError {
             | Self::NonFinite { t, .. }
             | Self::NewtonFailure { t, .. }
             | Self::SingularMatrix { t }
-            | Self::Stiff { t, .. } => Some(*t),
+            | Self::Stiff { t, .. }
+            | Self::TerminalEvent { t } => Some(*t),
             Self::InvalidOptions(_) | Self::InvalidInput(_) => None,
         }
     }

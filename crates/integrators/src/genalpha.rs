@@ -51,7 +51,8 @@
 //! ([`SecondOrderForm::structure`](crate::SecondOrderForm::structure)), and the products with
 //! `M` use the same storage; otherwise dense LU with partial pivoting (faer's `lu_in_place`
 //! into preallocated storage) and dense products. A form whose matrices have a non-zero
-//! entry outside the structure it declared is refused. The convergence test is CVODE's: the
+//! entry outside the structure it declared at the first evaluation is refused; later
+//! evaluations zero, check and read only the entries inside the structure. The convergence test is CVODE's: the
 //! rate `R` from successive corrections and `min(1, R) |dx|_w <= 0.002`, where `|.|_w` is
 //! the weighted RMS norm of the position corrections `beta' h^2 dx` with the error test's
 //! weights (velocities are not tested: an unresolved mode's velocity is `omega` times its
@@ -62,9 +63,19 @@
 //! The local error is estimated as in Zienkiewicz & Xie ("A simple error estimator and
 //! adaptive time stepping procedure for dynamic analysis", *Earthquake Eng. Struct. Dyn.*
 //! 20, 1991; for the generalized-alpha method Géradin & Cardona, *Flexible Multibody
-//! Dynamics*, 2001, ch. 14): the Taylor term the scheme misses in the positions,
-//! `e_q = (beta - 1/6) h^2 (a_dd_{n+1} - a_dd_n)` (`= (beta - 1/6) h^3 q'''`). The estimate
-//! is filtered through the iteration matrix, `e <- (M + gamma' h C + beta' h^2 K)^-1 M e`, as stiff solvers filter
+//! Dynamics*, 2001, ch. 14): the Taylor term the scheme misses in the positions. With the
+//! auxiliary acceleration lagging the true one by `delta h`, `a_n = q''(t_n + delta h) +
+//! O(h^2)`, `delta = alpha_m - alpha_f` (Arnold & Brüls 2007, section 3), the positions'
+//! local error is `(beta + delta / 2 - 1/6) h^3 q'''`, estimated as
+//! `e_q = (beta + delta / 2 - 1/6) h^2 (a_dd_{n+1} - a_dd_n)`. (Newmark's constant
+//! `beta - 1/6`, exact for `alpha_m = alpha_f`, overestimates it twice at `rho_inf = 0.7`:
+//! `tests/genalpha.rs` compares both with the error of one step of the oscillator.) The
+//! auxiliary acceleration's lag is tied to the step size: when a step of size `h` follows
+//! one of size `h_old`, `a_n` is first moved by `delta (h - h_old) q'''` (with `q'''` from the
+//! last two accelerations), which keeps the velocities second-order accurate under
+//! variable steps (without it a change of step makes an `O(h^2)` error in `v`, and a
+//! sequence of changes costs an order). The estimate is filtered through the iteration
+//! matrix, `e <- (M + gamma' h C + beta' h^2 K)^-1 M e`, as stiff solvers filter
 //! theirs (Shampine 1980; Hairer & Wanner II, IV.8, eq. 8.20 for Radau5): a mode of
 //! frequency `omega` keeps its estimate when `omega h << 1` and loses it by
 //! `1 / (1 + beta' (omega h)^2)` beyond, so the axial modes of the links, which the method
@@ -72,9 +83,13 @@
 //! weighted RMS norm of `e_q` is at most 1 (positions only, as Zienkiewicz & Xie: the
 //! velocities of modes near `omega h ~ 1` would set the step otherwise), with the weights of
 //! [`crate::Options::for_system`] (a system's tolerance scales bound them below, so that an
-//! absolute coordinate passing zero does not set the step); the next step is
-//! `h (0.9 / err^(1/3))` bounded to `[0.2, 5] h`, and not increased below [`MIN_INCREASE`]
-//! (each change of step may cost a factorisation). Dense output is cubic Hermite
+//! absolute coordinate passing zero does not set the step). The next step comes from the
+//! PI controller of Gustafsson (1991; Hairer & Wanner II, IV.2, eq. 2.43a):
+//! `h 0.9 err_n^(-0.7/3) err_{n-1}^(0.4/3)` (`err_{n-1}` of the last accepted step, at least
+//! 1e-4), bounded to `[0.2, 5] h`, and not increased below [`MIN_INCREASE`] (each change of
+//! step may cost a factorisation); after a rejection, `h 0.9 err^(-1/3)`. Its smoother step
+//! sequence, with the two corrections above, makes the global error fall steadily with the
+//! tolerance (docs/performance.md, "A tolerance that orders the error"). Dense output is cubic Hermite
 //! interpolation of `q` from `(q, v)` and of `v` from `(v, a_dd)` at both ends of the step.
 //!
 //! Nothing is allocated after [`crate::Integrator::start`].
@@ -130,6 +145,12 @@ const MAX_CONSECUTIVE_FAILURES: usize = 10;
 const NEWTON_FAILURE_FACTOR: f64 = 0.25;
 
 const SAFETY: f64 = 0.9;
+/// The PI controller's exponents (Gustafsson 1991, with `k = 3` for a local error of third
+/// order): `err_n^(-0.7/k) err_{n-1}^(0.4/k)`.
+const PI_INTEGRAL: f64 = 0.7 / 3.0;
+const PI_PROPORTIONAL: f64 = 0.4 / 3.0;
+/// The smallest previous error the PI controller uses (Hairer & Wanner's 1e-4).
+const MIN_OLD_ERROR: f64 = 1e-4;
 const MIN_FACTOR: f64 = 0.2;
 const MAX_FACTOR: f64 = 5.0;
 
@@ -202,6 +223,18 @@ impl Parameters {
     fn gamma_prime(&self) -> f64 {
         self.gamma * (1.0 - self.alpha_f) / (1.0 - self.alpha_m)
     }
+
+    /// `delta = alpha_m - alpha_f`: the auxiliary acceleration lags the true one by
+    /// `delta h` (`a_n = q''(t_n + delta h) + O(h^2)`, Arnold & Brüls 2007).
+    pub fn lag(&self) -> f64 {
+        self.alpha_m - self.alpha_f
+    }
+
+    /// The positions' local error constant `C`: one step from exact values misses
+    /// `C h^3 q'''`, `C = beta + delta / 2 - 1/6` (module documentation).
+    pub fn error_constant(&self) -> f64 {
+        self.beta + 0.5 * self.lag() - 1.0 / 6.0
+    }
 }
 
 /// Why one attempt at a step failed.
@@ -243,6 +276,8 @@ pub struct GeneralizedAlphaStepper {
     y: Vec<f64>,
     acc: Vec<f64>,
     aux: Vec<f64>,
+    /// The auxiliary acceleration of the current attempt: `aux` moved to its step size.
+    aux_step: Vec<f64>,
     /// The same at the start of the last accepted step (dense output).
     y_old: Vec<f64>,
     acc_old: Vec<f64>,
@@ -269,6 +304,8 @@ pub struct GeneralizedAlphaStepper {
     steps_since_matrices: usize,
     /// Newton rate estimate carried between steps while the factorisation is unchanged.
     newton_rate: f64,
+    /// Error norm of the last accepted step (PI control), 0 before the first.
+    error_old: f64,
 }
 
 impl std::fmt::Debug for GeneralizedAlphaStepper {
@@ -319,9 +356,22 @@ impl GeneralizedAlphaStepper {
         &mut self,
         system: &mut S,
     ) -> Result<(), AttemptFailure> {
-        self.mass.fill(0.0);
-        self.damping.fill(0.0);
-        self.stiffness.fill(0.0);
+        // With a structure, after the first evaluation has shown that the form writes inside
+        // it, only the entries inside are zeroed, checked and read (the dense storage of
+        // the form's interface is n^2 per matrix; its structured part O(n p)).
+        let first = !self.matrices_valid;
+        match &self.algebra {
+            Algebra::Structured { mass, .. } if !first => {
+                mass.zero_within(&mut self.mass);
+                mass.zero_within(&mut self.damping);
+                mass.zero_within(&mut self.stiffness);
+            }
+            _ => {
+                self.mass.fill(0.0);
+                self.damping.fill(0.0);
+                self.stiffness.fill(0.0);
+            }
+        }
         if let Some(form) = system.second_order_form() {
             form.matrices(
                 self.span.t,
@@ -343,15 +393,24 @@ impl GeneralizedAlphaStepper {
                 self.stiffness.col_as_slice(j),
             ];
             for column in columns {
-                // `v * 0` is NaN exactly for a non-finite `v`: one vectorized sum, and the
-                // position only when there is one.
-                if column.iter().map(|v| v * 0.0).sum::<f64>().is_nan() {
-                    let row = column.iter().position(|v| !v.is_finite()).unwrap_or(0);
-                    return Err(AttemptFailure::NonFiniteMatrix { row });
-                }
-                if let Algebra::Structured { mass, .. } = &self.algebra {
-                    if let Some(row) = mass.first_outside(j, column) {
-                        return Err(AttemptFailure::OutsideStructure { row, column: j });
+                match &self.algebra {
+                    Algebra::Structured { mass, .. } if !first => {
+                        if let Some(row) = mass.first_non_finite_within(j, column) {
+                            return Err(AttemptFailure::NonFiniteMatrix { row });
+                        }
+                    }
+                    algebra => {
+                        // `v * 0` is NaN exactly for a non-finite `v`: one vectorized sum,
+                        // and the position only when there is one.
+                        if column.iter().map(|v| v * 0.0).sum::<f64>().is_nan() {
+                            let row = column.iter().position(|v| !v.is_finite()).unwrap_or(0);
+                            return Err(AttemptFailure::NonFiniteMatrix { row });
+                        }
+                        if let Algebra::Structured { mass, .. } = algebra {
+                            if let Some(row) = mass.first_outside(j, column) {
+                                return Err(AttemptFailure::OutsideStructure { row, column: j });
+                            }
+                        }
                     }
                 }
             }
@@ -510,15 +569,25 @@ impl GeneralizedAlphaStepper {
         if !reuse {
             self.factor(h)?;
         }
+        // The auxiliary acceleration for this step size: its lag `delta h_old` moved to
+        // `delta h`, with `q'''` from the last two accelerations (none at the first step).
+        let h_old = self.span.t - self.span.t_previous;
+        let shift = if h_old == 0.0 {
+            0.0
+        } else {
+            p.lag() * (h - h_old) / h_old
+        };
+        for i in 0..n {
+            self.aux_step[i] = self.aux[i] + shift * (self.acc[i] - self.acc_old[i]);
+        }
         // Fixed parts: everything of q_{n+1}, v_{n+1} but the terms in x.
         let scale = 1.0 / (1.0 - p.alpha_m);
         for i in 0..n {
-            let known = scale * (p.alpha_f * self.acc[i] - p.alpha_m * self.aux[i]);
-            self.fixed[i] = self.y[i]
-                + h * self.y[n + i]
-                + h * h * ((0.5 - p.beta) * self.aux[i] + p.beta * known);
-            self.fixed[n + i] =
-                self.y[n + i] + h * ((1.0 - p.gamma) * self.aux[i] + p.gamma * known);
+            let a = self.aux_step[i];
+            let known = scale * (p.alpha_f * self.acc[i] - p.alpha_m * a);
+            self.fixed[i] =
+                self.y[i] + h * self.y[n + i] + h * h * ((0.5 - p.beta) * a + p.beta * known);
+            self.fixed[n + i] = self.y[n + i] + h * ((1.0 - p.gamma) * a + p.gamma * known);
         }
         self.predict(h);
         let mut previous = 0.0;
@@ -556,7 +625,7 @@ impl GeneralizedAlphaStepper {
     /// filtered through the iteration matrix.
     fn local_error(&mut self, h: f64) -> f64 {
         let n = self.n;
-        let c = (self.parameters.beta - 1.0 / 6.0) * h * h;
+        let c = self.parameters.error_constant() * h * h;
         for i in 0..n {
             self.error[i] = c * (self.x[i] - self.acc[i]);
         }
@@ -583,7 +652,7 @@ impl GeneralizedAlphaStepper {
         for i in 0..self.n {
             self.aux[i] = scale
                 * ((1.0 - p.alpha_f) * self.x[i] + p.alpha_f * self.acc[i]
-                    - p.alpha_m * self.aux[i]);
+                    - p.alpha_m * self.aux_step[i]);
         }
         self.y_old.copy_from_slice(&self.y);
         self.acc_old.copy_from_slice(&self.acc);
@@ -650,6 +719,23 @@ impl GeneralizedAlphaStepper {
             return Ok(true);
         }
         Ok(false)
+    }
+}
+
+impl GeneralizedAlphaStepper {
+    /// Sets the size (magnitude) of the next step attempt, in place of the controller's
+    /// proposal: for callers that drive a step sequence of their own (with error control
+    /// off, `rtol` and `atol` so large that every step passes). `max_step` and the landing on
+    /// `t_end` still apply.
+    pub fn set_step(&mut self, h: f64) {
+        if h.is_finite() && h > 0.0 {
+            self.h_next = h;
+        }
+    }
+
+    /// The method's parameters.
+    pub fn parameters(&self) -> Parameters {
+        self.parameters
     }
 }
 
@@ -728,10 +814,17 @@ impl Stepper for GeneralizedAlphaStepper {
                 return Ok(());
             }
             let factor = if error > 0.0 {
-                (SAFETY * error.powf(-1.0 / 3.0)).clamp(MIN_FACTOR, MAX_FACTOR)
+                let integral = SAFETY * error.powf(-PI_INTEGRAL);
+                let proportional = if self.error_old > 0.0 {
+                    self.error_old.powf(PI_PROPORTIONAL)
+                } else {
+                    1.0
+                };
+                (integral * proportional).clamp(MIN_FACTOR, MAX_FACTOR)
             } else {
                 MAX_FACTOR
             };
+            self.error_old = error.max(MIN_OLD_ERROR);
             self.h_next = if rejected || (1.0..MIN_INCREASE).contains(&factor) {
                 h.abs().min(h.abs() * factor)
             } else {
@@ -850,6 +943,7 @@ impl crate::Integrator for GeneralizedAlpha {
             h_next: h0,
             y: y0.to_vec(),
             aux: acc.clone(),
+            aux_step: acc.clone(),
             acc_old: acc.clone(),
             acc,
             y_old: y0.to_vec(),
@@ -869,6 +963,7 @@ impl crate::Integrator for GeneralizedAlpha {
             matrices_valid: false,
             steps_since_matrices: 0,
             newton_rate: 1.0,
+            error_old: 0.0,
         })
     }
 }

@@ -63,7 +63,9 @@ pub use exponential::{
     Auto, BlockOperators, LinearSecondOrder, Magnus, MagnusOrder, MagnusStepper,
 };
 pub use genalpha::{GeneralizedAlpha, GeneralizedAlphaStepper};
-pub use observe::{DynIntegrator, Flow, Interrupted, Interruption, Observer, OnStep};
+pub use observe::{
+    DynIntegrator, EVENT_RESOLUTION, Flow, Interrupted, Interruption, Observer, OnStep,
+};
 pub use options::{Options, Tolerance};
 pub use rk45::{Rk45, Rk45Stepper, StiffnessDetection};
 pub use solution::{Solution, Stats};
@@ -229,13 +231,7 @@ pub trait Integrator {
         t_out: &[f64],
     ) -> Result<Solution, IntegratorError> {
         self.solve_observed(system, t0, y0, t_out, &[], &mut ())
-            .map_err(|interrupted| match interrupted.reason {
-                Interruption::Failed(e) => e,
-                // The `()` observer never stops; say so rather than panic if it ever did.
-                Interruption::Stopped { t } => IntegratorError::InvalidInput(format!(
-                    "the run was stopped at t = {t} s although nothing observed it"
-                )),
-            })
+            .map_err(Interrupted::into_error)
     }
 
     /// Integrates from `t0` to the last of `t_out` (as [`Integrator::solve`]), restarting
@@ -258,7 +254,8 @@ pub trait Integrator {
     /// [`Interrupted`] with every output up to the last accepted time (dense output, never
     /// extrapolated) and the statistics so far: [`Interruption::Failed`] for the errors of
     /// [`Integrator::solve`] (and a non-finite stop time), [`Interruption::Stopped`] when the
-    /// observer returned [`Flow::Stop`].
+    /// observer returned [`Flow::Stop`], [`Interruption::Event`] when the system's terminal
+    /// event ([`OdeSystem::terminal_event`]) was reached (the outputs up to its located time).
     fn solve_observed<S: OdeSystem + ?Sized>(
         &self,
         system: &mut S,

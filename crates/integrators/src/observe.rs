@@ -143,6 +143,12 @@ pub enum Interruption {
         /// Time at which the observer stopped the run.
         t: f64,
     },
+    /// The system's terminal event ([`OdeSystem::terminal_event`]) was reached on an
+    /// accepted step or its dense output; `t` is the located time of its first crossing.
+    Event {
+        /// Time of the event.
+        t: f64,
+    },
 }
 
 impl Interrupted {
@@ -151,7 +157,7 @@ impl Interrupted {
     /// errors, which carry none, the last output time, or `None` when there is no output).
     pub fn last_time(&self) -> Option<f64> {
         match &self.reason {
-            Interruption::Stopped { t } => Some(*t),
+            Interruption::Stopped { t } | Interruption::Event { t } => Some(*t),
             Interruption::Failed(e) => e.time().or_else(|| self.solution.t.last().copied()),
         }
     }
@@ -160,7 +166,20 @@ impl Interrupted {
     pub fn error(&self) -> Option<&IntegratorError> {
         match &self.reason {
             Interruption::Failed(e) => Some(e),
-            Interruption::Stopped { .. } => None,
+            Interruption::Stopped { .. } | Interruption::Event { .. } => None,
+        }
+    }
+
+    /// The reason as an [`IntegratorError`], for callers that have no observer and treat
+    /// every early end as an error ([`Integrator::solve`]).
+    pub fn into_error(self) -> IntegratorError {
+        match self.reason {
+            Interruption::Failed(e) => e,
+            Interruption::Event { t } => IntegratorError::TerminalEvent { t },
+            // The `()` observer never stops; say so rather than panic if another one did.
+            Interruption::Stopped { t } => IntegratorError::InvalidInput(format!(
+                "the run was stopped at t = {t} s by an observer"
+            )),
         }
     }
 }
@@ -170,6 +189,7 @@ impl fmt::Display for Interrupted {
         match &self.reason {
             Interruption::Failed(e) => write!(f, "{e}")?,
             Interruption::Stopped { t } => write!(f, "stopped by the observer at t = {t} s")?,
+            Interruption::Event { t } => write!(f, "terminal event at t = {t} s")?,
         }
         match self.solution.t.last() {
             Some(t) => write!(
@@ -186,9 +206,60 @@ impl std::error::Error for Interrupted {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match &self.reason {
             Interruption::Failed(e) => Some(e),
-            Interruption::Stopped { .. } => None,
+            Interruption::Stopped { .. } | Interruption::Event { .. } => None,
         }
     }
+}
+
+/// The resolution of event location, relative to the length of the step in which the event
+/// is found (the bisection also stops at a few ulps of `t`).
+pub const EVENT_RESOLUTION: f64 = 1e-9;
+
+/// Whether `a` and `b` are the same number (bit for bit).
+fn same(a: f64, b: f64) -> bool {
+    a.to_bits() == b.to_bits()
+}
+
+/// Whether a terminal event value counts as reached: not negative (NaN included).
+fn reached(g: Option<f64>) -> bool {
+    g.is_some_and(|g| g >= 0.0 || g.is_nan())
+}
+
+/// The first time in `(lo, hi]` at which the terminal event is reached, by bisection on the
+/// dense output of the last accepted step (`g` is not reached at `lo`, reached at `hi`),
+/// to [`EVENT_RESOLUTION`] of the step `step`; the system's last call is at the returned time
+/// with its state, which is left in `buf`.
+fn locate_event<T: Stepper, S: OdeSystem + ?Sized>(
+    stepper: &T,
+    system: &mut S,
+    mut lo: f64,
+    mut hi: f64,
+    step: f64,
+    buf: &mut [f64],
+) -> f64 {
+    let resolution = (EVENT_RESOLUTION * step.abs()).max(4.0 * f64::EPSILON * hi.abs());
+    let state_at = |t: f64, buf: &mut [f64]| {
+        if same(t, stepper.t()) {
+            buf.copy_from_slice(stepper.y());
+        } else {
+            stepper.interpolate(t, buf);
+        }
+    };
+    while (hi - lo).abs() > resolution {
+        let mid = 0.5 * (lo + hi);
+        if same(mid, lo) || same(mid, hi) {
+            break;
+        }
+        state_at(mid, buf);
+        if reached(system.terminal_event(mid, buf)) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    state_at(hi, buf);
+    system.terminal_event(hi, buf);
+    hi
 }
 
 /// Whether `a` and `b` are distinguishable as the ends of an integration (the criterion of
@@ -216,6 +287,34 @@ fn interior_stops(t0: f64, t_end: f64, stops: &[f64]) -> Result<Vec<f64>, Integr
     inside.sort_by(|a, b| (dir * a).total_cmp(&(dir * b)));
     inside.dedup_by(|later, earlier| !distinct(*later, *earlier));
     Ok(inside)
+}
+
+/// The end of the segment that starts at `t_start`: the first of the listed stops (sorted,
+/// `next` the first not yet passed), the system's own next stop ([`OdeSystem::next_stop`],
+/// forwards in time only) and `t_end`, ignoring times indistinguishable from the start or
+/// from an earlier candidate.
+fn next_stop<S: OdeSystem + ?Sized>(
+    system: &S,
+    stops: &[f64],
+    next: &mut usize,
+    t_start: f64,
+    t_end: f64,
+) -> f64 {
+    let dir = (t_end - t_start).signum();
+    while *next < stops.len()
+        && ((stops[*next] - t_start) * dir <= 0.0 || !distinct(stops[*next], t_start))
+    {
+        *next += 1;
+    }
+    let listed = stops.get(*next).copied().unwrap_or(t_end);
+    if dir > 0.0 {
+        if let Some(own) = system.next_stop(t_start) {
+            if own > t_start && own < listed && distinct(own, t_start) && distinct(own, listed) {
+                return own;
+            }
+        }
+    }
+    listed
 }
 
 /// The stepping loop behind [`Integrator::solve_observed`] (see there).
@@ -266,6 +365,11 @@ pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
         reason: Interruption::Stopped { t },
     };
 
+    let event = |solution: Solution, t: f64| Interrupted {
+        solution,
+        reason: Interruption::Event { t },
+    };
+
     // Leading outputs at t0 need no step (and t_end == t0 is not an integration).
     let mut k = 0;
     while k < t_out.len() && (t_out[k] - t0) * dir <= 0.0 {
@@ -278,14 +382,21 @@ pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
     if k == t_out.len() {
         return Ok(solution);
     }
+    // The terminal event at the start: a system that has one is checked from here on.
+    let start_event = system.terminal_event(t0, y0);
+    if reached(start_event) {
+        return Err(event(solution, t0));
+    }
+    let has_event = start_event.is_some();
 
     let max_steps = integrator.options().max_steps;
     let mut total = Stats::default();
     let mut buf = vec![0.0; n];
     let mut t_start = t0;
     let mut y_start = y0.to_vec();
-    for seg in 0..=stops.len() {
-        let t_stop = stops.get(seg).copied().unwrap_or(t_end);
+    let mut next_listed = 0;
+    while (t_end - t_start) * dir > 0.0 {
+        let t_stop = next_stop(system, &stops, &mut next_listed, t_start, t_end);
         system.segment_start(t_start, &y_start);
         let mut stepper = match integrator.start(system, t_start, &y_start, t_stop) {
             Ok(s) => s,
@@ -312,12 +423,28 @@ pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
                 return Err(fail(solution, e));
             }
             let t_now = stepper.t();
+            system.step_accepted(t_now, stepper.y());
+            // The terminal event is checked on the accepted step in time order: at each
+            // output time within it (before that output is kept), then at its end.
+            let step = t_now - stepper.t_previous();
+            let mut not_reached = stepper.t_previous();
             while k < t_out.len() && (t_out[k] - t_now) * dir <= 0.0 {
                 if (t_out[k] - t_now).abs() <= f64::EPSILON * t_now.abs().max(1.0) {
                     buf.copy_from_slice(stepper.y());
                 } else {
                     stepper.interpolate(t_out[k], &mut buf);
                 }
+                if has_event && reached(system.terminal_event(t_out[k], &buf)) {
+                    let t_event =
+                        locate_event(&stepper, system, not_reached, t_out[k], step, &mut buf);
+                    if same(t_event, t_out[k]) {
+                        solution.push(t_out[k], &buf);
+                    }
+                    total.accumulate(stepper.stats());
+                    solution.stats = total;
+                    return Err(event(solution, t_event));
+                }
+                not_reached = t_out[k];
                 solution.push(t_out[k], &buf);
                 if observer.on_output(k, t_out[k], &buf) == Flow::Stop {
                     total.accumulate(stepper.stats());
@@ -325,6 +452,15 @@ pub(crate) fn drive<I: Integrator + ?Sized, S: OdeSystem + ?Sized>(
                     return Err(stopped(solution, t_out[k]));
                 }
                 k += 1;
+            }
+            if has_event
+                && !same(not_reached, t_now)
+                && reached(system.terminal_event(t_now, stepper.y()))
+            {
+                let t_event = locate_event(&stepper, system, not_reached, t_now, step, &mut buf);
+                total.accumulate(stepper.stats());
+                solution.stats = total;
+                return Err(event(solution, t_event));
             }
             if observer.on_step(t_now, stepper.y()) == Flow::Stop {
                 total.accumulate(stepper.stats());

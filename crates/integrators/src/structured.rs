@@ -244,6 +244,54 @@ impl BandedBordered {
         None
     }
 
+    /// The rows of column `j` inside the structure, as at most two ranges: a border column
+    /// has every row (`None`); a block column the rows of its block within the
+    /// half-bandwidth (the range returned) and the border's rows.
+    fn rows_within(&self, j: usize) -> Option<std::ops::Range<usize>> {
+        let Place::Block(_, own) = self.place[j] else {
+            return None;
+        };
+        let (first, len, _) = self.blocks[own];
+        let local = j - first;
+        Some(first + local.saturating_sub(self.p)..first + (local + self.p + 1).min(len))
+    }
+
+    /// Zeroes the entries of the dense `n x n` column-major `a` inside the structure (the
+    /// only ones [`BandedBordered::load`] reads), a pass over `O(n (2p + 1 + k))` entries
+    /// instead of `n^2`.
+    pub(crate) fn zero_within(&self, a: &mut Mat<f64>) {
+        for j in 0..self.n {
+            let column = a.col_as_slice_mut(j);
+            match self.rows_within(j) {
+                None => column.fill(0.0),
+                Some(rows) => {
+                    column[rows].fill(0.0);
+                    for &d in &self.border {
+                        column[d] = 0.0;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The first row of column `j` of `column` inside the structure with a non-finite
+    /// entry, if any (the entries outside are never read).
+    pub(crate) fn first_non_finite_within(&self, j: usize, column: &[f64]) -> Option<usize> {
+        match self.rows_within(j) {
+            None => column.iter().position(|v| !v.is_finite()),
+            Some(rows) => column[rows.clone()]
+                .iter()
+                .position(|v| !v.is_finite())
+                .map(|r| rows.start + r)
+                .or_else(|| {
+                    self.border
+                        .iter()
+                        .copied()
+                        .find(|&d| !column[d].is_finite())
+                }),
+        }
+    }
+
     /// Border size.
     fn k(&self) -> usize {
         self.border.len()
@@ -310,6 +358,17 @@ impl BandedBordered {
             for j in 0..len {
                 let col = &self.band[(o + j) * ld..(o + j + 1) * ld];
                 let xj = xb[j];
+                if p == 5 && j >= 5 && j + 5 < len {
+                    // The nonlinear links' half-bandwidth, a column of fixed length.
+                    let c: &[f64; 11] = col[5..16].try_into().unwrap_or(&[0.0; 11]);
+                    let o11: &mut [f64; 11] = (&mut ob[j - 5..j + 6])
+                        .try_into()
+                        .unwrap_or_else(|_| unreachable!("11 rows around an interior column"));
+                    for i in 0..11 {
+                        o11[i] += c[i] * xj;
+                    }
+                    continue;
+                }
                 for i in j.saturating_sub(p)..(j + p + 1).min(len) {
                     ob[i] += col[i + 2 * p - j] * xj;
                 }
@@ -484,6 +543,81 @@ impl BandedBordered {
 /// [`BandedBordered::factor_block`], `3p + 1` rows per column), row interchanges `pivots` and
 /// the reciprocals of `U`'s diagonal `inverse`.
 fn solve_band(a: &[f64], pivots: &[usize], inverse: &[f64], p: usize, r: &mut [f64]) {
+    // The half-bandwidths the models use, with loops of fixed length the compiler unrolls
+    // (the nonlinear links' 5: a third of the solve's instructions).
+    match p {
+        5 => return solve_band_fixed::<5, 10>(a, pivots, inverse, r),
+        2 => return solve_band_fixed::<2, 4>(a, pivots, inverse, r),
+        _ => {}
+    }
+    solve_band_any(a, pivots, inverse, p, r);
+}
+
+/// [`solve_band`] for the half-bandwidth `P` (`Q = 2 P`): the same operations, with the
+/// interior columns' multipliers and `U` columns as arrays of fixed length.
+fn solve_band_fixed<const P: usize, const Q: usize>(
+    a: &[f64],
+    pivots: &[usize],
+    inverse: &[f64],
+    r: &mut [f64],
+) {
+    let (len, ld) = (r.len(), 3 * P + 1);
+    if len <= Q {
+        solve_band_any(a, pivots, inverse, P, r);
+        return;
+    }
+    for j in 0..len {
+        let ip = pivots[j];
+        if ip != j {
+            r.swap(j, ip);
+        }
+        let rj = r[j];
+        if rj != 0.0 {
+            let start = j * ld + 2 * P + 1;
+            if j + P < len {
+                let l: &[f64; P] = a[start..start + P].try_into().unwrap_or(&[0.0; P]);
+                let x: &mut [f64; P] = (&mut r[j + 1..j + 1 + P])
+                    .try_into()
+                    .unwrap_or_else(|_| unreachable!("P rows below an interior column"));
+                for i in 0..P {
+                    x[i] -= l[i] * rj;
+                }
+            } else {
+                let end = len;
+                for (x, l) in r[j + 1..end]
+                    .iter_mut()
+                    .zip(&a[start..start + (end - j - 1)])
+                {
+                    *x -= l * rj;
+                }
+            }
+        }
+    }
+    for j in (0..len).rev() {
+        let col = &a[j * ld..(j + 1) * ld];
+        r[j] *= inverse[j];
+        let rj = r[j];
+        if rj != 0.0 {
+            if j >= Q {
+                let u: &[f64; Q] = col[..Q].try_into().unwrap_or(&[0.0; Q]);
+                let x: &mut [f64; Q] = (&mut r[j - Q..j])
+                    .try_into()
+                    .unwrap_or_else(|_| unreachable!("Q rows above an interior column"));
+                for i in 0..Q {
+                    x[i] -= u[i] * rj;
+                }
+            } else {
+                let u = &col[Q - j..Q];
+                for (x, u) in r[..j].iter_mut().zip(u) {
+                    *x -= u * rj;
+                }
+            }
+        }
+    }
+}
+
+/// [`solve_band`] for any half-bandwidth `p`.
+fn solve_band_any(a: &[f64], pivots: &[usize], inverse: &[f64], p: usize, r: &mut [f64]) {
     let (len, ld) = (r.len(), 3 * p + 1);
     for j in 0..len {
         let ip = pivots[j];

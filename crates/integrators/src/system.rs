@@ -96,6 +96,44 @@ pub trait OdeSystem {
         let _ = (t, y);
     }
 
+    /// The system's own next stop time strictly after `t` (forwards in time), when it has
+    /// stop times (`None`, the default, when not): a sampled controller's next sample time,
+    /// where its zero-order hold jumps. The stepping loop asks for it at the start of every
+    /// integration segment and ends the segment there (as for a listed stop time, see
+    /// [`crate::Integrator::solve_observed`]), so a system with a million samples never
+    /// lists them: they are generated as the run goes.
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        let _ = t;
+        None
+    }
+
+    /// Called by the stepping loop after every accepted step with its end time and state,
+    /// before the step's outputs and observers. What the right-hand side met in the trial
+    /// evaluations of rejected attempts (a failure it recorded to explain the NaN it wrote)
+    /// no longer matters once a step is accepted: a system that records such failures
+    /// forgets them here, so that the failure it reports is one met after the last accepted
+    /// step.
+    fn step_accepted(&mut self, t: f64, y: &[f64]) {
+        let _ = (t, y);
+    }
+
+    /// The system's terminal event function `g(t, y)`, when it has one (`None`, the
+    /// default, when not): the integration ends where `g` is first reached, i.e. is no longer
+    /// negative (`g >= 0` or NaN), such as a deflection passing its collapse limit.
+    ///
+    /// The stepping loop evaluates it on accepted states only: at the start, at the end of
+    /// every accepted step and at every output time within it (by dense output), in time
+    /// order. Where it is reached, the loop locates the first crossing after the last point
+    /// where it was not by bisection on the dense output, to [`crate::EVENT_RESOLUTION`]
+    /// times the step (or a few ulps of `t`), writes the outputs up to that time and ends with
+    /// [`crate::Interruption::Event`] there; its last call is at that time, with the state
+    /// it reports, so a system can record what it found there. Only the sign matters.
+    /// Called once per step and output: it should cost less than a right-hand side.
+    fn terminal_event(&mut self, t: f64, y: &[f64]) -> Option<f64> {
+        let _ = (t, y);
+        None
+    }
+
     /// The magnitude of each state component that the relative tolerance is measured
     /// against at least, written into `scales` (`dim` entries, `0` for none); `false` (the
     /// default) when the system has none.
@@ -141,6 +179,15 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     }
     fn tolerance_scales(&self, scales: &mut [f64]) -> bool {
         (**self).tolerance_scales(scales)
+    }
+    fn step_accepted(&mut self, t: f64, y: &[f64]) {
+        (**self).step_accepted(t, y);
+    }
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        (**self).next_stop(t)
+    }
+    fn terminal_event(&mut self, t: f64, y: &[f64]) -> Option<f64> {
+        (**self).terminal_event(t, y)
     }
 }
 

@@ -229,3 +229,111 @@ fn spectral_radius_from_the_options() {
         other => panic!("expected a refusal, got {other:?}"),
     }
 }
+
+/// Error control off: every step passes, the caller sets each step's size.
+fn unchecked() -> GeneralizedAlpha {
+    GeneralizedAlpha::new(
+        Options::default()
+            .rtol(1e10)
+            .atol(1e30)
+            .max_steps(10_000_000),
+    )
+}
+
+/// `q'' = t` (unit mass, no stiffness): `q''' = 1`, and the auxiliary acceleration settles
+/// on `a_n = t_n + (alpha_m - alpha_f) h` after a few steps (its start `a_0 = 0` decays by
+/// `-alpha_m / (1 - alpha_m)` per step).
+struct Ramp;
+
+impl OdeSystem for Ramp {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
+        dy[0] = y[1];
+        dy[1] = t;
+    }
+    fn second_order_form(&mut self) -> Option<&mut dyn SecondOrderForm> {
+        Some(self)
+    }
+}
+
+impl SecondOrderForm for Ramp {
+    fn coordinates(&self) -> usize {
+        1
+    }
+    fn matrices(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        mut mass: MatMut<'_, f64>,
+        _damping: MatMut<'_, f64>,
+        _stiffness: MatMut<'_, f64>,
+    ) {
+        mass[(0, 0)] = 1.0;
+    }
+}
+
+/// The error estimate is the method's local error (issue 34): one step of `q'' = t` from the
+/// state the method reached misses the exact flow from it by `C h^3 q''' = C h^3` with
+/// `C = beta + (alpha_m - alpha_f)/2 - 1/6`, the constant the estimate now uses; Newmark's
+/// `beta - 1/6`, which it used, is exact only for `rho_inf = 1` (twice too large at 0.7).
+#[test]
+fn the_error_constant_is_the_local_error_of_one_step() {
+    for rho in [0.7, 0.9, 0.5, 1.0] {
+        let h = 0.01;
+        let ga = unchecked().spectral_radius(rho);
+        let mut stepper = ga.start(&mut Ramp, 0.0, &[0.0, 0.0], 10.0).unwrap();
+        for _ in 0..100 {
+            stepper.set_step(h);
+            stepper.step(&mut Ramp).unwrap();
+        }
+        let (t, q, v) = (stepper.t(), stepper.y()[0], stepper.y()[1]);
+        stepper.set_step(h);
+        stepper.step(&mut Ramp).unwrap();
+        let exact = q + v * h + t * h * h / 2.0 + h.powi(3) / 6.0;
+        let local = stepper.y()[0] - exact;
+        let p = stepper.parameters();
+        let ratio = p.error_constant() * h.powi(3) / local;
+        let newmark = (p.beta - 1.0 / 6.0) * h.powi(3) / local;
+        println!("rho {rho}: local {local:.4e}, C h^3 / local {ratio:.6}, Newmark's {newmark:.3}");
+        assert!((ratio - 1.0).abs() < 1e-6, "rho {rho}: {ratio}");
+        if rho < 0.95 {
+            assert!(newmark > 1.2, "rho {rho}: {newmark}");
+        }
+    }
+}
+
+/// A change of step size leaves the auxiliary acceleration lagging by the old step: without
+/// moving it, every change makes an `O(h^2)` velocity error and a sequence of changes costs
+/// the method an order (issue 34). Steps alternating between `h` and `4 h` on the undamped
+/// oscillator now converge at second order, as constant steps do.
+#[test]
+fn alternating_steps_keep_second_order() {
+    let omega = 2.0 * std::f64::consts::PI;
+    let t_end = 2.3;
+    for rho in [0.7, 0.5] {
+        let error = |h: f64| {
+            let mut s = Oscillator { omega, zeta: 0.0 };
+            let ga = unchecked().spectral_radius(rho);
+            let mut stepper = ga.start(&mut s, 0.0, &[1.0, 0.0], t_end).unwrap();
+            let mut k = 0;
+            while stepper.t() < t_end {
+                stepper.set_step(if k % 2 == 0 { h } else { 4.0 * h });
+                stepper.step(&mut s).unwrap();
+                k += 1;
+            }
+            let y = stepper.y();
+            (y[0] - (omega * t_end).cos())
+                .abs()
+                .max((y[1] + omega * (omega * t_end).sin()).abs() / omega)
+        };
+        let (e1, e2, e3) = (error(4e-3), error(2e-3), error(1e-3));
+        println!(
+            "rho {rho}: errors {e1:.3e} {e2:.3e} {e3:.3e}, ratios {:.2} {:.2}",
+            e1 / e2,
+            e2 / e3
+        );
+        assert!(e2 / e3 > 3.5, "rho {rho}: ratio {}", e2 / e3);
+    }
+}

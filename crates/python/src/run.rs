@@ -468,9 +468,11 @@ pub fn run(
 
 /// Runs several scenes (each a `Scene` or a path) in parallel on threads (Rayon, GIL
 /// released) and returns one entry per scene, in order: a `RunResult`, or with
-/// `return_exceptions=True` the `SceneError`/`RunError` of that scene (otherwise the first
-/// error is raised after all runs ended). `progress(fraction)` is called in the calling
-/// thread after each finished scene with the fraction of scenes done.
+/// `return_exceptions=True` the exception of that scene in its slot (a path that cannot be
+/// read or parsed, or an entry that is neither a `Scene` nor a path: raised at once without
+/// it; an invalid scene's `SceneError` or a failed run's `RunError` (with `.partial`):
+/// otherwise the first of them is raised after all runs ended). `progress(fraction)` is
+/// called in the calling thread after each finished scene with the fraction of scenes done.
 #[pyfunction]
 #[pyo3(signature = (scenes, threads = None, return_exceptions = false, progress = None))]
 pub fn run_many_threads<'py>(
@@ -481,10 +483,20 @@ pub fn run_many_threads<'py>(
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let threads = crate::study::check_threads(threads)?;
-    let owned = scenes
-        .try_iter()?
-        .map(|s| PyScene::from_any(&s?))
-        .collect::<PyResult<Vec<PyScene>>>()?;
+    // Each entry is read on its own: one that cannot be read keeps its exception in its
+    // slot and does not stop the others.
+    let mut entries: Vec<Result<usize, PyErr>> = Vec::new();
+    let mut owned: Vec<PyScene> = Vec::new();
+    for item in scenes.try_iter()? {
+        match item.and_then(|s| PyScene::from_any(&s)) {
+            Ok(scene) => {
+                entries.push(Ok(owned.len()));
+                owned.push(scene);
+            }
+            Err(e) if return_exceptions => entries.push(Err(e)),
+            Err(e) => return Err(e),
+        }
+    }
     let names: Vec<String> = owned.iter().map(PyScene::name_or_default).collect();
     let total = owned.len();
     let outcomes = detached(py, progress, 0.0, move |report| {
@@ -510,10 +522,21 @@ pub fn run_many_threads<'py>(
         }
     })?;
     let outcomes = outcomes.map_err(pyo3::exceptions::PyRuntimeError::new_err)?;
+    let mut results: Vec<Option<Outcome>> = outcomes.into_iter().map(Some).collect();
     let list = PyList::empty(py);
     let mut first_error = None;
-    for (name, outcome) in names.iter().zip(outcomes) {
-        match outcome_to_py(py, name, outcome)? {
+    for entry in entries {
+        let converted = match entry {
+            Ok(k) => match results[k].take() {
+                Some(outcome) => outcome_to_py(py, &names[k], outcome)?,
+                None => Err(pyo3::exceptions::PyRuntimeError::new_err(format!(
+                    "{}: no outcome",
+                    names[k]
+                ))),
+            },
+            Err(e) => Err(e),
+        };
+        match converted {
             Ok(r) => list.append(r)?,
             Err(e) => {
                 list.append(e.value(py))?;

@@ -29,7 +29,9 @@ pub fn check_threads(threads: Option<usize>) -> PyResult<Option<usize>> {
 /// `study.json` and, with `case_outputs`, each case's outputs) on `threads` worker threads
 /// (default: all cores), skipping recorded cases when `resume`. `progress(fraction)` is
 /// called in the calling thread after each finished case with the fraction of cases done
-/// (resumed cases count as done). Returns a dict: `name`, `total`, `ran`, `resumed`,
+/// (resumed cases count as done), for a workspace map after each pose, for a speed search
+/// after each probe (the fraction of the probes its schedule plans), and with 1.0 at the
+/// end. Returns a dict: `name`, `total`, `ran`, `resumed`,
 /// `failed` and `results` (the path of `results.csv`). Raises `StudyError`.
 #[pyfunction]
 #[pyo3(signature = (path, out, threads = None, resume = false, case_outputs = false, progress = None))]
@@ -52,12 +54,31 @@ pub fn run_study<'py>(
             case_outputs,
             force: false,
         };
-        let on_case = |p: &flexprr_studies::study::StudyProgress, _: &_| {
-            if p.total > 0 {
-                report(p.done as f64 / p.total as f64);
-            }
+        // Progress per case of a sweep, per pose of a map, per probe of a search (against
+        // the probes its schedule plans, the same for any thread count).
+        let summary = if let Some(search) = &study.search {
+            let planned = search.planned_probes() * study.cases.len().max(1);
+            let done = std::sync::atomic::AtomicUsize::new(0);
+            let on_probe = |_: &_, _: &_| {
+                let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                report((n as f64 / planned.max(1) as f64).min(0.99));
+            };
+            flexprr_studies::run_search_study(&study, &out, &options, &on_probe)?
+        } else if study.map.is_some() {
+            let on_pose = |p: &flexprr_studies::map::MapProgress| {
+                if p.total > 0 {
+                    report(p.done as f64 / p.total as f64);
+                }
+            };
+            flexprr_studies::run_map_study(&study, &out, &options, &on_pose)?.0
+        } else {
+            let on_case = |p: &flexprr_studies::study::StudyProgress, _: &_| {
+                if p.total > 0 {
+                    report(p.done as f64 / p.total as f64);
+                }
+            };
+            run_rust_study(&study, &out, &options, &on_case)?
         };
-        let summary = run_rust_study(&study, &out, &options, &on_case)?;
         report(1.0);
         Ok::<_, flexprr_studies::StudyError>((study.name, summary))
     })?;

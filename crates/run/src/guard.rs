@@ -152,6 +152,8 @@ impl DivergenceGuard {
     }
 }
 
+/// Checks every accepted step and every output sample (the data written), so a divergence
+/// is reported at the first of them beyond the limit, with its value there.
 impl Observer for DivergenceGuard {
     fn on_step(&mut self, t: f64, y: &[f64]) -> Flow {
         match self.check(t, y) {
@@ -161,6 +163,9 @@ impl Observer for DivergenceGuard {
             }
             None => Flow::Continue,
         }
+    }
+    fn on_output(&mut self, _index: usize, t: f64, y: &[f64]) -> Flow {
+        self.on_step(t, y)
     }
 }
 

@@ -61,6 +61,9 @@ impl Observer for RunObserver<'_> {
         self.progress.on_step(t, y);
         self.guard.on_step(t, y)
     }
+    fn on_output(&mut self, index: usize, t: f64, y: &[f64]) -> Flow {
+        self.guard.on_output(index, t, y)
+    }
 }
 
 /// The times at which every integration of `scene` stops and restarts: the trajectory's
@@ -72,6 +75,7 @@ pub fn stop_times(scene: &Scene) -> Vec<f64> {
         .trajectory
         .breakpoints()
         .into_iter()
+        .chain(scene.stop_times.iter().copied())
         .filter(|s| *s > t0 && *s < t1)
         .collect();
     stops.sort_by(f64::total_cmp);
@@ -118,11 +122,9 @@ pub fn integrate_model(
         },
         guard: DivergenceGuard::new(model),
     };
-    let mut stops = stop_times(scene);
-    let t_end = t[t.len() - 1];
-    stops.extend(model.stop_times(t0, t_end));
-    stops.sort_by(f64::total_cmp);
-    stops.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end.abs().max(1.0));
+    // The model's own stops (a sampled controller's samples) come from the model as the
+    // run goes (`OdeSystem::next_stop`).
+    let stops = stop_times(scene);
     let result = integrator.solve_dyn(model, t0, &y0, t, &stops, &mut observer);
     let mut max_deflection_m = observer.guard.max_deflection();
     if !model.linear_deflection() {
@@ -149,6 +151,13 @@ pub fn integrate_model(
                                 "stopped by an observer".to_string(),
                             ),
                         }),
+                    Interruption::Event { t } => match model.take_failure() {
+                        Some(cause) => RunError::Model(cause),
+                        None => RunError::Integrator {
+                            method: integrator.name().to_string(),
+                            source: flexprr_integrators::IntegratorError::TerminalEvent { t },
+                        },
+                    },
                     Interruption::Failed(source) => match model.take_failure() {
                         Some(cause) => RunError::Model(cause),
                         None => match source {

@@ -108,3 +108,19 @@ kind = "waypoints"
 points = [[0.06, -0.08, -0.03, 30.0], [0.08, -0.05, 0.0, 30.0], [0.1, -0.02, 0.033, 30.0]]"#,
     );
 }
+
+/// The scene's own `time.stops` were validated and then never passed to the integrator
+/// (issue 34): they are stop times of every run now, beside the trajectory's breakpoints.
+#[test]
+fn the_scenes_own_stop_times_stop_the_integration() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/paper_f20.toml"
+    ))
+    .unwrap()
+    .replace("end = 0.2", "end = 0.2\nstops = [0.0125, 0.05]");
+    let scene = Scene::from_text("stops.toml", "stops", &text).unwrap();
+    let stops = flexprr_run::stop_times(&scene);
+    assert_eq!(stops.len(), 2, "{stops:?}");
+    assert!((stops[0] - 0.0125).abs() < 1e-15 && (stops[1] - 0.05).abs() < 1e-15);
+}

@@ -237,6 +237,21 @@ impl VibrationControllerFactory for ModalVelocityFactory {
         if keys.modes.contains(&0) {
             return Err(params.error("modes", "modes are numbered from 1"));
         }
+        if let Some((k, m)) = keys
+            .modes
+            .iter()
+            .enumerate()
+            .find(|(k, m)| keys.modes[..*k].contains(m))
+        {
+            return Err(params.error(
+                "modes",
+                format!(
+                    "mode {m} is named twice (entries {} and {}): name each targeted mode once",
+                    keys.modes.iter().position(|x| x == m).unwrap_or(0) + 1,
+                    k + 1
+                ),
+            ));
+        }
         if keys.modes.len() != keys.damping_ratio.len() {
             return Err(params.error(
                 "damping_ratio",
@@ -254,7 +269,10 @@ impl VibrationControllerFactory for ModalVelocityFactory {
         {
             return Err(params.error(
                 "damping_ratio",
-                format!("a damping ratio must be finite and >= 0, got {z}"),
+                format!(
+                    "a damping ratio must be finite and >= 0, got {}",
+                    crate::error::number(*z)
+                ),
             ));
         }
         let modes: Vec<usize> = keys.modes.iter().map(|m| m - 1).collect();

@@ -55,3 +55,14 @@ impl ScenarioError {
         matches!(self, ScenarioError::Input { .. })
     }
 }
+
+/// A number for a message: as written for ordinary magnitudes (`-400`, `0.003`), with an
+/// exponent for tiny and huge ones (`1e-300`, `2.5e200`), never hundreds of digits.
+pub(crate) fn number(value: f64) -> String {
+    let magnitude = value.abs();
+    if value == 0.0 || !value.is_finite() || (1e-4..1e9).contains(&magnitude) {
+        format!("{value}")
+    } else {
+        format!("{value:e}")
+    }
+}

@@ -39,7 +39,9 @@ pub use registry::{
     BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount,
     Registry, TableParams, mechanical_model,
 };
-pub use scene::{DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, Scene};
+pub use scene::{
+    DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, MAX_ANGLE_DEG, Scene,
+};
 pub use schema::{
     ActuatorsConfig, BasisTable, BranchChoice, ControlTable, CouplingChoice,
     DEFAULT_COULOMB_SMOOTHING, FormulationChoice, IntegratorConfig, Layout, LegConfig, LinksConfig,

@@ -18,7 +18,7 @@ use flexprr_dynamics::{
     AxialForceModel, AxialModel, JointReactionAxialForce, NoAxialForce, PaperAxialForce,
 };
 use flexprr_integrators::{
-    Abm, Auto, Bdf, DynIntegrator, GeneralizedAlpha, IntegratorError, Interruption, Magnus,
+    Abm, Auto, Bdf, DynIntegrator, GeneralizedAlpha, IntegratorError, Interrupted, Magnus,
     OdeSystem, Options, Rk45, Solution,
 };
 use serde::Deserialize;
@@ -81,12 +81,7 @@ impl MethodHandle {
         };
         self.integrator(options)
             .solve_dyn(system, t0, y0, t_out, &[], &mut ())
-            .map_err(|interrupted| match interrupted.reason {
-                Interruption::Failed(e) => e,
-                Interruption::Stopped { t } => IntegratorError::InvalidInput(format!(
-                    "stopped at t = {t} s without an observer"
-                )),
-            })
+            .map_err(Interrupted::into_error)
     }
 }
 
@@ -217,7 +212,7 @@ impl<'a> TableParams<'a> {
     pub fn control_error(&self, error: ControlError) -> ScenarioError {
         match error {
             ControlError::InvalidParameter { name, value, rule } => {
-                self.error(name, format!("{rule}, got {value}"))
+                self.error(name, format!("{rule}, got {}", crate::error::number(value)))
             }
             other => self.error("", other.to_string()),
         }

@@ -162,6 +162,32 @@ impl Checker<'_> {
             ))
         }
     }
+    /// An angle in degrees: finite and within [`MAX_ANGLE_DEG`] of zero. Beyond a few turns
+    /// an angle keeps fewer of its digits for the part that matters (`1e19` degrees has
+    /// none left), and every angle the scene takes is a direction or an orientation, whose
+    /// value within a turn is what counts.
+    fn angle(&self, key: &str, value: f64) -> Result<f64, ScenarioError> {
+        self.finite(key, value)?;
+        if value.abs() > MAX_ANGLE_DEG {
+            let advice = if value.abs() < 1e9 {
+                format!(
+                    "write it reduced to a turn ({} deg), which is the same direction",
+                    crate::error::number(value.rem_euclid(360.0))
+                )
+            } else {
+                "at this size the number keeps no digits within a turn".to_string()
+            };
+            return Err(self.error(
+                key,
+                format!(
+                    "expected an angle within two turns (|angle| <= {MAX_ANGLE_DEG} deg), got \
+                     {} deg: {advice}",
+                    crate::error::number(value)
+                ),
+            ));
+        }
+        Ok(value)
+    }
     fn finite(&self, key: &str, value: f64) -> Result<f64, ScenarioError> {
         if value.is_finite() {
             Ok(value)
@@ -170,6 +196,9 @@ impl Checker<'_> {
         }
     }
 }
+
+/// The largest angle (deg, either sign) a scene key takes: two turns.
+pub const MAX_ANGLE_DEG: f64 = 720.0;
 
 fn pose_from(values: [f64; 3]) -> Pose {
     Pose::new(values[0], values[1], values[2].to_radians())
@@ -293,6 +322,19 @@ impl Scene {
         let control = build_control(&c, registry, &raw, model.coupling)?;
         let piezo = crate::piezo::build_piezo(&c, registry, &raw, &machine)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
+        let span = (output_times[0], output_times[output_times.len() - 1]);
+        if let Some(law) = &control.controller {
+            check_sample_period(&c, "control", law.period(), span, options.max_steps)?;
+        }
+        if let Some(law) = &piezo.controller {
+            check_sample_period(
+                &c,
+                "vibration_control",
+                law.period(),
+                span,
+                options.max_steps,
+            )?;
+        }
         // `auto` becomes its choice for the model; a linear-only method needs the KED model
         // (an actuated model is never linear: it is coupled or nonlinear).
         let mut model_name = match control.controller {
@@ -382,6 +424,20 @@ fn build_link(
 }
 
 /// `[machine]`: the guides' geometry and the rigid-body inertia.
+/// The machine of `raw` with its links' patch layers, and its patches with the vibration
+/// control law (`[[links.patches]]`, `[vibration_control]`), as validation builds them: for
+/// checking a changed `vibration_control` table against the law's own keys.
+pub(crate) fn build_patches(
+    c: &Checker<'_>,
+    registry: &Registry,
+    raw: &SceneFile,
+) -> Result<(), ScenarioError> {
+    let link = build_link(c, registry, &raw.links)?;
+    let link_models = crate::piezo::with_patch_layers(c, raw, link)?;
+    let machine = build_machine(c, &raw.machine, link_models)?;
+    crate::piezo::build_piezo(c, registry, raw, &machine).map(|_| ())
+}
+
 fn build_machine(
     c: &Checker<'_>,
     m: &MachineConfig,
@@ -413,7 +469,7 @@ fn radial_geometry(
     length: f64,
 ) -> Result<Geometry, ScenarioError> {
     for (k, a) in m.alpha_deg.iter().enumerate() {
-        c.finite(&format!("machine.alpha_deg.{k}"), *a)?;
+        c.angle(&format!("machine.alpha_deg.{k}"), *a)?;
     }
     c.positive("machine.platform_side", m.platform_side, "m")?;
     c.positive("machine.half_travel", m.half_travel, "m")?;
@@ -456,6 +512,7 @@ fn general_geometry(
                 c.finite(&format!("{key}.{field}"), *v)?;
             }
         }
+        c.angle(&format!("{key}.direction_deg"), leg.direction_deg)?;
         let a = leg.direction_deg.to_radians();
         legs.push(Leg {
             guide: Guide {
@@ -536,6 +593,53 @@ fn build_stops(
     stops.sort_by(f64::total_cmp);
     stops.dedup_by(|a, b| (*a - *b).abs() <= f64::EPSILON * a.abs().max(1.0));
     Ok(stops)
+}
+
+/// The most samples a sampled law may take over a run: as many as output samples, and never
+/// more than the integration's steps (each sample restarts the integration).
+const MAX_SAMPLES: f64 = 5e6;
+
+/// A sampled law's `period` (the key `{table}.period`) against what a run can resolve: its
+/// samples are stop times of the integration, generated as the run goes, and each is kept
+/// for the outputs, so their number over the time span must stay within
+/// `integrator.max_steps` and [`MAX_SAMPLES`].
+fn check_sample_period(
+    c: &Checker<'_>,
+    table: &str,
+    period: f64,
+    (t0, t1): (f64, f64),
+    max_steps: usize,
+) -> Result<(), ScenarioError> {
+    if period.is_nan() || period <= 0.0 {
+        return Ok(());
+    }
+    let samples = (t1 - t0) / period;
+    let limit = MAX_SAMPLES.min(max_steps as f64);
+    if samples > limit {
+        let key = format!("{table}.period");
+        let why = if (max_steps as f64) < MAX_SAMPLES {
+            format!("each sample restarts the integration, and integrator.max_steps is {max_steps}")
+        } else {
+            format!(
+                "each sample restarts the integration and is kept for the outputs: at most {} \
+                 samples, as for output samples",
+                crate::error::number(MAX_SAMPLES)
+            )
+        };
+        return Err(c.error(
+            &key,
+            format!(
+                "a sample period of {} s gives {} samples over the {} s time span, more than \
+                 a run can resolve ({why}); use a period of at least {} s, or 0 for a \
+                 continuous law",
+                crate::error::number(period),
+                crate::error::number(samples.round()),
+                crate::error::number(t1 - t0),
+                crate::error::number((t1 - t0) / limit)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// `[trajectory]`, checked over the whole time span against the machine's workspace.
@@ -671,9 +775,10 @@ fn build_model_section(
     })
 }
 
-/// Default elements per link of the nonlinear model (docs/coupled.md: 32 elements put the
-/// 20 Hz mid-point deflections 0.46 % from the external ANCF model, 16 elements 1.6 %).
-pub const DEFAULT_ELEMENTS: usize = 32;
+/// Default elements per link of the nonlinear model: the dynamics crate's
+/// [`flexprr_dynamics::nonlinear::DEFAULT_ELEMENTS`] (one default for code, docs and scenes;
+/// docs/scenes.md, "elements", and docs/performance.md give its error and cost).
+pub const DEFAULT_ELEMENTS: usize = flexprr_dynamics::nonlinear::DEFAULT_ELEMENTS;
 
 /// Default collapse limit: 10 % of the link length, the external model's criterion
 /// (validation/data/collapse_speeds.json) and where the coupled model is still within 2 % of it.
@@ -792,7 +897,8 @@ fn spectral_radius(
             key,
             format!(
                 "expected a spectral radius at infinite frequency from 0 (most numerical \
-                 dissipation) to 1 (none), got {rho}"
+                 dissipation) to 1 (none), got {}",
+                crate::error::number(rho)
             ),
         ));
     }
@@ -864,7 +970,10 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
         if !(0.0..=1.0).contains(xi) {
             return Err(c.error(
                 &format!("output.deflection_xi.{k}"),
-                format!("expected a position xi in [0, 1] along the link, got {xi}"),
+                format!(
+                    "expected a position xi in [0, 1] along the link, got {}",
+                    crate::error::number(*xi)
+                ),
             ));
         }
     }
@@ -929,7 +1038,8 @@ fn build_trajectory(
         } => {
             c.non_negative("trajectory.radius", *radius, "m")?;
             c.positive("trajectory.frequency", *frequency, "Hz")?;
-            c.finite("trajectory.phi_deg", *phi_deg)?;
+            c.angle("trajectory.phi_deg", *phi_deg)?;
+            c.angle("trajectory.start_angle_deg", *start_angle_deg)?;
             Arc::new(
                 Circle::new(
                     Point2::new(centre[0], centre[1]),
@@ -942,6 +1052,7 @@ fn build_trajectory(
             )
         }
         TrajectoryConfig::Line { from, velocity } => {
+            c.angle("trajectory.from.2", from[2])?;
             let v = [velocity[0], velocity[1], velocity[2].to_radians()];
             Arc::new(
                 Line::new(pose_from(*from), nalgebra::Vector3::from(v), 0.0)
@@ -956,6 +1067,8 @@ fn build_trajectory(
             profile,
         } => {
             c.positive("trajectory.duration", *duration, "s")?;
+            c.angle("trajectory.from.2", from[2])?;
+            c.angle("trajectory.to.2", to[2])?;
             let profile = match profile {
                 ProfileChoice::Quintic => Profile::Quintic,
                 ProfileChoice::Cycloidal => Profile::Cycloidal,
@@ -966,6 +1079,9 @@ fn build_trajectory(
             )
         }
         TrajectoryConfig::Waypoints { points } => {
+            for (k, p) in points.iter().enumerate() {
+                c.angle(&format!("trajectory.points.{k}.3"), p[3])?;
+            }
             let pts: Vec<(f64, Pose)> = points
                 .iter()
                 .map(|p| (p[0], pose_from([p[1], p[2], p[3]])))

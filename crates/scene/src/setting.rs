@@ -154,9 +154,10 @@ pub fn check_change(
 }
 
 /// The first schema error of the top-level entry `top` of `table`, put into an otherwise
-/// minimal complete scene; for the links and the control law, also the registered part's
-/// own keys (the basis kind's, the control law's; reported only at or under `key`, since
-/// other errors of the part may depend on keys set later).
+/// minimal complete scene; for the links, the control law and the vibration control law,
+/// also the registered part's own keys (the basis kind's, the control law's, the vibration
+/// law's against the scene's patches; reported only at or under `key`, since other errors
+/// of the part may depend on keys set later).
 fn schema_error(
     registry: &Registry,
     table: &toml::Table,
@@ -171,6 +172,14 @@ fn schema_error(
         None => {
             if !probe.contains_key(top) {
                 return None;
+            }
+        }
+    }
+    // A vibration control law reads its keys against the patches, on the machine's links.
+    if top == "vibration_control" {
+        for part in ["links", "machine"] {
+            if let Some(v) = table.get(part) {
+                probe.insert(part.to_string(), v.clone());
             }
         }
     }
@@ -195,6 +204,10 @@ fn schema_error(
             registry
                 .build_controller(&params, &control.kind)
                 .map(|_| ())
+        }
+        "vibration_control" => {
+            let c = crate::scene::Checker { file, text: &text };
+            crate::scene::build_patches(&c, registry, &parsed)
         }
         _ => return None,
     };
@@ -319,6 +332,33 @@ mod tests {
             }
             other => panic!("{key} = {value:?} accepted: {other:?}"),
         }
+    }
+
+    /// `Scene.set` accepted unknown `vibration_control` keys (issue 34): the law's own keys
+    /// are now checked at once, against the scene's patches, as validation checks them.
+    #[test]
+    fn vibration_control_keys_and_types_are_checked_at_once() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../configs/piezo_f20.toml"
+        ))
+        .unwrap();
+        let piezo: toml::Table = text.parse().unwrap();
+        let mut table = piezo.clone();
+        let e = set_checked(&mut table, "vibration_control.gian", &0.01.into()).unwrap_err();
+        assert!(
+            matches!(&e, ScenarioError::Input { key, message, .. }
+                if key == "vibration_control.gian" && message.contains("unknown field `gian`")),
+            "{e}"
+        );
+        assert_eq!(table, piezo, "a refused set changed the table");
+        let e = set_checked(&mut table, "vibration_control.gain", &"high".into()).unwrap_err();
+        assert!(
+            matches!(&e, ScenarioError::Input { key, .. } if key == "vibration_control.gain"),
+            "{e}"
+        );
+        set_checked(&mut table, "vibration_control.gain", &0.01.into()).unwrap();
+        set_checked(&mut table, "vibration_control.period", &1e-4.into()).unwrap();
     }
 
     #[test]

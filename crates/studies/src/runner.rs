@@ -349,9 +349,10 @@ pub fn run_study(
 }
 
 /// Runs a speed-search study ([`crate::search`]): one search per case of its axes (or one),
-/// the searches in parallel on [`StudyOptions::threads`] workers, the threads that searches
-/// leave free running several probes of a search at once (k-section, see
-/// [`crate::search::section_search`]); no shards and no resume. `on_probe` sees every probe as it ends, with its search
+/// the searches and the probes of each round in parallel on [`StudyOptions::threads`]
+/// workers (k-section with the study's `probes_per_round`, see
+/// [`crate::search::section_search`]; the same probes for any thread count); no shards and
+/// no resume. `on_probe` sees every probe as it ends, with its search
 /// (for progress). A sweep study (no `[search]`) is refused.
 ///
 /// # Errors

@@ -13,14 +13,17 @@
 //! The search assumes a threshold: values below it do not reach the limit within the
 //! window, values at or above it do. It first runs both ends of the bracket (`low` must not
 //! collapse, `high` must), then narrows the bracket until it is at most `tolerance` wide.
-//! With one thread per search this is bisection (the bracket after `n` halvings is
-//! `(high - low) / 2^n`, Burden & Faires, *Numerical Analysis*, section 2.1); with `k`
-//! threads free for a search, each round probes `k` interior values at once and keeps one
-//! of the `k + 1` parts (k-section: `(high - low) / (k + 1)^n` after `n` rounds), see
-//! [`section_search`]. The answer is the bracket: the largest value seen not to collapse
-//! below the smallest seen to collapse. A probe that fails for another reason (a diverged
-//! KED run, an integrator failure) ends the search with that failure: the threshold is then
-//! not known, and the search says so instead of guessing.
+//! With `probes_per_round = 1` (the default) this is bisection (the bracket after `n`
+//! halvings is `(high - low) / 2^n`, Burden & Faires, *Numerical Analysis*, section 2.1);
+//! with `k`, each round probes `k` interior values at once and keeps one of the `k + 1`
+//! parts (k-section: `(high - low) / (k + 1)^n` after `n` rounds), see [`section_search`].
+//! The schedule depends on the study only, never on the thread count, so every `--threads`
+//! gives the same probes and the same answer. The answer is the bracket: the largest value
+//! seen not to collapse below the smallest seen to collapse, checked against every probe
+//! ([`Verification`]): where the outcome is not monotone in the key, the search says so
+//! and reports the interval that holds every change it saw. A probe that fails for another
+//! reason (a diverged KED run, an integrator failure) ends the search with that failure:
+//! the threshold is then not known, and the search says so instead of guessing.
 
 use std::path::Path;
 
@@ -52,6 +55,12 @@ pub struct SearchConfig {
     /// model, collapse for a coupled or nonlinear one.
     #[serde(default)]
     pub criterion: Option<Criterion>,
+    /// Interior probes per round (k-section: each round cuts the bracket into `k + 1`
+    /// parts); 1, the default, is bisection. The probes of a round run at once on the
+    /// threads there are, so `3` or `7` use more cores on one search; the probes, and so
+    /// the answer, are the same for any `--threads`.
+    #[serde(default)]
+    pub probes_per_round: Option<usize>,
 }
 
 /// What counts as reaching the speed limit in a probe.
@@ -85,6 +94,9 @@ impl Criterion {
         }
     }
 }
+/// The most interior probes per round a search may ask for.
+pub const MAX_PROBES_PER_ROUND: usize = 63;
+
 /// The window of a search.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Window {
@@ -109,6 +121,8 @@ pub struct Search {
     pub window: Window,
     /// The criterion named in the file, if any (else each case's default).
     pub criterion: Option<Criterion>,
+    /// Interior probes per round `k` (1: bisection).
+    pub probes_per_round: usize,
 }
 
 /// One run of the search.
@@ -147,11 +161,81 @@ pub struct SearchOutcome {
     pub below: Option<f64>,
     /// Smallest value seen to reach it: the speed limit to within the tolerance.
     pub at_or_above: Option<f64>,
-    /// Rounds of interior probes after the two ends (each round probes up to as many values
-    /// at once as the search had threads; see [`section_search`]).
+    /// Rounds of interior probes after the two ends (each round probes
+    /// [`Search::probes_per_round`] values at once; see [`section_search`]).
     pub rounds: usize,
     /// The probes in the order they ran.
     pub probes: Vec<Probe>,
+    /// Every decided probe checked against the answer ([`Verification`]).
+    pub verification: Verification,
+}
+
+/// The probes of a search checked against its answer: sorted by value, the outcome should
+/// change once, from not reaching the limit to reaching it, inside the bracket. Where it
+/// changes more than once the outcome is not monotone in the key: the search says so (status
+/// `"non-monotone"`), widens its answer to the interval that holds every change seen, and
+/// names the probes that show it.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Verification {
+    /// Whether the decided probes change outcome at most once, upwards.
+    pub monotone: bool,
+    /// Every change of outcome between neighbouring decided probes: `(below, above,
+    /// reached above)`, in value order.
+    pub transitions: Vec<Transition>,
+    /// The first onset narrowed by the search when the outcome is not monotone: the lowest
+    /// change from not reaching to reaching, `(below, at_or_above)`.
+    pub first_onset: Option<(f64, f64)>,
+    /// The probes on the wrong side of the first onset: reaching below it or not reaching
+    /// above it.
+    pub contradicting: Vec<f64>,
+}
+
+/// A change of outcome between two neighbouring decided probes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Transition {
+    /// The lower probe's value.
+    pub below: f64,
+    /// The upper probe's value.
+    pub above: f64,
+    /// Whether the upper one reached the limit (`true`: the limit starts here; `false`:
+    /// it stops reaching it, a contradiction of a threshold).
+    pub reached_above: bool,
+}
+
+impl Verification {
+    /// The check of `probes`: their transitions in value order and the probes on the wrong
+    /// side of `(below, at_or_above]`, the bracket the search narrowed.
+    pub fn of(probes: &[Probe], bracket: Option<(f64, f64)>) -> Self {
+        let mut decided: Vec<(f64, bool)> = probes
+            .iter()
+            .filter_map(|p| p.reached.map(|r| (p.value, r)))
+            .collect();
+        decided.sort_by(|a, b| a.0.total_cmp(&b.0));
+        decided.dedup_by(|a, b| a.0.total_cmp(&b.0).is_eq() && a.1 == b.1);
+        let transitions: Vec<Transition> = decided
+            .windows(2)
+            .filter(|w| w[0].1 != w[1].1)
+            .map(|w| Transition {
+                below: w[0].0,
+                above: w[1].0,
+                reached_above: w[1].1,
+            })
+            .collect();
+        let monotone = transitions.len() <= 1 && transitions.iter().all(|t| t.reached_above);
+        let contradicting = bracket.map_or_else(Vec::new, |(below, above)| {
+            decided
+                .iter()
+                .filter(|(v, r)| (*r && *v <= below) || (!*r && *v >= above))
+                .map(|(v, _)| *v)
+                .collect()
+        });
+        Self {
+            monotone: monotone && contradicting.is_empty(),
+            transitions,
+            first_onset: None,
+            contradicting,
+        }
+    }
 }
 
 impl SearchOutcome {
@@ -251,6 +335,16 @@ impl Search {
                 ));
             }
         };
+        let probes_per_round = c.probes_per_round.unwrap_or(1);
+        if !(1..=MAX_PROBES_PER_ROUND).contains(&probes_per_round) {
+            return Err((
+                "search.probes_per_round",
+                format!(
+                    "expected 1 (bisection) to {MAX_PROBES_PER_ROUND} probes per round, got \
+                     {probes_per_round}"
+                ),
+            ));
+        }
         Ok(Self {
             key: c.key.clone(),
             low: c.low,
@@ -258,6 +352,7 @@ impl Search {
             tolerance: c.tolerance,
             window,
             criterion: c.criterion,
+            probes_per_round,
         })
     }
 
@@ -286,6 +381,14 @@ impl Search {
             ),
             _ => Ok(criterion),
         }
+    }
+
+    /// The most probes one search runs when every probe decides: the two ends, then
+    /// `k` per round until the bracket is at most the tolerance wide.
+    pub fn planned_probes(&self) -> usize {
+        let k = self.probes_per_round;
+        let rounds = ((self.high - self.low) / self.tolerance).ln() / ((k + 1) as f64).ln();
+        2 + k * rounds.ceil().max(0.0) as usize
     }
 
     /// The end of the window for `value` (s).
@@ -414,48 +517,6 @@ fn probe(
     out
 }
 
-/// How many probes a search may run at once: the worker threads shared among the searches
-/// still running. While a search waits for a thread, every running search probes one value
-/// at a time (bisection); once every search has started, the threads are split among the
-/// unfinished ones (the remainder to the first), so a lone search gets them all.
-pub(crate) struct ThreadShare {
-    threads: usize,
-    /// Per search: started, finished.
-    state: std::sync::Mutex<Vec<(bool, bool)>>,
-}
-
-impl ThreadShare {
-    /// `threads` workers for `searches` searches.
-    pub(crate) fn new(threads: usize, searches: usize) -> Self {
-        Self {
-            threads: threads.max(1),
-            state: std::sync::Mutex::new(vec![(false, false); searches]),
-        }
-    }
-
-    fn mark(&self, index: usize, started: bool, finished: bool) {
-        if let Ok(mut s) = self.state.lock() {
-            if let Some(slot) = s.get_mut(index) {
-                *slot = (started, finished);
-            }
-        }
-    }
-
-    /// The probes search `index` may run in its next round (at least 1).
-    pub(crate) fn width(&self, index: usize) -> usize {
-        let Ok(s) = self.state.lock() else { return 1 };
-        if s.iter().any(|&(started, _)| !started) {
-            return 1;
-        }
-        let running: Vec<usize> = (0..s.len()).filter(|&i| !s[i].1).collect();
-        let Some(rank) = running.iter().position(|&i| i == index) else {
-            return 1;
-        };
-        let n = running.len();
-        (self.threads / n + usize::from(rank < self.threads % n)).max(1)
-    }
-}
-
 /// The `k` interior points of `(low, high)` that cut it into `k + 1` equal parts, ascending;
 /// points that rounding puts on an end or on each other are left out (a bracket near the
 /// resolution of `f64`), so the list may be shorter, even empty.
@@ -473,12 +534,12 @@ pub fn section_points(low: f64, high: f64, k: usize) -> Vec<f64> {
 
 /// One search by k-section (the bisection of Burden & Faires, section 2.1, with `k` probes
 /// per round: each round cuts the bracket into `k + 1` equal parts and keeps the one where
-/// the limit starts, so `n` rounds shrink it by `(k + 1)^n`; `k = 1` is bisection).
+/// the limit starts, so `n` rounds shrink it by `(k + 1)^n`; `k = 1` is bisection), with
+/// `k` = [`Search::probes_per_round`].
 ///
-/// `width()` gives `k` before each round (the threads free for this search, see
-/// [`run_search`]); `probe(value)` runs one probe (the rounds' probes run in parallel on the
-/// current rayon pool); `on_probe` sees each probe as it ends, with the outcome as it stood
-/// before its round.
+/// `probe(value)` runs one probe (the probes of a round run in parallel on the current
+/// rayon pool: the thread count changes when they run, never which values are probed);
+/// `on_probe` sees each probe as it ends, with the outcome as it stood before its round.
 ///
 /// The rules are bisection's, whatever `k`:
 /// - the ends first: `high` must reach the limit, then `low` must not (run together when
@@ -487,23 +548,26 @@ pub fn section_points(low: f64, high: f64, k: usize) -> Vec<f64> {
 /// - the bracket `(low, high]` keeps `low` not reaching and `high` reaching, and rounds
 ///   continue while it is wider than `tolerance`;
 /// - in a round, the smallest value that reaches the limit becomes `high` and the one below
-///   it `low` (or the largest value becomes `low` when none reaches);
+///   it `low` (or the largest value becomes `low` when none reaches): the search narrows
+///   the first onset;
 /// - a probe that fails for another reason ends the search as `"failed"` (the threshold is
 ///   then not known), except the lower end when the upper one already did not reach the
 ///   limit (bisection would not have run it).
 ///
-/// For a criterion with a threshold, every `k` brackets it within `tolerance`, so the
-/// answers of different thread counts agree to the tolerance; `k` changes only which values
-/// are probed, and the number of rounds (`ceil(log(w0 / tolerance) / log(k + 1))` for a
-/// bracket of width `w0` and a constant `k`).
+/// At the end every decided probe is checked against the answer ([`Verification`]): if the
+/// outcome changes more than once along the key (a probe above the bracket that does not
+/// reach the limit, or one below it that does), the status is `"non-monotone"` and the
+/// answer is the interval that holds every change seen, with the first onset kept in the
+/// verification. The rounds take `ceil(log(w0 / tolerance) / log(k + 1))` for a bracket of
+/// width `w0`.
 pub fn section_search(
     search: &Search,
     case: CaseLabels,
     criterion: Criterion,
-    width: &(dyn Fn() -> usize + Sync),
     probe: &(dyn Fn(f64) -> Probe + Sync),
     on_probe: &(dyn Fn(&SearchOutcome, &Probe) + Sync),
 ) -> SearchOutcome {
+    let k = search.probes_per_round.max(1);
     let mut outcome = SearchOutcome {
         case,
         criterion,
@@ -512,6 +576,7 @@ pub fn section_search(
         at_or_above: None,
         rounds: 0,
         probes: Vec::new(),
+        verification: Verification::default(),
     };
     // Runs `values` at once and appends the probes in the order of `values`.
     let round = |values: &[f64], outcome: &mut SearchOutcome| -> Vec<Option<bool>> {
@@ -533,7 +598,7 @@ pub fn section_search(
     };
     let (mut low, mut high) = (search.low, search.high);
     outcome.status = 'search: {
-        let ends: Vec<Option<bool>> = if width() >= 2 {
+        let ends: Vec<Option<bool>> = if k >= 2 {
             round(&[high, low], &mut outcome)
         } else {
             let first = round(&[high], &mut outcome);
@@ -556,7 +621,7 @@ pub fn section_search(
             }
         }
         while high - low > search.tolerance {
-            let points = section_points(low, high, width());
+            let points = section_points(low, high, k);
             if points.is_empty() {
                 break;
             }
@@ -579,6 +644,27 @@ pub fn section_search(
     };
     if outcome.status == "bracketed" {
         (outcome.below, outcome.at_or_above) = (Some(low), Some(high));
+        let verification = Verification::of(&outcome.probes, Some((low, high)));
+        if !verification.monotone {
+            // The answer is the interval that holds every change of outcome seen.
+            outcome.status = "non-monotone";
+            outcome.below = verification
+                .transitions
+                .iter()
+                .map(|t| t.below)
+                .reduce(f64::min);
+            outcome.at_or_above = verification
+                .transitions
+                .iter()
+                .map(|t| t.above)
+                .reduce(f64::max);
+            outcome.verification = Verification {
+                first_onset: Some((low, high)),
+                ..verification
+            };
+        } else {
+            outcome.verification = verification;
+        }
     } else {
         outcome.below = outcome
             .probes
@@ -592,6 +678,7 @@ pub fn section_search(
             .filter(|p| p.reached == Some(true))
             .map(|p| p.value)
             .reduce(f64::min);
+        outcome.verification = Verification::of(&outcome.probes, None);
     }
     outcome
 }
@@ -625,10 +712,9 @@ pub fn search_cases(study: &Study) -> Result<Vec<(CaseLabels, toml::Table)>, Str
 }
 
 /// Runs every search of `study` (one per case of its axes, or one on the base scene), the
-/// searches in parallel on `threads` workers. When there are more threads than searches
-/// still running, each search probes several values per round ([`section_search`]), so the
-/// threads stay busy to the last search. `on_probe` sees each probe as it ends, with its
-/// search. Nothing is written: see [`write_search_files`].
+/// searches and the probes of each round in parallel on `threads` workers
+/// ([`section_search`]; the probes do not depend on `threads`). `on_probe` sees each probe
+/// as it ends, with its search. Nothing is written: see [`write_search_files`].
 ///
 /// # Errors
 /// [`StudyError::Input`] when a case's scene cannot be formed; [`StudyError::Io`] when the
@@ -661,22 +747,18 @@ pub fn run_search(
             path: study.file.clone(),
             source: std::io::Error::other(format!("cannot start worker threads: {e}")),
         })?;
-    let share = ThreadShare::new(threads, jobs.len());
+    // The searches run in parallel, and the probes of each round too; the thread count
+    // changes only when probes run, never which ones (each search's schedule is its own).
     Ok(pool.install(|| {
         jobs.into_par_iter()
-            .enumerate()
-            .map(|(index, (labels, table, criterion))| {
-                share.mark(index, true, false);
-                let outcome = section_search(
+            .map(|(labels, table, criterion)| {
+                section_search(
                     search,
                     labels,
                     criterion,
-                    &|| share.width(index),
                     &|value| probe(study, search, &table, criterion, value),
                     on_probe,
-                );
-                share.mark(index, true, true);
-                outcome
+                )
             })
             .collect()
     }))
@@ -719,6 +801,7 @@ fn search_json(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> se
             "below": o.below,
             "at_or_above": o.at_or_above,
             "rounds": o.rounds,
+            "verification": o.verification,
             "probes": o.probes,
         })
     };
@@ -728,6 +811,7 @@ fn search_json(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> se
         "low": search.low,
         "high": search.high,
         "tolerance": search.tolerance,
+        "probes_per_round": search.probes_per_round,
         "window": match search.window {
             Window::Revolutions(n) => serde_json::json!({ "revolutions": n }),
             Window::Time(t) => serde_json::json!({ "time_s": t }),
@@ -741,6 +825,7 @@ fn search_json(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -> se
             "below",
             "at_or_above",
             "rounds",
+            "verification",
             "probes",
         ] {
             map.insert(key.to_string(), one(single)[key].clone());
@@ -758,12 +843,11 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
     };
     let mut md = format!(
         "# {}: speed limit in `{}`\n\nSearch over {} to {} (tolerance {}), window {window}: \
-         the two ends, then rounds of as many probes at once as the search had threads \
-         (bisection with one). The limit is reached at or above the upper end and not at \
-         the lower end.\n\n\
+         the two ends, then rounds of {} probes at once (bisection with one). The limit is \
+         reached at or above the upper end and not at the lower end.\n\n\
          | case | criterion | status | not reached at | reached at | when (s) | link | probes | rounds |\n\
          |---|---|---|---:|---:|---:|---:|---:|---:|\n",
-        study.name, search.key, search.low, search.high, search.tolerance
+        study.name, search.key, search.low, search.high, search.tolerance, search.probes_per_round
     );
     for o in outcomes {
         let first = o.at_or_above.and_then(|v| {
@@ -804,6 +888,24 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
         md.push_str("\nFailed searches (no bracket is claimed):\n\n");
         md.push_str(&failed.concat());
     }
+    let contradicted: Vec<String> = outcomes
+        .iter()
+        .filter(|o| o.status == "non-monotone")
+        .map(|o| {
+            format!(
+                "- {}: {}\n",
+                o.case_label(),
+                non_monotone_note(&search.key, o)
+            )
+        })
+        .collect();
+    if !contradicted.is_empty() {
+        md.push_str(
+            "\nSearches whose outcome is not monotone in the key (the answer is the interval \
+             that holds every change of outcome seen):\n\n",
+        );
+        md.push_str(&contradicted.concat());
+    }
     let ignored: Vec<String> = outcomes
         .iter()
         .filter(|o| o.status != "failed")
@@ -827,6 +929,49 @@ fn search_markdown(study: &Study, search: &Search, outcomes: &[SearchOutcome]) -
         md.push_str(&ignored.concat());
     }
     md
+}
+
+/// What a non-monotone search saw, in words: the changes of outcome, the probes that
+/// contradict a single threshold, and the interval reported.
+pub fn non_monotone_note(key: &str, o: &SearchOutcome) -> String {
+    let v = crate::record::format_value;
+    let changes = o
+        .verification
+        .transitions
+        .iter()
+        .map(|t| {
+            format!(
+                "{} between {} and {}",
+                if t.reached_above {
+                    "reached"
+                } else {
+                    "no longer reached"
+                },
+                v(t.below),
+                v(t.above)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    let against = o
+        .verification
+        .contradicting
+        .iter()
+        .map(|x| v(*x))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let onset = o
+        .verification
+        .first_onset
+        .map(|(a, b)| format!("; the first onset is in ({}, {}]", v(a), v(b)))
+        .unwrap_or_default();
+    format!(
+        "the {} is not monotone in {key}: {changes} (probes at {against} contradict a single \
+         threshold){onset}; the limit lies somewhere in ({}, {}]",
+        o.criterion.name(),
+        o.below.map_or("-".to_string(), v),
+        o.at_or_above.map_or("-".to_string(), v)
+    )
 }
 
 /// `results.csv`: one row per probe, with its search's case and criterion (written by the

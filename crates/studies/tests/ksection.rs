@@ -1,9 +1,11 @@
 //! The k-section speed search (`section_search`) against criteria whose threshold is known
 //! in closed form (`reached = value >= threshold`), so the bracket is checked against the
-//! true limit, not against the code's earlier output: every thread count brackets the
-//! threshold within the tolerance, in `ceil(log(w0 / tol) / log(k + 1))` rounds after the two
-//! ends (the k-section law; `k = 1` is bisection, Burden & Faires section 2.1), with `k`
-//! probes in flight at once. The real searches over scenes agree across thread counts.
+//! true limit, not against the code's earlier output: every `k` brackets the threshold
+//! within the tolerance, in `ceil(log(w0 / tol) / log(k + 1))` rounds after the two ends (the
+//! k-section law; `k = 1` is bisection, Burden & Faires section 2.1), with `k` probes in
+//! flight at once, and the same probes for any thread count. A criterion that is not
+//! monotone (two thresholds) is reported as such, with the interval that holds every change
+//! of outcome. The real searches over scenes give the same answer for any thread count.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -20,6 +22,10 @@ fn configs() -> PathBuf {
 }
 
 fn search(low: f64, high: f64, tolerance: f64) -> Search {
+    search_k(low, high, tolerance, 1)
+}
+
+fn search_k(low: f64, high: f64, tolerance: f64, k: usize) -> Search {
     Search::from_config(&SearchConfig {
         key: "trajectory.frequency".into(),
         low,
@@ -28,6 +34,7 @@ fn search(low: f64, high: f64, tolerance: f64) -> Search {
         revolutions: None,
         time: Some(0.5),
         criterion: None,
+        probes_per_round: Some(k),
     })
     .unwrap()
 }
@@ -45,22 +52,35 @@ fn probe_of(value: f64, reached: Option<bool>) -> Probe {
     }
 }
 
-/// Runs `section_search` with a constant `k` on a pool of `k` threads.
-fn run_k(s: &Search, k: usize, criterion: &(dyn Fn(f64) -> Option<bool> + Sync)) -> SearchOutcome {
+/// Runs `section_search` with `k` probes per round on a pool of `threads` threads.
+fn run_on(
+    s: &Search,
+    k: usize,
+    threads: usize,
+    criterion: &(dyn Fn(f64) -> Option<bool> + Sync),
+) -> SearchOutcome {
+    let s = Search {
+        probes_per_round: k,
+        ..s.clone()
+    };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(k)
+        .num_threads(threads)
         .build()
         .unwrap();
     pool.install(|| {
         section_search(
-            s,
+            &s,
             Vec::new(),
             Criterion::Collapse,
-            &|| k,
             &|v| probe_of(v, criterion(v)),
             &|_, _| {},
         )
     })
+}
+
+/// Runs `section_search` with `k` probes per round on a pool of `k` threads.
+fn run_k(s: &Search, k: usize, criterion: &(dyn Fn(f64) -> Option<bool> + Sync)) -> SearchOutcome {
+    run_on(s, k, k, criterion)
 }
 
 /// The rounds the k-section law predicts for a bracket of width `w0`.
@@ -69,7 +89,7 @@ fn predicted_rounds(w0: f64, tolerance: f64, k: usize) -> usize {
 }
 
 #[test]
-fn every_thread_count_brackets_a_known_threshold_in_the_predicted_rounds() {
+fn every_k_brackets_a_known_threshold_in_the_predicted_rounds() {
     let (low, high, tolerance) = (20.0, 34.0, 0.1);
     let s = search(low, high, tolerance);
     // Thresholds: generic, next to either end, and one that is a bisection midpoint.
@@ -103,9 +123,16 @@ fn every_thread_count_brackets_a_known_threshold_in_the_predicted_rounds() {
                     .all(|p| p.value <= below || p.value >= above),
                 "{what}"
             );
+            assert!(o.verification.monotone, "{what}");
+            assert_eq!(o.verification.transitions.len(), 1, "{what}");
+            // The same probes and answer on 1, 2 and 7 threads.
+            for threads in [1, 2, 7] {
+                let again = run_on(&s, k, threads, &|v| Some(v >= threshold));
+                assert_eq!(again, o, "{what}, {threads} threads");
+            }
             brackets.push((below, above));
         }
-        // Independent of the thread count to the tolerance: all brackets overlap.
+        // Every k brackets the threshold: all brackets overlap.
         let lo = brackets.iter().map(|b| b.0).fold(f64::MIN, f64::max);
         let hi = brackets.iter().map(|b| b.1).fold(f64::MAX, f64::min);
         assert!(lo < hi && hi - lo <= tolerance, "{brackets:?}");
@@ -188,12 +215,15 @@ fn a_round_keeps_its_k_probes_in_flight_at_once() {
             .num_threads(k)
             .build()
             .unwrap();
+        let s = Search {
+            probes_per_round: k,
+            ..s.clone()
+        };
         let o = pool.install(|| {
             section_search(
                 &s,
                 Vec::new(),
                 Criterion::Collapse,
-                &|| k,
                 &|v| {
                     let expected = if v <= low || v >= high { 2 } else { k };
                     let now = in_flight.fetch_add(1, Ordering::SeqCst) + 1;
@@ -219,12 +249,12 @@ fn a_round_keeps_its_k_probes_in_flight_at_once() {
     }
 }
 
-/// The KED buckling speed of the paper's machine searched with 1 to 4 threads (one search,
-/// so k = threads): every bracket is within the tolerance and they all overlap, i.e. the
-/// answer does not depend on the thread count beyond the tolerance; more threads take
-/// fewer rounds.
+/// The KED buckling speed of the paper's machine searched with 1 to 4 threads: the answer
+/// moved with the thread count (the thread count chose the probes); the probes are now the
+/// study's (`probes_per_round = 3`), so every thread count gives the same probes and the same
+/// bracket, within the tolerance, in the rounds the k-section law predicts.
 #[test]
-fn a_scene_search_agrees_across_thread_counts() {
+fn a_scene_search_gives_the_same_answer_for_any_thread_count() {
     let text = r#"
 base = "coupled_f20.toml"
 [set.model]
@@ -235,10 +265,12 @@ low = 20.0
 high = 34.0
 tolerance = 0.1
 time = 0.5
+probes_per_round = 3
 "#;
     let study = Study::from_text("ked_search.toml", "ked_search", text, &configs()).unwrap();
     let mut brackets = Vec::new();
     let mut rounds = Vec::new();
+    let mut probes: Vec<Vec<f64>> = Vec::new();
     for threads in 1..=4 {
         let dir = tempfile::tempdir().unwrap();
         let options = StudyOptions {
@@ -260,14 +292,62 @@ time = 0.5
         for p in &o.probes {
             assert_eq!(p.reached, Some(p.value >= above), "{threads}: {p:?}");
         }
-        assert_eq!(o.rounds, predicted_rounds(14.0, 0.1, threads));
+        assert_eq!(o.rounds, predicted_rounds(14.0, 0.1, 3));
+        assert!(o.verification.monotone, "{o:?}");
         brackets.push((below, above));
         rounds.push(o.rounds);
+        let mut values: Vec<f64> = o.probes.iter().map(|p| p.value).collect();
+        values.sort_by(f64::total_cmp);
+        probes.push(values);
     }
-    let lo = brackets.iter().map(|b| b.0).fold(f64::MIN, f64::max);
-    let hi = brackets.iter().map(|b| b.1).fold(f64::MAX, f64::min);
-    assert!(lo < hi && hi - lo <= 0.1, "{brackets:?}");
-    assert_eq!(rounds, vec![8, 5, 4, 4], "{rounds:?}");
+    assert!(brackets.windows(2).all(|w| w[0] == w[1]), "{brackets:?}");
+    assert!(probes.windows(2).all(|w| w[0] == w[1]), "{probes:?}");
+    assert_eq!(rounds, vec![4; 4], "{rounds:?}");
+}
+
+/// A limit reached on two stretches of the key, [23.5, 26.5] and from 30.7 on: its own probes
+/// above the narrowed bracket do not reach it, and the search used to call it "bracketed".
+/// It now says "non-monotone", lists the changes of outcome and the contradicting probes,
+/// keeps the first onset, and answers with the interval that holds every change seen, the
+/// same for every thread count.
+#[test]
+fn a_non_monotone_outcome_is_reported_with_the_probes_that_show_it() {
+    let reached = |v: f64| Some((23.5..=26.5).contains(&v) || v >= 30.7);
+    let s = search_k(20.0, 36.0, 0.1, 3);
+    let o = run_on(&s, 3, 3, &reached);
+    assert_eq!(o.status, "non-monotone", "{o:?}");
+    let v = &o.verification;
+    assert!(!v.monotone);
+    // The first onset is the narrowed bracket around 23.5.
+    let (a, b) = v.first_onset.unwrap();
+    assert!(a < 23.5 && 23.5 <= b && b - a <= 0.1, "{v:?}");
+    // Every change of outcome seen lies in the interval reported, and there are changes
+    // both ways: up at 23.5, down after 26.5, up again at 30.7.
+    let (below, above) = (o.below.unwrap(), o.at_or_above.unwrap());
+    assert!(v.transitions.len() >= 3, "{v:?}");
+    for t in &v.transitions {
+        assert!(
+            below <= t.below && t.above <= above,
+            "{t:?} outside ({below}, {above}]"
+        );
+        // Each change is where the criterion changes.
+        assert_ne!(reached(t.below), reached(t.above));
+    }
+    assert!(v.transitions.iter().any(|t| !t.reached_above));
+    // The contradicting probes: not reaching above the first onset.
+    assert!(!v.contradicting.is_empty());
+    for &x in &v.contradicting {
+        assert_eq!(reached(x), Some(false), "{x}");
+        assert!(x > b);
+    }
+    // The same for any thread count.
+    for threads in [1, 2, 5] {
+        assert_eq!(run_on(&s, 3, threads, &reached), o, "{threads} threads");
+    }
+    // A monotone criterion is "bracketed" with one change of outcome.
+    let o = run_on(&s, 3, 3, &|v| Some(v >= 24.3));
+    assert_eq!(o.status, "bracketed");
+    assert!(o.verification.monotone && o.verification.contradicting.is_empty());
 }
 
 /// A tolerance below the resolution of `f64` near the bracket could never be met: the
@@ -283,6 +363,7 @@ fn a_tolerance_below_the_resolution_of_the_numbers_is_refused() {
         revolutions: None,
         time: Some(0.5),
         criterion: None,
+        probes_per_round: None,
     };
     let (key, message) = Search::from_config(&config(1e17, 1e17 + 64.0, 1.0)).unwrap_err();
     assert_eq!(key, "search.tolerance");

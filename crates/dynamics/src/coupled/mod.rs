@@ -621,19 +621,13 @@ impl CoupledSystem {
         (&y[..n], &y[coordinates..coordinates + n])
     }
 
-    /// The sample times of a sampled controller strictly inside `(t0, t1)`: where the
-    /// integration must stop for the zero-order hold.
-    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        let mut times = self
-            .actuated
-            .as_ref()
-            .map_or_else(Vec::new, |a| a.sample_times(t0, t1));
-        if let Some(p) = &self.patches {
-            times.extend(p.sample_times(t0, t1));
-            times.sort_by(f64::total_cmp);
-            times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t1.abs().max(1.0));
-        }
-        times
+    /// The first sample time of a sampled controller (slider or vibration law) strictly
+    /// after `t`: where the integration must stop next for the zero-order hold.
+    pub fn next_sample(&self, t: f64) -> Option<f64> {
+        crate::hold::earliest(
+            self.actuated.as_ref().and_then(|a| a.next_sample(t)),
+            self.patches.as_ref().and_then(|p| p.next_sample(t)),
+        )
     }
 
     /// The measured sliders of `y` (actuated sliders).
@@ -701,8 +695,10 @@ impl CoupledSystem {
     pub fn initial_state(&self) -> Vec<f64> {
         self.initial.clone()
     }
-    /// The first failure met inside the right-hand side (which then writes NaN so the
-    /// integrator stops with a non-finite error): use it to report the real cause.
+    /// Why the integration ended: the collapse found by the terminal event
+    /// ([`OdeSystem::terminal_event`], on accepted states), or the latest failure met inside
+    /// the right-hand side since the last accepted step (which then writes NaN so the
+    /// integrator rejects the trial): use it to report the real cause.
     pub fn take_failure(&mut self) -> Option<DynamicsError> {
         self.failure.take()
     }
@@ -731,8 +727,12 @@ impl CoupledSystem {
         Ok(())
     }
 
-    fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {
-        if self.failure.is_none() {
+    /// Records `error` and writes NaN so the integrator rejects the trial. The record is
+    /// the latest failure met since the last accepted step (the one closest to where the
+    /// integration stopped) at a finite state: a stage built from an earlier stage's NaN
+    /// fails only as a consequence, and does not replace the cause.
+    fn fail(&mut self, error: DynamicsError, y: &[f64], dy: &mut [f64]) {
+        if self.failure.is_none() || y.iter().all(|v| v.is_finite()) {
             self.failure = Some(error);
         }
         dy.fill(f64::NAN);
@@ -748,22 +748,16 @@ impl OdeSystem for CoupledSystem {
         self.counters.rhs_evaluations += 1;
         let kin = match self.kinetics(t, y) {
             Ok(kin) => kin,
-            Err(e) => return self.fail(e, dy),
+            Err(e) => return self.fail(e, y, dy),
         };
         let (n, coordinates) = (self.modes, self.coordinates());
-        if let Some(limit) = self.options.collapse_deflection {
-            let measure = kin.type_ii_measure;
-            if let Some(e) = self.deflection_collapse(t, &y[..n], measure, limit) {
-                return self.fail(e, dy);
-            }
-        }
         let forces = match self.actuator_forces(t, y, &kin.rigid, &mut dy[2 * coordinates..]) {
             Ok(forces) => forces.map(|(_, outputs)| outputs.map(|o| o.force)),
-            Err(e) => return self.fail(e, dy),
+            Err(e) => return self.fail(e, y, dy),
         };
         let z = match self.solve_accelerations(t, y, &kin, forces.as_ref()) {
             Ok(z) => z,
-            Err(e) => return self.fail(e, dy),
+            Err(e) => return self.fail(e, y, dy),
         };
         dy[..coordinates].copy_from_slice(&y[coordinates..2 * coordinates]);
         dy[coordinates..coordinates + n].copy_from_slice(&self.scratch.acceleration);
@@ -772,8 +766,50 @@ impl OdeSystem for CoupledSystem {
         }
     }
 
+    /// A sampled controller's next sample ([`CoupledSystem::next_sample`]).
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        self.next_sample(t)
+    }
+
+    /// A failure met in a rejected trial is forgotten once a step is accepted.
+    fn step_accepted(&mut self, _t: f64, _y: &[f64]) {
+        self.failure = None;
+    }
+
+    /// The collapse ([`CoupledOptions::collapse_deflection`]) as a terminal event, decided on
+    /// accepted states only: a mid-point deflection past its limit, or the deflected chords
+    /// at a type-II pose while the commanded one is regular (where the right-hand side
+    /// cannot be evaluated). The collapse is recorded for [`CoupledSystem::take_failure`].
+    /// None without a deflection limit; where the commanded motion itself fails (the
+    /// right-hand side reports that), not reached.
+    fn terminal_event(&mut self, t: f64, y: &[f64]) -> Option<f64> {
+        let limit = self.options.collapse_deflection?;
+        if y.len() != self.dim() {
+            return None;
+        }
+        let measure = match self.kinetics(t, y) {
+            Ok(kin) => kin.type_ii_measure,
+            Err(e @ DynamicsError::Collapse { .. }) => {
+                self.failure = Some(e);
+                return Some(f64::NAN);
+            }
+            Err(_) => return Some(-1.0),
+        };
+        let eta = &y[..self.modes];
+        let margin = (0..3)
+            .map(|i| {
+                let w = dot(&self.links[i].psi_mid, &eta[self.link_range(i)]);
+                w.abs() / (limit * self.links[i].length) - 1.0
+            })
+            .fold(f64::NEG_INFINITY, f64::max);
+        if margin >= 0.0 || margin.is_nan() {
+            self.failure = self.deflection_collapse(t, eta, measure, limit);
+        }
+        Some(margin)
+    }
+
     /// A sampled controller takes its sample when a segment starts at one of its sample
-    /// times (they are stop times: [`CoupledSystem::sample_times`]).
+    /// times (they are stop times: [`CoupledSystem::next_sample`]).
     fn segment_start(&mut self, t: f64, y: &[f64]) {
         if y.len() != self.dim() {
             return;

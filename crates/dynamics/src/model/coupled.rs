@@ -81,9 +81,6 @@ impl SceneModel for CoupledSystem {
     ) -> Result<Option<crate::ChordCompliance>, DynamicsError> {
         CoupledSystem::chord_compliance(self, t, y)
     }
-    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.sample_times(t0, t1)
-    }
     fn actuation(&self) -> Option<&crate::Actuation> {
         CoupledSystem::actuation(self)
     }

@@ -61,7 +61,4 @@ impl SceneModel for ModalSystem {
     fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
         Ok(ModalSystem::patch_states(self, t, y))
     }
-    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.sample_times(t0, t1)
-    }
 }

@@ -359,12 +359,6 @@ pub trait SceneModel: OdeSystem + Send {
         let _ = t;
         Ok(modal_energies(self, y))
     }
-    /// Times strictly inside `(t0, t1)` where the integration must stop and restart (a
-    /// sampled controller's samples); the trajectory's own breakpoints come from the scene.
-    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        let _ = (t0, t1);
-        Vec::new()
-    }
     /// The model's own tables at the output times of `solution` (say, the coupled model's
     /// platform deviation and chord forces); none by default.
     ///

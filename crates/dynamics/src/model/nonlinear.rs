@@ -105,9 +105,6 @@ impl SceneModel for NonlinearSystem {
     fn slope(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
         self.slope_at(t, link, xi, y)
     }
-    fn stop_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.sample_times(t0, t1)
-    }
     fn actuation(&self) -> Option<&crate::Actuation> {
         NonlinearSystem::actuation(self)
     }

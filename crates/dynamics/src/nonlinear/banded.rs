@@ -97,6 +97,16 @@ impl BorderedBanded {
         for (r, out) in border_out.iter_mut().enumerate() {
             *out = (0..k).map(|c| self.border[r * k + c] * border_x[c]).sum();
         }
+        // The models' sizes, with loops of fixed length the compiler unrolls.
+        match (w, k) {
+            (5, 3) => {
+                return self.multiply_fixed::<5, 3>(blocks_x, border_x, blocks_out, border_out);
+            }
+            (5, 6) => {
+                return self.multiply_fixed::<5, 6>(blocks_x, border_x, blocks_out, border_out);
+            }
+            _ => {}
+        }
         for b in 0..self.blocks {
             let band = &self.band[b * n * (w + 1)..(b + 1) * n * (w + 1)];
             let c = &self.coupling[b * n * k..(b + 1) * n * k];
@@ -128,6 +138,60 @@ impl BorderedBanded {
                     *o += a * x[i];
                 }
             }
+        }
+    }
+
+    /// The blocks' part of [`BorderedBanded::multiply`] for the half-bandwidth `W` and the
+    /// border size `K` (the border's own product is done): the same sums, each row's lower
+    /// band and coupling as arrays of fixed length.
+    fn multiply_fixed<const W: usize, const K: usize>(
+        &self,
+        blocks_x: &[f64],
+        border_x: &[f64],
+        blocks_out: &mut [f64],
+        border_out: &mut [f64],
+    ) {
+        let n = self.n;
+        let bx: &[f64; K] = border_x.try_into().unwrap_or(&[0.0; K]);
+        let mut border_sum = [0.0; K];
+        for b in 0..self.blocks {
+            let band = &self.band[b * n * (W + 1)..(b + 1) * n * (W + 1)];
+            let c = &self.coupling[b * n * K..(b + 1) * n * K];
+            let x = &blocks_x[b * n..(b + 1) * n];
+            let out = &mut blocks_out[b * n..(b + 1) * n];
+            for i in 0..n {
+                let row = &band[i * (W + 1)..(i + 1) * (W + 1)];
+                let xi = x[i];
+                let mut sum = row[0] * xi;
+                if i >= W {
+                    // `row[d] = A[i][i - d]` against `x[i - d]` and into `out[i - d]`.
+                    let xs: &[f64; W] = x[i - W..i].try_into().unwrap_or(&[0.0; W]);
+                    let os: &mut [f64; W] = (&mut out[i - W..i])
+                        .try_into()
+                        .unwrap_or_else(|_| unreachable!("W rows below row i"));
+                    for d in 1..=W {
+                        let a = row[d];
+                        sum += a * xs[W - d];
+                        os[W - d] += a * xi;
+                    }
+                } else {
+                    for d in 1..=i {
+                        let a = row[d];
+                        sum += a * x[i - d];
+                        out[i - d] += a * xi;
+                    }
+                }
+                let coupling: &[f64; K] = c[i * K..(i + 1) * K].try_into().unwrap_or(&[0.0; K]);
+                let mut cross = 0.0;
+                for j in 0..K {
+                    cross += coupling[j] * bx[j];
+                    border_sum[j] += coupling[j] * xi;
+                }
+                out[i] = sum + cross;
+            }
+        }
+        for (o, s) in border_out.iter_mut().zip(border_sum) {
+            *o += s;
         }
     }
 

@@ -96,6 +96,11 @@ pub struct ElementState {
 /// `a - 2 pi round(a / (2 pi))`: the angle in `(-pi, pi]` (up to rounding at the ends).
 #[inline]
 pub(crate) fn wrap_angle(a: f64) -> f64 {
+    // The usual case first (a local rotation within a half turn: no rounding call); the
+    // same result as `a - 2 pi round(a / 2 pi)` wherever `|a| <= pi`.
+    if a.abs() <= PI {
+        return a;
+    }
     a - 2.0 * PI * (a / (2.0 * PI)).round()
 }
 

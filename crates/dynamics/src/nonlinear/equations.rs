@@ -176,7 +176,6 @@ impl NonlinearSystem {
             let mut shared = (f64::NAN, (0.0, 1.0));
             for e in 0..ne {
                 let (q, v) = self.element_state(y, frame, i, e);
-                let (map, known) = self.element_map(frame, y, i, e);
                 let first = if q[2].to_bits() == shared.0.to_bits() {
                     shared.1
                 } else {
@@ -189,6 +188,29 @@ impl NonlinearSystem {
                     &v,
                     [first, shared.1],
                 );
+                let f = &self.forces[i * stride..(i + 1) * stride];
+                if e > 0 && e + 1 < ne {
+                    // An element inside the link: its six coordinates are rows
+                    // 3e - 2 .. 3e + 4 of the link's block, nothing of its acceleration is
+                    // known, and its second node's forces are its own (the same as the
+                    // general path below, without the maps).
+                    let base = 3 * e - 2;
+                    let g0 = self.link_index(i, base);
+                    for c in 0..6 {
+                        let mut force = inertia.velocity_terms[c];
+                        if c >= 3 {
+                            force += f[3 * (e + 1) + c - 3];
+                        }
+                        rhs[g0 + c] -= force;
+                    }
+                    for c1 in 0..6 {
+                        for c2 in 0..=c1 {
+                            mass.add_block(i, base + c1, base + c2, inertia.mass[c1][c2]);
+                        }
+                    }
+                    continue;
+                }
+                let (map, known) = self.element_map(frame, y, i, e);
                 // Known force: the nodal forces of the element's nodes are added once per node
                 // (by the element that owns the node's slot: its first element, or the last
                 // element for node N), the inertia of the known accelerations per element.
@@ -196,7 +218,6 @@ impl NonlinearSystem {
                 for (a, row) in inertia.mass.iter().enumerate() {
                     known_force[a] += row.iter().zip(&known).map(|(m, k)| m * k).sum::<f64>();
                 }
-                let f = &self.forces[i * stride..(i + 1) * stride];
                 for c in 0..6 {
                     let node = e + c / 3;
                     let owns = if c < 3 { e == 0 } else { true };

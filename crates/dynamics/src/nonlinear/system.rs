@@ -46,10 +46,11 @@ use flexprr_kinematics::MachineState;
 /// consecutive coordinates of its two nodes.
 pub(super) const MASS_BANDWIDTH: usize = 5;
 
-/// Elements per link of [`NonlinearOptions::paper`]: with the default element
-/// ([`LocalStrain::ShallowArch`], [`NodalMass::Consistent`]) within 0.25 % of the converged
-/// external model through the 30 Hz collapse (0-64 ms) and within 0.4 % of its whole-machine
-/// frequencies.
+/// Elements per link of [`NonlinearOptions::paper`], and of scenes (`model.elements`): with
+/// the default element ([`LocalStrain::ShallowArch`], [`NodalMass::Consistent`]) within
+/// 0.25 % of the converged external model through the 30 Hz collapse (0-64 ms; 0.026 % at 16
+/// elements) and within 0.4 % of its whole-machine frequencies, at about 9 times the coupled
+/// model's cost under generalized-alpha at rtol 1e-5 (docs/performance.md).
 pub const DEFAULT_ELEMENTS: usize = 8;
 
 /// Model switches of a [`NonlinearSystem`].
@@ -386,19 +387,15 @@ impl NonlinearSystem {
     pub fn actuation(&self) -> Option<&Actuation> {
         self.actuated.as_ref().map(|a| &a.spec)
     }
-    /// The sample times of a sampled controller (slider or vibration law) strictly inside
-    /// `(t0, t1)`.
-    pub fn sample_times(&self, t0: f64, t1: f64) -> Vec<f64> {
-        let mut times = self
-            .actuated
-            .as_ref()
-            .map_or_else(Vec::new, |a| a.sample_times(t0, t1));
-        if let Some((law, _)) = &self.patches {
-            times.extend(law.sample_times(t0, t1));
-            times.sort_by(f64::total_cmp);
-            times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t1.abs().max(1.0));
-        }
-        times
+    /// The first sample time of a sampled controller (slider or vibration law) strictly
+    /// after `t`: where the integration must stop next for the zero-order hold.
+    pub fn next_sample(&self, t: f64) -> Option<f64> {
+        crate::hold::earliest(
+            self.actuated.as_ref().and_then(|a| a.next_sample(t)),
+            self.patches
+                .as_ref()
+                .and_then(|(law, _)| law.next_sample(t)),
+        )
     }
     /// Range of link `link`'s nodal coordinates (0-based link) among the generalized
     /// coordinates; the platform's three come first.
@@ -414,8 +411,10 @@ impl NonlinearSystem {
     pub fn counters(&self) -> NonlinearCounters {
         self.counters
     }
-    /// The first failure met inside the right-hand side (which then writes NaN so the
-    /// integrator stops): a [`DynamicsError::Collapse`] or a kinematic failure.
+    /// Why the integration ended: the collapse found by the terminal event
+    /// ([`OdeSystem::terminal_event`], on accepted states), or the latest failure met inside
+    /// the right-hand side since the last accepted step (which then writes NaN so the
+    /// integrator rejects the trial), such as a kinematic failure.
     pub fn take_failure(&mut self) -> Option<DynamicsError> {
         self.failure.take()
     }
@@ -943,35 +942,41 @@ impl NonlinearSystem {
         })
     }
 
-    /// The collapse checks of [`NonlinearOptions`].
-    fn check_collapse(&self, t: f64, y: &[f64], frame: &Frame) -> Result<(), DynamicsError> {
-        let check_limit = self.options.collapse_deflection.is_some();
-        if !(self.options.stop_at_type_ii || check_limit) {
-            return Ok(());
-        }
+    /// The collapse checks of [`NonlinearOptions`] at `(t, y)`: the margin (negative while
+    /// no check fires: the largest of the most deflected link's deflection over its limit,
+    /// minus one, and one minus the type-II measure over its threshold; NaN for a NaN
+    /// measure) and the collapse it describes.
+    fn collapse_margin(&self, t: f64, y: &[f64], frame: &Frame) -> (f64, DynamicsError) {
         let measure = self.measure(frame);
         let w = self.midpoint_deflections(y, frame);
+        let lengths: [f64; 3] = std::array::from_fn(|i| self.machine.links[i].length());
+        let mut margin = f64::NEG_INFINITY;
+        if let Some(f) = self.options.collapse_deflection {
+            for i in 0..3 {
+                margin = margin.max(w[i].abs() / (f * lengths[i]) - 1.0);
+            }
+        }
+        if self.options.stop_at_type_ii {
+            let threshold = self.machine.geometry.thresholds.type_ii;
+            margin = if measure.is_nan() {
+                f64::NAN
+            } else {
+                margin.max(1.0 - measure / threshold)
+            };
+        }
         let (link, deflection) =
             (0..3).map(|i| (i, w[i])).fold(
                 (0, 0.0_f64),
                 |a, b| if b.1.abs() > a.1.abs() { b } else { a },
             );
-        let over_limit = self
-            .options
-            .collapse_deflection
-            .is_some_and(|f| deflection.abs() > f * self.machine.links[link].length());
-        let singular = self.options.stop_at_type_ii
-            && (measure.is_nan() || measure < self.machine.geometry.thresholds.type_ii);
-        if over_limit || singular {
-            return Err(DynamicsError::Collapse {
-                t,
-                link: link + 1,
-                deflection,
-                length: self.machine.links[link].length(),
-                type_ii_measure: measure,
-            });
-        }
-        Ok(())
+        let collapse = DynamicsError::Collapse {
+            t,
+            link: link + 1,
+            deflection,
+            length: lengths[link],
+            type_ii_measure: measure,
+        };
+        (margin, collapse)
     }
 
     /// Accelerations `z''` into `acc` (the second block of `dy`): assembles and solves
@@ -1133,22 +1138,23 @@ impl NonlinearSystem {
         self.counters.rhs_evaluations += 1;
         let frame = match self.frame(t, y) {
             Ok(f) => f,
-            Err(e) => return self.fail(e, out),
+            Err(e) => return self.fail(e, y, out),
         };
-        if let Err(e) = self.check_collapse(t, y, &frame) {
-            return self.fail(e, out);
-        }
         self.assemble(y, &frame);
         // The form exists only without a control law's states: no rates to write.
         if let Err(e) = self.actuate(t, y, &frame, &mut []) {
-            return self.fail(e, out);
+            return self.fail(e, y, out);
         }
         self.assemble_equations(y, &frame);
         self.equations_residual(acc, out);
     }
 
-    fn fail(&mut self, error: DynamicsError, dy: &mut [f64]) {
-        if self.failure.is_none() {
+    /// Records `error` and writes NaN so the integrator rejects the trial. The record is
+    /// the latest failure met since the last accepted step (the one closest to where the
+    /// integration stopped) at a finite state: a stage built from an earlier stage's NaN
+    /// fails only as a consequence, and does not replace the cause.
+    fn fail(&mut self, error: DynamicsError, y: &[f64], dy: &mut [f64]) {
+        if self.failure.is_none() || y.iter().all(|v| v.is_finite()) {
             self.failure = Some(error);
         }
         dy.fill(f64::NAN);
@@ -1164,21 +1170,18 @@ impl OdeSystem for NonlinearSystem {
         self.counters.rhs_evaluations += 1;
         let frame = match self.frame(t, y) {
             Ok(f) => f,
-            Err(e) => return self.fail(e, dy),
+            Err(e) => return self.fail(e, y, dy),
         };
-        if let Err(e) = self.check_collapse(t, y, &frame) {
-            return self.fail(e, dy);
-        }
         self.assemble(y, &frame);
         let n = self.coordinates();
         let (dz, rest) = dy.split_at_mut(n);
         let (dzd, rates) = rest.split_at_mut(n);
         dz.copy_from_slice(&y[n..2 * n]);
         if let Err(e) = self.actuate(t, y, &frame, rates) {
-            return self.fail(e, dy);
+            return self.fail(e, y, dy);
         }
         if let Err(e) = self.accelerations(t, y, &frame, dzd) {
-            self.fail(e, dy);
+            self.fail(e, y, dy);
         }
     }
 
@@ -1212,6 +1215,37 @@ impl OdeSystem for NonlinearSystem {
         true
     }
 
+    /// A sampled controller's next sample ([`NonlinearSystem::next_sample`]).
+    fn next_stop(&self, t: f64) -> Option<f64> {
+        self.next_sample(t)
+    }
+
+    /// A failure met in a rejected trial is forgotten once a step is accepted.
+    fn step_accepted(&mut self, _t: f64, _y: &[f64]) {
+        self.failure = None;
+    }
+
+    /// The collapse checks ([`NonlinearOptions::collapse_deflection`],
+    /// [`NonlinearOptions::stop_at_type_ii`]) as a terminal event, decided on accepted
+    /// states only; where it is reached the collapse is recorded for
+    /// [`NonlinearSystem::take_failure`]. None without checks; where the commanded motion
+    /// itself fails (the right-hand side reports that), not reached.
+    fn terminal_event(&mut self, t: f64, y: &[f64]) -> Option<f64> {
+        if !(self.options.stop_at_type_ii || self.options.collapse_deflection.is_some())
+            || y.len() != self.dim()
+        {
+            return None;
+        }
+        let Ok(frame) = self.frame(t, y) else {
+            return Some(-1.0);
+        };
+        let (margin, collapse) = self.collapse_margin(t, y, &frame);
+        if margin >= 0.0 || margin.is_nan() {
+            self.failure = Some(collapse);
+        }
+        Some(margin)
+    }
+
     /// The mechanical form for implicit integrators (super::tangent); none when a
     /// continuous control law adds first-order states.
     fn second_order_form(&mut self) -> Option<&mut dyn flexprr_integrators::SecondOrderForm> {
@@ -1222,7 +1256,7 @@ impl OdeSystem for NonlinearSystem {
     }
 
     /// A sampled controller takes its sample when a segment starts at one of its sample
-    /// times (they are stop times: [`NonlinearSystem::sample_times`]).
+    /// times (they are stop times: [`NonlinearSystem::next_sample`]).
     fn segment_start(&mut self, t: f64, y: &[f64]) {
         if y.len() != self.dim() {
             return;

@@ -78,12 +78,32 @@ def _process_pool(processes):
     return ProcessPoolExecutor(max_workers=processes, mp_context=context)
 
 
+def _load_each(scenes, return_exceptions):
+    """Each entry as a :class:`Scene` read here (workers need no files); with
+    ``return_exceptions`` an entry that cannot be read (a missing or unparsable file, an
+    entry that is not a scene or a path) keeps its exception in its place, otherwise it is
+    raised at once."""
+    loaded = []
+    for s in scenes:
+        if isinstance(s, Scene):
+            loaded.append(s)
+            continue
+        try:
+            loaded.append(Scene.load(s))
+        except Exception as e:  # noqa: BLE001 - returned in its slot, as asked
+            if not return_exceptions:
+                raise
+            loaded.append(e)
+    return loaded
+
+
 def _run_on_executor(scenes, executor, return_exceptions, progress):
-    """Submits one :func:`run` per scene to ``executor``; results in order."""
+    """Submits one :func:`run` per scene to ``executor``; results in order (an entry that is
+    already an exception stays in its place)."""
     from concurrent.futures import as_completed
 
-    futures = {executor.submit(run, scene): i for i, scene in enumerate(scenes)}
-    results = [None] * len(futures)
+    results = list(scenes)
+    futures = {executor.submit(run, scene): i for i, scene in enumerate(scenes) if isinstance(scene, Scene)}
     done = 0
     callback_error = None
     for future in as_completed(futures):
@@ -111,9 +131,12 @@ def run_many(scenes, threads=None, return_exceptions=False, progress=None, proce
     """Runs several scenes and returns one entry per scene, in order.
 
     Each scene is a :class:`Scene` or the path of a scene file. Each entry is a
-    :class:`RunResult`, or with ``return_exceptions=True`` the :class:`SceneError` or
-    :class:`RunError` of that scene; otherwise the first error (in scene order) is raised
-    after all runs ended.
+    :class:`RunResult`, or with ``return_exceptions=True`` the exception of that scene, in
+    its place, while every other scene runs: the :class:`SceneError` of a file that cannot
+    be read or parsed or of an invalid scene, the ``TypeError`` of an entry that is neither
+    a scene nor a path, the :class:`RunError` (with ``.partial``) of a failed run. Without
+    it, an entry that cannot be read is raised at once, and otherwise the first error (in
+    scene order) is raised after all runs ended.
 
     Where the runs happen:
 
@@ -139,18 +162,19 @@ def run_many(scenes, threads=None, return_exceptions=False, progress=None, proce
             raise TypeError("executor must be a concurrent.futures.Executor (something with submit)")
         if threads is not None:
             raise ValueError("threads applies to runs in this process; with an executor, size the executor")
-        # Paths are read here: a bad file fails at once, and workers need no files.
-        loaded = [s if isinstance(s, Scene) else Scene.load(s) for s in scenes]
+        # Paths are read here: workers need no files.
+        loaded = _load_each(scenes, return_exceptions)
         return _run_on_executor(loaded, executor, return_exceptions, progress)
     if processes is not None:
         if isinstance(processes, bool) or not isinstance(processes, int) or not 1 <= processes <= _MAX_WORKERS:
             raise ValueError(f"processes = {processes!r}: expected 1 to {_MAX_WORKERS}")
         if threads is not None:
             raise ValueError("threads applies to runs in this process; with processes, each worker runs one scene")
-        loaded = [s if isinstance(s, Scene) else Scene.load(s) for s in scenes]
-        if not loaded:
-            return []
-        with _process_pool(min(processes, len(loaded))) as pool:
+        loaded = _load_each(scenes, return_exceptions)
+        workers = sum(isinstance(s, Scene) for s in loaded)
+        if not workers:
+            return loaded
+        with _process_pool(min(processes, workers)) as pool:
             return _run_on_executor(loaded, pool, return_exceptions, progress)
     return _run_many_threads(scenes, threads=threads, return_exceptions=return_exceptions, progress=progress)
 

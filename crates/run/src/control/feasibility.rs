@@ -1,15 +1,20 @@
 //! Feasibility of the commanded motion for the scene's motors (docs/control.md,
-//! "Feasibility"): from the rigid inverse dynamics at the output times, the force each
+//! "Feasibility"): from the rigid inverse dynamics of the commanded motion, the force each
 //! slider's actuator must deliver, `F_i = F_a_i_rigid + m_r rho_i''` (the rigid driving
 //! force, slider mass included, plus the rotor's reflected inertia), and through
 //! [`Actuator::required`] the motor torque and speed; compared with the peak torque, the
-//! continuous torque (against the RMS torque) and the largest speed.
+//! continuous torque (against the RMS torque) and the largest speed. The check is made on
+//! the motion itself, between the output samples ([`super::scan`]); the `actuators` table
+//! gives the same requirement at the output times.
 
 use flexprr_control::{Actuator, MotorRatings};
-use flexprr_dynamics::{DynamicsError, Machine};
+use flexprr_dynamics::{DynamicsError, Machine, inverse_dynamics};
+use flexprr_scene::Scene;
 use serde_json::{Value, json};
 
-use super::stats::{Peak, first_crossing, margin, num, number, rms, sig};
+pub use super::scan::TOLERANCE as SCAN_TOLERANCE;
+use super::scan::scan;
+use super::stats::{Peak, margin, num, number, sig};
 use crate::samples::Samples;
 
 /// Per leg, a time series.
@@ -73,7 +78,8 @@ pub(crate) fn required(
 pub struct LegRequirement {
     /// Largest required torque magnitude (N m) and when.
     pub peak_torque: Peak,
-    /// RMS of the required torque over the output times (N m).
+    /// RMS of the required torque over the time span (N m): the root of the time mean of
+    /// its square.
     pub rms_torque: f64,
     /// Largest required motor speed magnitude (rev/s) and when.
     pub peak_speed: Peak,
@@ -103,8 +109,14 @@ pub struct Feasibility {
     pub ratings: MotorRatings,
     /// Each leg's requirement.
     pub legs: [LegRequirement; 3],
-    /// Time span the requirement covers (s): the output times reached.
+    /// Time span the requirement covers (s): the scene's whole time span (the commanded
+    /// motion is known there even when a run stops early).
     pub span: (f64, f64),
+    /// The largest step of the scan's grid (s): peaks are refined and crossings located
+    /// between its points.
+    pub grid_step: f64,
+    /// Whether the scan's peaks and RMS values converged to [`SCAN_TOLERANCE`].
+    pub converged: bool,
 }
 
 /// The earliest of per-leg event times, with its leg (0-based).
@@ -116,25 +128,75 @@ fn earliest(times: impl Iterator<Item = Option<f64>>) -> Option<(f64, usize)> {
 }
 
 impl Feasibility {
-    /// The check of `required` on `actuator`, sampled at `t`; `None` when the actuator has
-    /// no ratings or no motor, or there is no sample.
-    pub(crate) fn of(actuator: &dyn Actuator, t: &[f64], required: &Required) -> Option<Self> {
-        let ratings = actuator.ratings()?;
-        let (torque, speed) = required.motor.as_ref()?;
-        let (&t0, &t1) = (t.first()?, t.last()?);
+    /// The check of the commanded motion of `scene` on `actuator` over the scene's whole
+    /// time span, between the output samples ([`super::scan`]): at every time, the rigid
+    /// inverse dynamics gives the force on each slider, `F_a_rigid + m_r rho''`, and the
+    /// actuator the torque and speed it needs; their peaks, RMS values and first crossings
+    /// of the ratings are found to the scan's resolution, whatever the output step. `None`
+    /// when the actuator has no ratings or no motor.
+    ///
+    /// # Errors
+    /// A pose of the commanded motion where the inverse kinematics or the rigid inverse
+    /// dynamics fails, with its time.
+    pub(crate) fn scan(
+        scene: &Scene,
+        actuator: &dyn Actuator,
+    ) -> Result<Option<Self>, DynamicsError> {
+        let Some(ratings) = actuator.ratings() else {
+            return Ok(None);
+        };
+        if actuator.required(0.0, 0.0).is_none() {
+            return Ok(None);
+        }
+        let machine = &scene.machine;
+        let reflected = actuator.reflected_mass();
+        let mut requirement = |t: f64, out: &mut [f64]| -> Result<(), DynamicsError> {
+            let motion = scene.trajectory.motion(t);
+            let state = machine
+                .geometry
+                .inverse_kinematics_unchecked(&motion)
+                .map_err(|source| DynamicsError::Kinematics { t, source })?;
+            let reactions = inverse_dynamics(machine, &state, None, t)?;
+            for i in 0..3 {
+                let leg = &state.legs[i];
+                let force = reactions.driving_force[i] + reflected * leg.rho_ddot;
+                let (torque, speed) = actuator.required(force, leg.rho_dot).unwrap_or_default();
+                out[i] = torque;
+                out[3 + i] = speed;
+            }
+            Ok(())
+        };
+        let times = &scene.output_times;
+        let span = (times[0], times[times.len() - 1]);
+        let limits = [
+            ratings.peak_torque,
+            ratings.peak_torque,
+            ratings.peak_torque,
+            ratings.max_speed,
+            ratings.max_speed,
+            ratings.max_speed,
+        ];
+        let found = scan(
+            &mut requirement,
+            span,
+            &scene.trajectory.breakpoints(),
+            &limits,
+        )?;
         let legs = std::array::from_fn(|i| LegRequirement {
-            peak_torque: Peak::of(t, &torque[i]),
-            rms_torque: rms(&torque[i]),
-            peak_speed: Peak::of(t, &speed[i]),
-            over_torque: first_crossing(t, &torque[i], ratings.peak_torque),
-            over_speed: first_crossing(t, &speed[i], ratings.max_speed),
+            peak_torque: found.peaks[i],
+            rms_torque: found.rms[i],
+            peak_speed: found.peaks[3 + i],
+            over_torque: found.first_over[i],
+            over_speed: found.first_over[3 + i],
         });
-        Some(Self {
+        Ok(Some(Self {
             actuator: actuator.name().to_string(),
             ratings,
             legs,
-            span: (t0, t1),
-        })
+            span,
+            grid_step: found.step,
+            converged: found.converged,
+        }))
     }
 
     /// Whether every leg stays within every rating.
@@ -250,7 +312,14 @@ impl Feasibility {
         };
         json!({
             "actuator": self.actuator,
-            "source": "rigid inverse dynamics of the commanded motion at the output times",
+            "source": "rigid inverse dynamics of the commanded motion over the whole time span, between the output samples",
+            "resolution": {
+                "grid_step_s": num(self.grid_step),
+                "tolerance": SCAN_TOLERANCE,
+                "converged": self.converged,
+                "method": "grid refined until every peak and RMS value changes by at most the tolerance times the peak; peaks by golden-section search, first crossings by bisection on the requirement itself",
+            },
+            "span_s": [num(self.span.0), num(self.span.1)],
             "ratings": {
                 "peak_torque_N_m": num(r.peak_torque),
                 "continuous_torque_N_m": num(r.continuous_torque),

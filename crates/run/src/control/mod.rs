@@ -9,6 +9,7 @@
 
 mod feasibility;
 mod figures;
+mod scan;
 mod servo;
 mod stats;
 mod tables;
@@ -17,7 +18,7 @@ use flexprr_dynamics::{DynamicsError, MachineSnapshot};
 use flexprr_scene::{OutputKind, Scene};
 use serde_json::Value;
 
-pub use feasibility::{Feasibility, LegRequirement};
+pub use feasibility::{Feasibility, LegRequirement, SCAN_TOLERANCE};
 pub(crate) use figures::figures;
 pub use servo::{PlatformSummary, ServoSummary, SliderSummary};
 pub use stats::Peak;
@@ -87,16 +88,9 @@ pub(crate) fn produce(
         result.tables.push(table);
     }
     if let Some(motor) = motor {
-        // The commanded motion is known over the whole span even when the run stopped
-        // early: check all of it (what was computed when the rigid dynamics fails there).
-        let whole = (samples.len() < scene.output_times.len())
-            .then(|| whole_span_requirement(scene, motor))
-            .flatten();
-        let (t, required) = match (&whole, &motor_required) {
-            (Some((t, r)), _) => (t.as_slice(), Some(r)),
-            (None, r) => (samples.t.as_slice(), r.as_ref()),
-        };
-        if let Some(f) = required.and_then(|r| Feasibility::of(motor, t, r)) {
+        // The commanded motion is known over the whole span, between the samples and
+        // beyond a failure: check all of it.
+        if let Some(f) = Feasibility::scan(scene, motor)? {
             result.warnings.extend(f.warnings());
             result.control.feasibility = Some(f);
         }
@@ -107,17 +101,6 @@ pub(crate) fn produce(
         result.control.servo = Some(summary);
     }
     Ok(())
-}
-
-/// The requirement of the commanded motion on `motor` at every output time of `scene`, with
-/// the times; `None` when the rigid inverse dynamics fails somewhere.
-fn whole_span_requirement(
-    scene: &Scene,
-    motor: &dyn flexprr_control::Actuator,
-) -> Option<(Vec<f64>, feasibility::Required)> {
-    let mut samples = Samples::new(scene, &scene.output_times).ok()?;
-    let required = feasibility::required(motor, &mut samples, &scene.machine).ok()?;
-    Some((samples.t, required))
 }
 
 /// The `control` and `feasibility` sections of `summary.json` (`null` where the run has

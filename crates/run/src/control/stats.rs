@@ -33,10 +33,12 @@ impl Peak {
 /// `sqrt(mean(x_k^2))` over the samples: the RMS value over the time span for the run's
 /// evenly spaced output times (0 for an empty series).
 pub fn rms(x: &[f64]) -> f64 {
-    if x.is_empty() {
-        return 0.0;
+    // Scaled by the largest magnitude, so that the squares of huge values do not overflow.
+    let scale = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if scale == 0.0 || !scale.is_finite() {
+        return scale;
     }
-    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+    scale * (x.iter().map(|v| (v / scale).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
 }
 
 /// The first time at which `|x|` exceeds `limit`: the first sample if it already does,
@@ -64,6 +66,13 @@ pub fn margin(rating: f64, required: f64) -> Option<f64> {
 pub fn sig(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
         return format!("{x}");
+    }
+    if !(1e-4..1e7).contains(&x.abs()) {
+        // Four significant digits with an exponent: `1.235e12`, `2.5e-7`.
+        let text = format!("{x:.3e}");
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        return format!("{mantissa}e{exponent}");
     }
     let decimals = (3 - x.abs().log10().floor() as i32).max(0) as usize;
     let text = format!("{x:.decimals$}");
@@ -108,5 +117,9 @@ mod tests {
         assert_eq!(sig(0.0125), "0.0125");
         assert_eq!(sig(49844.1), "49844");
         assert_eq!(sig(0.0), "0");
+        assert_eq!(sig(1.23456e200), "1.235e200");
+        assert_eq!(sig(-2.5e-7), "-2.5e-7");
+        // Huge values: no overflow of the squares.
+        assert!((rms(&[3e200, -4e200]) - 12.5_f64.sqrt() * 1e200).abs() < 1e188);
     }
 }
