@@ -17,16 +17,23 @@ rm -rf "$work/base" "$work/head"
 mkdir -p "$work"
 
 # The base binary: its own worktree and target folder, kept between calls so that a second
-# check only rebuilds what changed.
-base_tree="$work/base-tree"
-if [ -d "$base_tree" ]; then
-    git -C "$base_tree" checkout -q --detach "$base_ref"
+# check only rebuilds what changed. FLEXPRR_BASE_BIN names a binary already built at BASE
+# instead (several worktrees can then share one base build).
+base_bin="${FLEXPRR_BASE_BIN:-}"
+if [ -z "$base_bin" ]; then
+    base_tree="$work/base-tree"
+    if [ -d "$base_tree" ]; then
+        git -C "$base_tree" checkout -q --detach "$base_ref"
+    else
+        git worktree add -q --detach "$base_tree" "$base_ref"
+    fi
+    echo "building flexprr at $base_ref ($(git -C "$base_tree" rev-parse --short HEAD))" >&2
+    CARGO_TARGET_DIR="$work/base-target" cargo build -q --release --bin flexprr \
+        --manifest-path "$base_tree/Cargo.toml"
+    base_bin="$work/base-target/release/flexprr"
 else
-    git worktree add -q --detach "$base_tree" "$base_ref"
+    echo "using the base binary named by FLEXPRR_BASE_BIN" >&2
 fi
-echo "building flexprr at $base_ref ($(git -C "$base_tree" rev-parse --short HEAD))" >&2
-CARGO_TARGET_DIR="$work/base-target" cargo build -q --release --bin flexprr \
-    --manifest-path "$base_tree/Cargo.toml"
 echo "building flexprr from the working tree" >&2
 cargo build -q --release --bin flexprr
 
@@ -67,7 +74,7 @@ products() {
 }
 
 echo "running the products of $base_ref" >&2
-products "$work/base-target/release/flexprr" "$work/base"
+products "$base_bin" "$work/base"
 echo "running the products of the working tree" >&2
 products "$root/target/release/flexprr" "$work/head"
 
