@@ -95,6 +95,8 @@ pub struct PlanOutcome {
     pub flexible: Option<FlexibleCheck>,
     /// Wall time of the whole pipeline (s).
     pub wall_time_s: f64,
+    /// The scene planned (its machine and axial-force model draw the limit curves).
+    pub source: Scene,
 }
 
 impl PlanOutcome {
@@ -370,6 +372,7 @@ pub fn plan_scene(
         settle_time,
         flexible: None,
         wall_time_s: 0.0,
+        source: scene.clone(),
     };
     if options.flexible_check {
         outcome.flexible = Some(vibration::flexible_check(scene, &outcome, progress)?);
