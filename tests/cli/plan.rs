@@ -19,7 +19,10 @@ fn largest(csv: &str, prefix: &str, suffix: &str) -> f64 {
     lines
         .flat_map(|line| {
             let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
-            columns.iter().map(move |&i| cells[i].abs()).collect::<Vec<_>>()
+            columns
+                .iter()
+                .map(move |&i| cells[i].abs())
+                .collect::<Vec<_>>()
         })
         .fold(0.0, f64::max)
 }
@@ -37,7 +40,13 @@ fn plan_writes_a_runnable_planned_scene_within_its_limits() {
     assert!(output.status.success(), "{}", stderr_of(&output));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("residual vibration"), "{stdout}");
-    for name in ["plan.json", "planned.toml", "phase_plane.svg", "sliders.svg", "deflections.svg"] {
+    for name in [
+        "plan.json",
+        "planned.toml",
+        "phase_plane.svg",
+        "sliders.svg",
+        "deflections.svg",
+    ] {
         assert!(out.join(name).is_file(), "{name}");
     }
     assert!(out.join("planned/viewer.html").is_file());
@@ -50,7 +59,9 @@ fn plan_writes_a_runnable_planned_scene_within_its_limits() {
         assert!(limit["usage"].as_f64().unwrap() <= 1.0 + 1e-9, "{limit}");
         assert!(limit["pose"]["x_m"].is_f64());
     }
-    let ratio = json["flexible_check"]["shaped_over_unshaped"].as_f64().unwrap();
+    let ratio = json["flexible_check"]["shaped_over_unshaped"]
+        .as_f64()
+        .unwrap();
     assert!(ratio < 0.05, "{ratio}");
     assert!(json["scene_timing"]["check"]["max_usage"].as_f64().unwrap() > 1.5);
     // The planned scene runs as it is; its slider speeds and rigid forces keep the limits.
@@ -85,13 +96,26 @@ fn plan_bad_input_exits_2_with_one_line_and_writes_nothing() {
     let text = std::fs::read_to_string(config("pick_and_place.toml")).unwrap();
     let cases = [
         ("", "[plan]"),
-        ("[plan]\nboundary = \"periodic\"\nslider_speed = 1.0\n", "plan.boundary"),
+        (
+            "[plan]\nboundary = \"periodic\"\nslider_speed = 1.0\n",
+            "plan.boundary",
+        ),
         ("[plan]\nslider_force = 0.0\n", "plan.slider_force"),
     ];
     for (k, (plan, key)) in cases.iter().enumerate() {
-        let scene = scene_file(dir.path(), &format!("s{k}.toml"), &format!("{text}\n{plan}"));
+        let scene = scene_file(
+            dir.path(),
+            &format!("s{k}.toml"),
+            &format!("{text}\n{plan}"),
+        );
         let out = dir.path().join(format!("out{k}"));
-        let output = flexprr().arg("plan").arg(&scene).arg("--out").arg(&out).output().unwrap();
+        let output = flexprr()
+            .arg("plan")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
         assert_eq!(output.status.code(), Some(2), "{}", stderr_of(&output));
         let stderr = stderr_of(&output);
         assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
@@ -99,7 +123,11 @@ fn plan_bad_input_exits_2_with_one_line_and_writes_nothing() {
         assert!(!out.exists());
     }
     // `check` validates [plan] the same way.
-    let scene = scene_file(dir.path(), "c.toml", &format!("{text}\n[plan]\nslider_speed = -2.0\n"));
+    let scene = scene_file(
+        dir.path(),
+        "c.toml",
+        &format!("{text}\n[plan]\nslider_speed = -2.0\n"),
+    );
     let output = flexprr().arg("check").arg(&scene).output().unwrap();
     assert_eq!(output.status.code(), Some(2));
     assert!(stderr_of(&output).contains("plan.slider_speed"));
