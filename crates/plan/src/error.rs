@@ -32,7 +32,7 @@ pub enum PlanError {
         /// What was being planned (`the time-optimal motion`, `the orientation`, ...).
         stage: &'static str,
         /// The planner's error.
-        source: PlanningError,
+        source: Box<PlanningError>,
     },
     /// The machine's modes for shaping could not be computed.
     #[error("{scene}: the modes for shaping at {at}: {message}")]

@@ -235,7 +235,7 @@ pub fn plan_scene(
         move |source: PlanningError| PlanError::Planning {
             scene: name,
             stage,
-            source,
+            source: Box::new(source),
         }
     };
     let times = &scene.output_times;
@@ -344,10 +344,11 @@ pub fn plan_scene(
     };
 
     // The planned scene's span.
-    let settle_time = spec.settle_time.unwrap_or_else(|| match scene_end {
+    let own_settle = match scene_end {
         Some(end) if span.1 - end > 0.0 => span.1 - end,
         _ => DEFAULT_SETTLE_TIME,
-    });
+    };
+    let settle_time = spec.settle_time.unwrap_or(own_settle);
     let end = match spec.boundary {
         Boundary::Periodic => {
             let revolutions = ((span.1 - span.0) / schedule.duration()).round().max(1.0);

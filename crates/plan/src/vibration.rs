@@ -145,7 +145,7 @@ pub fn design_shaper(
     let impulses = spec.shaper(&design).map_err(|source| PlanError::Planning {
         scene: scene.name.clone(),
         stage: "the shaper",
-        source,
+        source: Box::new(source),
     })?;
     let modes = (0..count)
         .map(|j| {

@@ -136,9 +136,11 @@ pub(crate) fn check_plan(
         return Ok(());
     };
     let at_key = |e: PlanningError| match e {
-        PlanningError::InvalidSpec { key, rule, .. } if key == "limits" => {
-            c.error("plan", format!("no limit bounds the motion: {rule}"))
-        }
+        PlanningError::InvalidSpec {
+            key: "limits",
+            rule,
+            ..
+        } => c.error("plan", format!("no limit bounds the motion: {rule}")),
         PlanningError::InvalidSpec { key, value, rule } => {
             c.value_error(&format!("plan.{key}"), format!("{value}: {rule}"))
         }
