@@ -45,6 +45,6 @@ pub use scene::{
 pub use schema::{
     ActuatorsConfig, BasisTable, BranchChoice, ControlTable, CouplingChoice,
     DEFAULT_COULOMB_SMOOTHING, FormulationChoice, IntegratorConfig, Layout, LegConfig, LinksConfig,
-    MachineConfig, Method, ModelConfig, OutputConfig, OutputKind, ProfileChoice, SceneFile,
+    MachineConfig, ModelConfig, OutputConfig, OutputKind, ProfileChoice, SceneFile,
     StiffnessChoice, TimeConfig, TrajectoryConfig,
 };

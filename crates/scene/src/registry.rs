@@ -36,25 +36,49 @@ use flexprr_control::{ControlError, Controller};
 /// Builds an integrator from the scene's options.
 pub type IntegratorConstructor = Arc<dyn Fn(Options) -> Box<dyn DynIntegrator> + Send + Sync>;
 
-/// The integrator a scene names: its registered name and constructor.
+/// The integrator a scene names: its registered name, constructor and what it asks of the
+/// model. Scenes, the bench and `flexprr work-precision` all reach integrators through these
+/// handles, so a registered integrator runs, resolves and is benchmarked like a built-in one.
 #[derive(Clone)]
 pub struct MethodHandle {
     name: String,
     constructor: IntegratorConstructor,
+    kind: MethodKind,
 }
 
 impl MethodHandle {
-    /// A handle from a name and a constructor.
+    /// A handle from a name and a constructor, for a method that integrates any model
+    /// ([`MethodKind::General`]).
     pub fn new(name: impl Into<String>, constructor: IntegratorConstructor) -> Self {
+        Self::with_kind(name, constructor, MethodKind::General)
+    }
+
+    /// A handle from a name, a constructor and what the method asks of the model.
+    pub fn with_kind(
+        name: impl Into<String>,
+        constructor: IntegratorConstructor,
+        kind: MethodKind,
+    ) -> Self {
         Self {
             name: name.into(),
             constructor,
+            kind,
         }
     }
 
     /// The name the scene file gives (`integrator.method`).
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// What the method asks of the model.
+    pub fn kind(&self) -> &MethodKind {
+        &self.kind
+    }
+
+    /// The constructor it was registered with.
+    pub fn constructor(&self) -> &IntegratorConstructor {
+        &self.constructor
     }
 
     /// The integrator configured with `options` (built by the registered constructor).
@@ -429,9 +453,9 @@ impl Default for Registry {
             "auto",
             Arc::new(|o| Box::new(Auto::new(o))),
             MethodKind::Auto {
-                linear: "magnus6".to_string(),
-                general: "abm".to_string(),
-                mechanical: Some("generalized_alpha".to_string()),
+                linear: Auto::LINEAR.to_string(),
+                general: Auto::GENERAL.to_string(),
+                mechanical: Some(Auto::MECHANICAL.to_string()),
             },
         );
         r.register_basis("sine", Arc::new(SineFactory));
@@ -702,9 +726,19 @@ impl Registry {
 
     /// The integrator `name`, as a handle.
     pub fn method(&self, name: &str) -> Option<MethodHandle> {
-        self.integrators
-            .get(name)
-            .map(|c| MethodHandle::new(name, c.clone()))
+        self.integrators.get(name).map(|c| {
+            let kind = self.method_kind(name).cloned().unwrap_or_default();
+            MethodHandle::with_kind(name, c.clone(), kind)
+        })
+    }
+
+    /// Registers (or replaces) the integrator of `handle`, under its name and kind.
+    pub fn register_method(&mut self, handle: &MethodHandle) {
+        self.register_integrator_kind(
+            handle.name(),
+            handle.constructor().clone(),
+            handle.kind().clone(),
+        );
     }
 
     /// The basis kind `name`.
