@@ -17,8 +17,7 @@ use flexprr_bench::work_precision::builtin;
 use flexprr_run::guard::DIVERGENCE_FRACTION;
 use flexprr_run::{RunError, run};
 use flexprr_scene::{
-    CouplingChoice, FormulationChoice, MethodHandle, OutputKind, ScenarioError, Scene, SceneFile,
-    parse_scene,
+    FormulationChoice, MethodHandle, OutputKind, ScenarioError, Scene, SceneFile, parse_scene,
 };
 
 /// Every stress scene that is integrated (all but `near_singular_type2`, refused at load).
@@ -200,7 +199,7 @@ fn every_stress_scene_runs_the_exponential_methods() {
 #[test]
 fn classification_resolves_methods_like_a_scene() {
     let coupled = scene("max_step_huge", |f| {
-        f.model.coupling = CouplingChoice::Coupled;
+        f.model.coupling = "coupled".to_string();
         f.time.end = 0.002;
     });
     let a = attempt(&coupled, &builtin("auto"));
@@ -406,7 +405,7 @@ fn high_speed_integration_is_bounded_or_diverges_clearly() {
         let mut diverged_at = Vec::new();
         let all = methods(&s);
         for m in &all {
-            let a = attempt(&s, &m);
+            let a = attempt(&s, m);
             println!("{}", describe(&name, &a, &a.classify(None, None)));
             match &a.result {
                 Ok(sol) => {

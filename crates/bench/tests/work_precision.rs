@@ -11,7 +11,6 @@ use flexprr_bench::work_precision::{
     default_reference, markdown_at_error, markdown_models, measure, midpoint_deflections, read_csv,
     time_at_error, work_precision,
 };
-use flexprr_dynamics::CouplingModel;
 use flexprr_integrators::{Bdf, Integrator, Options};
 use flexprr_scene::Scene;
 
@@ -429,7 +428,7 @@ fn the_nonlinear_reference_agrees_with_its_check_and_with_a_tighter_third_run() 
         ErrorMeasure::Deflection
     );
     let plan = config.reference_plan(&scene).expect("plan");
-    assert_eq!(plan, default_reference(CouplingModel::Nonlinear));
+    assert_eq!(plan, default_reference("nonlinear"));
     let reference = Reference::compute(&scene, &config).expect("reference");
     assert_eq!(reference.model, "nonlinear:4");
     assert_ne!(reference.method, reference.check_method);

@@ -1,10 +1,11 @@
 //! The registry of named parts: the TOML names of integrators (`integrator.method`), bases
-//! (`links.basis.kind`), axial force models (`model.axial_force`) and control laws
-//! (`control.kind`) and how to build each.
+//! (`links.basis.kind`), axial force models (`model.axial_force`), control laws
+//! (`control.kind`) and model kinds (`model.coupling`) and how to build each.
 //!
 //! [`Registry::default`] holds the built-ins; a program adds its own parts with
 //! [`Registry::register_integrator`], [`Registry::register_basis`],
-//! [`Registry::register_axial_force`] and [`Registry::register_controller`] and loads scenes
+//! [`Registry::register_axial_force`], [`Registry::register_controller`] and
+//! [`Registry::register_model_kind`] and loads scenes
 //! through it with
 //! [`crate::Scene::load_with`] or [`crate::Scene::from_text_with`]. Nothing in the scene code
 //! matches on a name: a new part is one registration.
@@ -149,13 +150,14 @@ pub enum MethodKind {
     },
 }
 
-/// Whether a scene's model has a mechanical form ([`MethodKind::Mechanical`]): the nonlinear
-/// model, with no control law or one without continuous states (a sampled or stateless law).
+/// Whether a scene's model has a mechanical form ([`MethodKind::Mechanical`]): a kind with
+/// [`crate::ModelCapabilities::mechanical_form`] (the nonlinear model), with no control law
+/// or one without continuous states (a sampled or stateless law).
 pub fn mechanical_model(
-    coupling: flexprr_dynamics::CouplingModel,
+    coupling: &crate::ModelKindHandle,
     controller: Option<&Arc<dyn flexprr_control::Controller>>,
 ) -> bool {
-    coupling == flexprr_dynamics::CouplingModel::Nonlinear
+    coupling.capabilities().mechanical_form
         && controller.is_none_or(|c| c.period() > 0.0 || c.states() == 0)
 }
 
@@ -405,7 +407,7 @@ pub(crate) struct AxialEntry {
 /// `abm`, `rk45`, `bdf`, `generalized_alpha` (mechanical models), `magnus4`, `magnus6`
 /// (linear models only) and `auto`; bases `sine`,
 /// `classical`, `hermite`; axial force models `none`, `paper`, `joint-reaction`; control
-/// laws `pd` and `pid`.
+/// laws `pd` and `pid`; model kinds `ked`, `coupled` and `nonlinear`.
 #[derive(Clone)]
 pub struct Registry {
     integrators: BTreeMap<String, IntegratorConstructor>,
@@ -414,6 +416,7 @@ pub struct Registry {
     axial: BTreeMap<String, AxialEntry>,
     controllers: BTreeMap<String, Arc<dyn ControllerFactory>>,
     vibration_controllers: BTreeMap<String, Arc<dyn VibrationControllerFactory>>,
+    model_kinds: BTreeMap<String, Arc<dyn crate::ModelKind>>,
 }
 
 impl fmt::Debug for Registry {
@@ -424,6 +427,7 @@ impl fmt::Debug for Registry {
             .field("axial_forces", &self.axial_force_names())
             .field("controllers", &self.controller_names())
             .field("vibration_controllers", &self.vibration_controller_names())
+            .field("model_kinds", &self.model_kind_names())
             .finish()
     }
 }
@@ -458,6 +462,9 @@ impl Default for Registry {
                 mechanical: Some(Auto::MECHANICAL.to_string()),
             },
         );
+        r.register_model_kind("ked", Arc::new(crate::model::KedKind));
+        r.register_model_kind("coupled", Arc::new(crate::model::CoupledKind));
+        r.register_model_kind("nonlinear", Arc::new(crate::model::NonlinearKind));
         r.register_basis("sine", Arc::new(SineFactory));
         r.register_basis("classical", Arc::new(ClassicalFactory));
         r.register_basis("hermite", Arc::new(HermiteFactory));
@@ -500,7 +507,25 @@ impl Registry {
             axial: BTreeMap::new(),
             controllers: BTreeMap::new(),
             vibration_controllers: BTreeMap::new(),
+            model_kinds: BTreeMap::new(),
         }
+    }
+
+    /// Registers (or replaces) the model kind `name` for `model.coupling`.
+    pub fn register_model_kind(&mut self, name: &str, kind: Arc<dyn crate::ModelKind>) {
+        self.model_kinds.insert(name.to_string(), kind);
+    }
+
+    /// The model kind `name`, as a handle.
+    pub fn model_kind(&self, name: &str) -> Option<crate::ModelKindHandle> {
+        self.model_kinds
+            .get(name)
+            .map(|k| crate::ModelKindHandle::new(name, k.clone()))
+    }
+
+    /// Registered model kind names, sorted.
+    pub fn model_kind_names(&self) -> Vec<&str> {
+        self.model_kinds.keys().map(String::as_str).collect()
     }
 
     /// Registers (or replaces) the integrator `name` for `integrator.method`; it integrates

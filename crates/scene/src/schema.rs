@@ -395,19 +395,6 @@ pub enum StiffnessChoice {
     Full,
 }
 
-/// KED, coupled or geometrically nonlinear model.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum CouplingChoice {
-    /// Prescribed rigid motion (kineto-elastodynamics).
-    #[default]
-    Ked,
-    /// Platform moved by the links' foreshortening.
-    Coupled,
-    /// Co-rotational beam-element links and a free platform (large deflection).
-    Nonlinear,
-}
-
 /// How the coupled model's chords enter linear analyses at rest.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -441,9 +428,11 @@ pub struct ModelConfig {
     /// Modal damping ratios: one for all modes or one per mode.
     #[serde(default)]
     pub damping: Vec<f64>,
-    /// `"ked"` (prescribed rigid motion), `"coupled"` or `"nonlinear"`.
-    #[serde(default)]
-    pub coupling: CouplingChoice,
+    /// The registered model kind ([`crate::Registry::register_model_kind`]): `"ked"`
+    /// (prescribed rigid motion), `"coupled"` (platform moved by the links' foreshortening)
+    /// or `"nonlinear"` (co-rotational beam elements and a free platform) among the built-ins.
+    #[serde(default = "default_coupling")]
+    pub coupling: String,
     /// Nonlinear model only: co-rotational elements per link (even, at least 2; default 32).
     #[serde(default)]
     pub elements: Option<usize>,
@@ -470,7 +459,7 @@ impl Default for ModelConfig {
             coriolis_forcing: None,
             centrifugal_softening: None,
             damping: Vec::new(),
-            coupling: CouplingChoice::Ked,
+            coupling: default_coupling(),
             elements: None,
             collapse_deflection: None,
             axial_damping_time: None,
@@ -689,4 +678,9 @@ impl OutputKind {
                 | OutputKind::Piezo
         )
     }
+}
+
+/// `model.coupling` when not given: the KED model.
+fn default_coupling() -> String {
+    "ked".to_string()
 }

@@ -1,7 +1,7 @@
 //! What a work-precision measurement measures: the models side by side, the methods, the
 //! tolerance ladder, the error measure and how the reference is computed.
 
-use flexprr_dynamics::{CouplingModel, Formulation};
+use flexprr_dynamics::Formulation;
 use flexprr_scene::{MethodHandle, ScenarioError, Scene};
 
 use super::{DEFAULT_TOLERANCES, ErrorMeasure};
@@ -46,12 +46,17 @@ impl ModelChoice {
         }
     }
 
-    /// The scene's own model.
+    /// The scene's own model, by its capabilities: linear in its state (KED), links in
+    /// co-rotational elements (nonlinear), or links in assumed modes on a free platform
+    /// (coupled).
     pub fn of(scene: &Scene) -> Self {
-        match scene.coupling {
-            CouplingModel::Ked => Self::Ked,
-            CouplingModel::Coupled => Self::Coupled,
-            CouplingModel::Nonlinear => Self::Nonlinear(Some(scene.large_deflection.elements)),
+        let caps = scene.coupling.capabilities();
+        if caps.linear_in_state {
+            Self::Ked
+        } else if !caps.assumed_modes {
+            Self::Nonlinear(Some(scene.large_deflection.elements))
+        } else {
+            Self::Coupled
         }
     }
 
@@ -73,12 +78,12 @@ impl ModelChoice {
         }
     }
 
-    /// The model kind.
-    pub fn kind(self) -> CouplingModel {
+    /// The registered name of the model kind (`model.coupling`).
+    pub fn kind(self) -> &'static str {
         match self {
-            Self::Ked => CouplingModel::Ked,
-            Self::Coupled => CouplingModel::Coupled,
-            Self::Nonlinear(_) => CouplingModel::Nonlinear,
+            Self::Ked => "ked",
+            Self::Coupled => "coupled",
+            Self::Nonlinear(_) => "nonlinear",
         }
     }
 
@@ -99,7 +104,9 @@ impl ModelChoice {
     /// a scene whose formulation is not the consistent one (they are built on it).
     pub fn apply(self, scene: &Scene) -> Result<Scene, ScenarioError> {
         let mut out = scene.clone();
-        out.coupling = self.kind();
+        out.coupling = flexprr_scene::Registry::default()
+            .model_kind(self.kind())
+            .unwrap_or_else(|| unreachable!("{} is a built-in model kind", self.kind()));
         if let Some(n) = self.elements(scene) {
             out.large_deflection.elements = n;
         }
@@ -125,7 +132,7 @@ impl ModelChoice {
 /// * KED: `rk45` at `1e-14` checked by `abm` at the same tolerance (a
 ///   one-step Runge-Kutta pair against a multistep Adams code, so their errors are
 ///   independent); agreement below `1e-9`.
-/// * Coupled: `abm` at `1e-14` checked by `rk45` at the same tolerance;
+/// * Coupled (and any other kind): `abm` at `1e-14` checked by `rk45` at the same tolerance;
 ///   agreement below `1e-9` (the 0.2 s coupled scene at 20 Hz: `8.7e-12` in deflections).
 /// * Nonlinear: `abm` at `1e-10` checked by `rk45` at the same
 ///   tolerance; agreement below `1e-8`. Tighter costs minutes per run: the elements' axial
@@ -133,28 +140,28 @@ impl ModelChoice {
 ///   on the steps become accuracy-limited on top (32 elements over 20 ms: 376 000 ABM steps
 ///   at `1e-10`, 1 003 000 at `1e-11`; RK45 193 000 steps of six right-hand sides each at
 ///   `1e-10`).
-pub fn default_reference(kind: CouplingModel) -> ReferencePlan {
+pub fn default_reference(kind: &str) -> ReferencePlan {
     match kind {
-        CouplingModel::Ked => ReferencePlan {
+        "ked" => ReferencePlan {
             method: builtin("rk45"),
             check_method: builtin("abm"),
             rtol: 1e-14,
             check_factor: 1.0,
             agreement_limit: 1e-9,
         },
-        CouplingModel::Coupled => ReferencePlan {
-            method: builtin("abm"),
-            check_method: builtin("rk45"),
-            rtol: 1e-14,
-            check_factor: 1.0,
-            agreement_limit: 1e-9,
-        },
-        CouplingModel::Nonlinear => ReferencePlan {
+        "nonlinear" => ReferencePlan {
             method: builtin("abm"),
             check_method: builtin("rk45"),
             rtol: 1e-10,
             check_factor: 1.0,
             agreement_limit: 1e-8,
+        },
+        _ => ReferencePlan {
+            method: builtin("abm"),
+            check_method: builtin("rk45"),
+            rtol: 1e-14,
+            check_factor: 1.0,
+            agreement_limit: 1e-9,
         },
     }
 }

@@ -265,8 +265,8 @@ pub fn method_applies(scene: &Scene, method: &MethodHandle) -> Result<(), String
     registry
         .resolve_method_for(
             method.name(),
-            scene.coupling == flexprr_dynamics::CouplingModel::Ked,
-            flexprr_scene::mechanical_model(scene.coupling, scene.controller.as_ref()),
+            scene.coupling.capabilities().linear_in_state,
+            flexprr_scene::mechanical_model(&scene.coupling, scene.controller.as_ref()),
             scene.coupling.name(),
         )
         .map(|_| ())
