@@ -5,9 +5,10 @@
 
 use std::sync::Arc;
 
+use flexprr_bench::work_precision::builtin;
 use flexprr_dynamics::{Formulation, FrequencyHistory, ModalDamping, ModalSystem, paper};
 use flexprr_run::{run, summary_json};
-use flexprr_scene::{Method, Scene};
+use flexprr_scene::Scene;
 
 fn system(frequency: f64, formulation: Formulation) -> ModalSystem {
     let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
@@ -135,7 +136,7 @@ fn reference_state_at_0_2_s_with_every_integrator() {
         .solve(&mut sys, 0.0, &y0, &t_out)
         .unwrap();
     check("bdf", sol.y(0));
-    for method in [Method::Magnus4, Method::Magnus6, Method::Auto] {
+    for method in ["magnus4", "magnus6", "auto"].map(builtin) {
         let sol = method
             .solve(options.clone(), &mut sys, &y0, &[0.0, 0.2])
             .unwrap();

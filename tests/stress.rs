@@ -13,11 +13,11 @@
 //! cases is printed by `cargo test --release --test stress -- --ignored --nocapture`.
 
 use flexprr_bench::classify::{Attempt, Failure, Outcome, attempt};
+use flexprr_bench::work_precision::builtin;
 use flexprr_run::guard::DIVERGENCE_FRACTION;
 use flexprr_run::{RunError, run};
 use flexprr_scene::{
-    CouplingChoice, FormulationChoice, Method, OutputKind, ScenarioError, Scene, SceneFile,
-    parse_scene,
+    FormulationChoice, MethodHandle, OutputKind, ScenarioError, Scene, SceneFile, parse_scene,
 };
 
 /// Every stress scene that is integrated (all but `near_singular_type2`, refused at load).
@@ -37,18 +37,18 @@ const INTEGRATED_SCENES: [&str; 12] = [
 ];
 
 /// The general methods (any model).
-const GENERAL: [Method; 3] = [Method::Abm, Method::Rk45, Method::Bdf];
+const GENERAL: [&str; 3] = ["abm", "rk45", "bdf"];
 /// The exponential methods and the automatic choice (`magnus6` on a KED model): models that
 /// are linear in their state only.
-const EXPONENTIAL: [Method; 3] = [Method::Magnus4, Method::Magnus6, Method::Auto];
+const EXPONENTIAL: [&str; 3] = ["magnus4", "magnus6", "auto"];
 
-fn is_exponential(method: Method) -> bool {
-    EXPONENTIAL.contains(&method)
+fn is_exponential(method: &MethodHandle) -> bool {
+    EXPONENTIAL.contains(&method.name())
 }
 
 /// The methods run on `s`: the general ones, and the exponential ones where the scene's
 /// model is linear in its state (the KED model: every stress scene).
-fn methods(s: &Scene) -> Vec<Method> {
+fn methods(s: &Scene) -> Vec<MethodHandle> {
     let mut model = s
         .build_model()
         .unwrap_or_else(|e| panic!("{}: {e}", s.name));
@@ -56,6 +56,7 @@ fn methods(s: &Scene) -> Vec<Method> {
     GENERAL
         .into_iter()
         .chain(EXPONENTIAL.into_iter().filter(|_| linear))
+        .map(builtin)
         .collect()
 }
 
@@ -76,16 +77,16 @@ fn scene(name: &str, edit: impl FnOnce(&mut SceneFile)) -> Scene {
 }
 
 /// The method whose tight solution is the reference for `method`.
-fn reference_method(method: Method) -> Method {
-    match method {
-        Method::Abm => Method::Rk45,
-        _ => Method::Abm,
+fn reference_method(method: &MethodHandle) -> MethodHandle {
+    match method.name() {
+        "abm" => builtin("rk45"),
+        _ => builtin("abm"),
     }
 }
 
 /// The reference for `method`: the same scene integrated by another method (RK45 for ABM,
 /// ABM for RK45 and BDF) at rtol 1e-11, atol 1e-15.
-fn reference(name: &str, method: Method, edit: impl Fn(&mut SceneFile)) -> Attempt {
+fn reference(name: &str, method: &MethodHandle, edit: impl Fn(&mut SceneFile)) -> Attempt {
     let other = reference_method(method);
     let tight = scene(name, |f| {
         edit(f);
@@ -93,7 +94,7 @@ fn reference(name: &str, method: Method, edit: impl Fn(&mut SceneFile)) -> Attem
         f.integrator.atol = 1e-15;
         f.integrator.max_steps = 50_000_000;
     });
-    let a = attempt(&tight, other);
+    let a = attempt(&tight, &other);
     assert!(a.result.is_ok(), "{name}: reference failed: {:?}", a.result);
     a
 }
@@ -114,7 +115,7 @@ fn describe(name: &str, a: &Attempt, outcome: &Outcome) -> String {
     } else {
         format!("{} ({})", a.method.name(), a.resolved)
     };
-    let unit = if is_exponential(a.method) {
+    let unit = if is_exponential(&a.method) {
         "coefficient evaluations"
     } else {
         "rhs"
@@ -140,31 +141,31 @@ fn classify_all(
     slow_factor: usize,
 ) -> Vec<(Attempt, Outcome)> {
     let s = scene(name, edit);
-    let attempts: Vec<Attempt> = methods(&s).into_iter().map(|m| attempt(&s, m)).collect();
+    let attempts: Vec<Attempt> = methods(&s).iter().map(|m| attempt(&s, m)).collect();
     let cheapest = |exponential: bool| {
         attempts
             .iter()
-            .filter(|a| a.result.is_ok() && is_exponential(a.method) == exponential)
+            .filter(|a| a.result.is_ok() && is_exponential(&a.method) == exponential)
             .map(Attempt::rhs_evaluations)
             .min()
     };
     let cheapest = [cheapest(false), cheapest(true)];
     // One reference per other method, computed only when needed.
-    let mut references: Vec<(Method, Attempt)> = Vec::new();
+    let mut references: Vec<(MethodHandle, Attempt)> = Vec::new();
     attempts
         .into_iter()
         .map(|a| {
             let outcome = if a.result.is_ok() {
-                let other = reference_method(a.method);
+                let other = reference_method(&a.method);
                 if !references.iter().any(|(m, _)| *m == other) {
-                    references.push((other, reference(name, a.method, edit)));
+                    references.push((other.clone(), reference(name, &a.method, edit)));
                 }
                 let r = &references
                     .iter()
                     .find(|(m, _)| *m == other)
                     .expect("added")
                     .1;
-                let budget = cheapest[usize::from(is_exponential(a.method))]
+                let budget = cheapest[usize::from(is_exponential(&a.method))]
                     .map(|c| c.saturating_mul(slow_factor));
                 a.classify(r.result.as_ref().ok(), budget)
             } else {
@@ -186,7 +187,9 @@ fn every_stress_scene_runs_the_exponential_methods() {
         assert_eq!(s.method.name(), "magnus6", "{name}");
         let model = s.build_model().unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(model.kind(), "ked", "{name}");
-        assert_eq!(methods(&s), [GENERAL, EXPONENTIAL].concat(), "{name}");
+        let all = methods(&s);
+        let names: Vec<&str> = all.iter().map(MethodHandle::name).collect();
+        assert_eq!(names, [GENERAL, EXPONENTIAL].concat(), "{name}");
     }
 }
 
@@ -196,13 +199,13 @@ fn every_stress_scene_runs_the_exponential_methods() {
 #[test]
 fn classification_resolves_methods_like_a_scene() {
     let coupled = scene("max_step_huge", |f| {
-        f.model.coupling = CouplingChoice::Coupled;
+        f.model.coupling = "coupled".to_string();
         f.time.end = 0.002;
     });
-    let a = attempt(&coupled, Method::Auto);
+    let a = attempt(&coupled, &builtin("auto"));
     assert_eq!(a.resolved, "abm");
     assert!(a.result.is_ok(), "{:?}", a.result);
-    let m = attempt(&coupled, Method::Magnus6);
+    let m = attempt(&coupled, &builtin("magnus6"));
     assert_eq!(m.resolved, "magnus6");
     match &m.result {
         Err(Failure::Model { source }) => {
@@ -215,7 +218,7 @@ fn classification_resolves_methods_like_a_scene() {
         other => panic!("magnus6 on the coupled model: {other:?}"),
     }
     let ked = scene("max_step_huge", |f| f.time.end = 0.002);
-    assert_eq!(attempt(&ked, Method::Auto).resolved, "magnus6");
+    assert_eq!(attempt(&ked, &builtin("auto")).resolved, "magnus6");
 }
 
 /// Many modes (r = 12 and 20 per link): an explicit method solves the scene accurately or
@@ -237,14 +240,14 @@ fn many_modes_explicit_methods_solve_or_report_stiffness() {
         let results = classify_all(name, short, 3);
         let abm_steps = results
             .iter()
-            .find(|(a, _)| a.method == Method::Abm)
+            .find(|(a, _)| a.method.name() == "abm")
             .map(|(a, _)| a.stats.accepted_steps)
             .expect("abm ran");
         for (a, outcome) in results {
-            if a.method == Method::Bdf {
+            if a.method.name() == "bdf" {
                 continue;
             }
-            if is_exponential(a.method) {
+            if is_exponential(&a.method) {
                 let Outcome::Solved { error, .. } = outcome else {
                     panic!("{name} {}: {outcome:?}", a.method.name());
                 };
@@ -302,11 +305,11 @@ fn many_modes_damped_bdf_is_efficient() {
         let results = classify_all(name, short, 2);
         let bdf = results
             .iter()
-            .find(|(a, _)| a.method == Method::Bdf)
+            .find(|(a, _)| a.method.name() == "bdf")
             .expect("bdf ran");
         for (a, outcome) in results
             .iter()
-            .filter(|(a, _)| a.method == Method::Bdf || is_exponential(a.method))
+            .filter(|(a, _)| a.method.name() == "bdf" || is_exponential(&a.method))
         {
             match outcome {
                 Outcome::Solved { error, .. } => {
@@ -318,7 +321,7 @@ fn many_modes_damped_bdf_is_efficient() {
         }
         for (a, _) in results
             .iter()
-            .filter(|(a, _)| matches!(a.method, Method::Abm | Method::Rk45))
+            .filter(|(a, _)| matches!(a.method.name(), "abm" | "rk45"))
         {
             assert!(
                 bdf.0.rhs_evaluations() < a.rhs_evaluations(),
@@ -401,7 +404,7 @@ fn high_speed_integration_is_bounded_or_diverges_clearly() {
         let limit = DIVERGENCE_FRACTION * 0.2;
         let mut diverged_at = Vec::new();
         let all = methods(&s);
-        for &m in &all {
+        for m in &all {
             let a = attempt(&s, m);
             println!("{}", describe(&name, &a, &a.classify(None, None)));
             match &a.result {
@@ -457,7 +460,7 @@ fn high_speed_growth_bounded_without_buckling_divergent_with_it() {
         let first_buckling = hist.buckling.iter().map(|b| b.t_start).reduce(f64::min);
         let mut peaks = Vec::new();
         for m in methods(&s) {
-            let a = attempt(&s, m);
+            let a = attempt(&s, &m);
             println!("{}", describe(&name, &a, &a.classify(None, None)));
             match (&a.result, first_buckling) {
                 (Ok(sol), None) => {
@@ -519,7 +522,7 @@ fn buckling_intervals_are_integrated_accurately_by_every_method() {
         // 2 ms by then.
         let (a, _) = results
             .iter()
-            .find(|(a, _)| a.method == Method::Magnus6)
+            .find(|(a, _)| a.method.name() == "magnus6")
             .expect("magnus6 ran");
         assert!(
             a.max_deflection_m > 0.01,
@@ -559,8 +562,7 @@ fn buckling_intervals_are_integrated_accurately_by_every_method() {
 fn run_and_classification_share_the_divergence_guard() {
     let check = |name: &str| {
         let s = scene(name, |_| {});
-        let method = Method::parse(s.method.name()).expect("a built-in method");
-        (run(&s, &mut |_| {}), attempt(&s, method))
+        (run(&s, &mut |_| {}), attempt(&s, &s.method))
     };
     let (run_40, stepwise) = check("high_speed_f40");
     let Err(Failure::Diverged {
@@ -645,8 +647,8 @@ fn long_horizon_drift_is_small() {
     };
     let s = scene("long_horizon_f20", short);
     for m in methods(&s) {
-        let a = attempt(&s, m);
-        let r = reference("long_horizon_f20", m, short);
+        let a = attempt(&s, &m);
+        let r = reference("long_horizon_f20", &m, short);
         let outcome = a.classify(r.result.as_ref().ok(), None);
         println!("{}", describe("long_horizon_f20", &a, &outcome));
         let error = outcome.error().expect("solved with a reference");
@@ -670,7 +672,7 @@ fn tolerance_extremes_finish_without_nan() {
     }
     let s = scene("tolerance_loose", |_| {});
     for m in methods(&s) {
-        let a = attempt(&s, m);
+        let a = attempt(&s, &m);
         println!(
             "{}",
             describe("tolerance_loose", &a, &a.classify(None, None))
@@ -689,7 +691,7 @@ fn tolerance_extremes_finish_without_nan() {
 fn max_step_extremes() {
     let s = scene("max_step_tiny", |f| f.integrator.max_steps = 20_000);
     for m in methods(&s) {
-        let a = attempt(&s, m);
+        let a = attempt(&s, &m);
         match &a.result {
             Err(Failure::Integrator {
                 error: flexprr_integrators::IntegratorError::TooManySteps { t, max_steps },

@@ -9,7 +9,7 @@ use flexprr_bench::work_precision::{
     WorkPrecisionRow, csv_text, markdown_at_error, markdown_models, markdown_rows, measure,
     method_applies, read_csv, write_svg,
 };
-use flexprr_scene::{Method, ScenarioError, Scene};
+use flexprr_scene::{Registry, ScenarioError, Scene};
 
 use super::Failure;
 use super::run::failure;
@@ -190,11 +190,12 @@ fn config_of(args: &WorkPrecisionArgs, scene: &Scene) -> Result<WorkPrecisionCon
         None => {}
     }
     if let Some(names) = &args.methods {
+        let registry = Registry::default();
         config.methods = names
             .iter()
             .map(|name| {
-                Method::parse(name.trim()).ok_or_else(|| {
-                    let known: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+                registry.method(name.trim()).ok_or_else(|| {
+                    let known = registry.integrator_names();
                     Failure::bad_input(format!(
                         "--methods: unknown method {name:?} (expected one of {})",
                         known.join(", ")
@@ -256,7 +257,7 @@ fn check_choices(
         })?;
     }
     if args.methods.is_some() {
-        for &method in &config.methods {
+        for method in &config.methods {
             let reasons: Vec<String> = model_scenes
                 .iter()
                 .filter_map(|(_, s)| method_applies(s, method).err())

@@ -3,7 +3,7 @@
 //! `docs/stability.md`).
 //!
 //! [`attempt`] integrates a scene's own model (KED or coupled, from the scene's one builder)
-//! with a chosen [`Method`] (the scene's own method is ignored), resolved for that model the
+//! with a chosen registered method ([`MethodHandle`]; the scene's own method is ignored), resolved for that model the
 //! way a scene resolves it (`auto` becomes `magnus6` on a KED model and `abm` otherwise; an
 //! exponential method on a nonlinear model fails with the scene's message), through the run
 //! layer's one observed stepping loop, so the integrator's work counters survive a failure
@@ -22,7 +22,7 @@ use flexprr_dynamics::DynamicsError;
 use flexprr_integrators::{IntegratorError, Solution, Stats};
 use flexprr_run::RunError;
 use flexprr_run::guard::{DeflectionModel, deflection_error};
-use flexprr_scene::{Method, Scene};
+use flexprr_scene::{MethodHandle, Scene};
 
 /// Points `xi` along each link where deflections are checked and compared.
 pub const CHECK_POINTS: [f64; 3] = [0.25, 0.5, 0.75];
@@ -92,10 +92,10 @@ impl fmt::Display for Failure {
 #[derive(Debug, Clone)]
 pub struct Attempt {
     /// The method asked for.
-    pub method: Method,
+    pub method: MethodHandle,
     /// The method actually used: `method` itself, or the choice of `auto` for the model
     /// (`magnus6` on a KED model, `abm` otherwise).
-    pub resolved: &'static str,
+    pub resolved: String,
     /// The states at the scene's output times, or why the integration stopped.
     pub result: Result<Solution, Failure>,
     /// The integrator's work counters (also when it failed).
@@ -229,11 +229,11 @@ impl From<RunError> for Failure {
 /// Integrates the scene's model with `method` and the scene's options through the run
 /// layer's one stepping loop (divergence guard, stop times). Never panics on a failed run:
 /// the failure is in [`Attempt::result`].
-pub fn attempt(scene: &Scene, method: Method) -> Attempt {
+pub fn attempt(scene: &Scene, method: &MethodHandle) -> Attempt {
     let clock = Clock::now();
-    let failed = |resolved: &'static str, source: DynamicsError| Attempt {
-        method,
-        resolved,
+    let failed = |resolved: &str, source: DynamicsError| Attempt {
+        method: method.clone(),
+        resolved: resolved.to_string(),
         result: Err(Failure::Model { source }),
         stats: Stats::default(),
         max_deflection_m: 0.0,
@@ -246,13 +246,11 @@ pub fn attempt(scene: &Scene, method: Method) -> Attempt {
     };
     // The method a scene naming `method` would run on this model.
     let linear = model.linear_form().is_some();
-    let mechanical = flexprr_scene::mechanical_model(scene.coupling, scene.controller.as_ref());
-    let handle = match flexprr_scene::Registry::default().resolve_method_for(
-        method.name(),
-        linear,
-        mechanical,
-        model.kind(),
-    ) {
+    let mechanical = flexprr_scene::mechanical_model(&scene.coupling, scene.controller.as_ref());
+    let mut registry = flexprr_scene::Registry::default();
+    registry.register_method(method);
+    let handle = match registry.resolve_method_for(method.name(), linear, mechanical, model.kind())
+    {
         Ok(handle) => handle,
         Err(message) => {
             return failed(
@@ -261,7 +259,7 @@ pub fn attempt(scene: &Scene, method: Method) -> Attempt {
             );
         }
     };
-    let resolved = Method::parse(handle.name()).map_or(method.name(), Method::name);
+    let resolved = handle.name().to_string();
     let integrator = handle.integrator(scene.options.clone());
     let integration =
         flexprr_run::integrate_model(scene, integrator.as_ref(), model.as_mut(), &mut |_| {});
@@ -277,7 +275,7 @@ pub fn attempt(scene: &Scene, method: Method) -> Attempt {
         }),
     };
     Attempt {
-        method,
+        method: method.clone(),
         resolved,
         result,
         stats,

@@ -5,14 +5,13 @@
 //! deflection measure against closed forms, the nonlinear model's reference against its
 //! check and a tighter run, and models side by side flooring at their model error.
 
+use flexprr_bench::work_precision::builtin;
 use flexprr_bench::work_precision::{
     ErrorMeasure, ModelChoice, PACKAGE, Reference, WorkPrecisionConfig, WorkPrecisionRow, csv_text,
     default_reference, markdown_at_error, markdown_models, measure, midpoint_deflections, read_csv,
     time_at_error, work_precision,
 };
-use flexprr_dynamics::CouplingModel;
 use flexprr_integrators::{Bdf, Integrator, Options};
-use flexprr_scene::Method;
 use flexprr_scene::Scene;
 
 fn short_scene() -> Scene {
@@ -89,7 +88,7 @@ fn errors_fall_as_the_tolerance_tightens_and_the_reference_is_confirmed() {
         "bdf at 1e-10 against the reference: {third:?}"
     );
 
-    for method in [Method::Abm, Method::Rk45, Method::Bdf] {
+    for method in ["abm", "rk45", "bdf"].map(builtin) {
         let rows: Vec<&WorkPrecisionRow> = result
             .rows
             .iter()
@@ -124,7 +123,7 @@ fn errors_fall_as_the_tolerance_tightens_and_the_reference_is_confirmed() {
 
     // The exponential methods: errors fall with the tolerance until the reference's own
     // accuracy (about 1e-10 here), and stay proportional to it.
-    for method in [Method::Magnus4, Method::Magnus6, Method::Auto] {
+    for method in ["magnus4", "magnus6", "auto"].map(builtin) {
         let rows: Vec<&WorkPrecisionRow> = result
             .rows
             .iter()
@@ -334,7 +333,7 @@ fn the_deflection_error_of_a_run_is_zero_against_itself_and_the_perturbation_aga
     let mut system = scene.build_model().expect("KED model");
     let y0 = system.initial_state();
     let options = Options::default().rtol(1e-9).atol(1e-13);
-    let solution = Method::Abm
+    let solution = builtin("abm")
         .solve(options, &mut system.as_mut(), &y0, &scene.output_times)
         .expect("solves");
     let w = midpoint_deflections(system.as_mut(), &solution).expect("deflections");
@@ -419,7 +418,7 @@ fn the_nonlinear_reference_agrees_with_its_check_and_with_a_tighter_third_run() 
     let scene = scene_f30("coupling = \"nonlinear\"\nelements = 4", 0.002);
     let config = WorkPrecisionConfig {
         tolerances: vec![1e-4, 1e-6],
-        methods: vec![Method::Abm],
+        methods: vec![builtin("abm")],
         warmup: 0,
         repeats: 1,
         ..WorkPrecisionConfig::default()
@@ -429,7 +428,7 @@ fn the_nonlinear_reference_agrees_with_its_check_and_with_a_tighter_third_run() 
         ErrorMeasure::Deflection
     );
     let plan = config.reference_plan(&scene).expect("plan");
-    assert_eq!(plan, default_reference(CouplingModel::Nonlinear));
+    assert_eq!(plan, default_reference("nonlinear"));
     let reference = Reference::compute(&scene, &config).expect("reference");
     assert_eq!(reference.model, "nonlinear:4");
     assert_ne!(reference.method, reference.check_method);
@@ -448,7 +447,7 @@ fn the_nonlinear_reference_agrees_with_its_check_and_with_a_tighter_third_run() 
     let options = Options::default()
         .rtol(tight)
         .atol(tight * reference.displacement_size);
-    let third = Method::Abm
+    let third = builtin("abm")
         .solve(options, &mut system.as_mut(), &y0, &scene.output_times)
         .expect("solves");
     let error = reference
@@ -473,7 +472,7 @@ fn models_side_by_side_share_one_reference_and_floor_at_their_model_error() {
     let scene = scene_f30("coupling = \"nonlinear\"\nelements = 4", 0.002);
     let config = WorkPrecisionConfig {
         tolerances: vec![1e-5, 1e-7],
-        methods: vec![Method::Abm],
+        methods: vec![builtin("abm")],
         models: vec![ModelChoice::Ked, ModelChoice::Nonlinear(Some(4))],
         warmup: 0,
         repeats: 1,
@@ -626,7 +625,7 @@ fn a_point_that_diverges_is_a_failed_point_and_the_others_are_measured() {
     let scene = stress_scene("tolerance_loose");
     let config = WorkPrecisionConfig {
         tolerances: vec![1e-1, 1e-4],
-        methods: vec![Method::Abm],
+        methods: vec![builtin("abm")],
         warmup: 0,
         repeats: 1,
         ..WorkPrecisionConfig::default()
@@ -661,7 +660,7 @@ fn a_method_model_or_tolerance_named_twice_is_refused() {
     for (config, key, named) in [
         (
             WorkPrecisionConfig {
-                methods: vec![Method::Abm, Method::Rk45, Method::Abm],
+                methods: ["abm", "rk45", "abm"].map(builtin).to_vec(),
                 ..config()
             },
             "methods",

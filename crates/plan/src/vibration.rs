@@ -7,7 +7,7 @@ use flexprr_kinematics::{GeometricPath, Impulse, Path, Pose};
 use flexprr_planning::shaping::{self, Mode};
 use flexprr_run::RunResult;
 use flexprr_run::linear::{OperatingPoint, operating_point};
-use flexprr_scene::{CouplingChoice, OutputKind, Scene, SceneFile};
+use flexprr_scene::{OutputKind, Scene, SceneFile};
 
 use crate::error::PlanError;
 use crate::pipeline::{PlanOutcome, build_scene};
@@ -59,15 +59,16 @@ pub struct ShapingDesign {
     pub impulses: Vec<Impulse>,
 }
 
-/// The scene whose linear model gives the modes: the scene itself, or for a KED scene its
-/// coupled variant (the KED model prescribes the platform: it has no whole-machine modes).
+/// The scene whose linear model gives the modes: the scene itself, or for a model that
+/// prescribes the platform (KED) its coupled variant (a prescribed platform has no
+/// whole-machine modes).
 fn modal_scene(scene: &Scene) -> Result<(Scene, String), PlanError> {
     let mut file = scene.file.clone();
     file.output.requests.clear();
     file.plan = None;
-    let model = if scene.coupling == flexprr_dynamics::CouplingModel::Ked {
-        file.model.coupling = CouplingChoice::Coupled;
-        "coupled (the KED scene's platform is prescribed)".to_string()
+    let model = if !scene.coupling.capabilities().free_platform {
+        file.model.coupling = "coupled".to_string();
+        "coupled (the scene's model prescribes the platform)".to_string()
     } else {
         scene.coupling.name().to_string()
     };

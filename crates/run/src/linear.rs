@@ -2,7 +2,7 @@
 //! held at rest at a pose, or integrated along its motion to a time. The linearisation
 //! itself is `flexprr-linear`'s, which knows no model kind.
 
-use flexprr_dynamics::{CouplingModel, SceneModel};
+use flexprr_dynamics::SceneModel;
 use flexprr_kinematics::Pose;
 use flexprr_linear::{Input, Linearization, Output, Settings, linearize_with_settings};
 use flexprr_scene::{ScenarioError, Scene};
@@ -75,7 +75,7 @@ impl std::fmt::Debug for AtOperatingPoint {
 /// `model.coupling = "coupled"` or `"nonlinear"`), a pose the machine cannot hold or a
 /// singular one, a time outside the scene's span, or a run that fails before the time.
 pub fn operating_point(scene: &Scene, at: OperatingPoint) -> Result<AtOperatingPoint, RunError> {
-    if scene.coupling == CouplingModel::Ked {
+    if !scene.coupling.capabilities().free_platform {
         return Err(RunError::Scene(ScenarioError::Input {
             location: None,
             key: "model.coupling".into(),
@@ -124,7 +124,7 @@ pub fn along_motion_states(scene: &Scene, times: &[f64]) -> Result<MotionStates,
 
 /// [`along_motion_states`] with a bad time refused at `key`.
 fn integrate_to(scene: &Scene, times: &[f64], key: &str) -> Result<MotionStates, RunError> {
-    if scene.coupling == CouplingModel::Ked {
+    if !scene.coupling.capabilities().free_platform {
         operating_point(scene, OperatingPoint::Time(scene.output_times[0]))?;
     }
     let (t0, t1) = (
@@ -213,11 +213,7 @@ pub fn linear_error(scene: &Scene, e: flexprr_linear::LinearError) -> RunError {
         LinearError::Model(e) => RunError::Model(e),
         e @ LinearError::TooLarge { .. } => RunError::Scene(ScenarioError::Input {
             location: None,
-            key: if scene.coupling == CouplingModel::Nonlinear {
-                "model.elements".into()
-            } else {
-                "links.modes".into()
-            },
+            key: scene.coupling.capabilities().size_key().into(),
             message: e.to_string(),
         }),
         other => RunError::Scene(ScenarioError::Run(other.to_string())),

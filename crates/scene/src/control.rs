@@ -11,7 +11,6 @@
 use std::sync::Arc;
 
 use flexprr_control::{Actuator, Controller, IdealForce, MotorBallScrew, MotorRatings};
-use flexprr_dynamics::CouplingModel;
 
 use crate::error::ScenarioError;
 use crate::registry::{Registry, TableParams};
@@ -31,7 +30,7 @@ pub(crate) fn build_control(
     c: &Checker<'_>,
     registry: &Registry,
     raw: &SceneFile,
-    coupling: CouplingModel,
+    caps: crate::ModelCapabilities,
 ) -> Result<ControlParts, ScenarioError> {
     let actuator = raw
         .actuators
@@ -41,7 +40,7 @@ pub(crate) fn build_control(
     let controller = match &raw.control {
         None => None,
         Some(table) => {
-            if coupling == CouplingModel::Ked {
+            if !caps.free_platform {
                 return Err(c.error(
                     "control",
                     "the KED model prescribes the platform motion, and with it the sliders, so \

@@ -17,6 +17,7 @@ pub mod link;
 pub mod link_file;
 mod locate;
 mod model;
+mod model_kind;
 mod parse;
 mod piezo;
 mod plan;
@@ -34,6 +35,8 @@ pub use input::{
     sanitize_name, unsafe_name_reason,
 };
 pub use locate::{line_column, locate};
+pub use model::{CoupledKind, KedKind, NonlinearKind};
+pub use model_kind::{ModelCapabilities, ModelKind, ModelKindHandle};
 pub use parse::{parse_scene, parse_toml};
 pub use piezo::PatchContext;
 pub use plan::{motor_of, path_of};
@@ -45,8 +48,8 @@ pub use scene::{
     DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, MAX_ANGLE_DEG, Scene,
 };
 pub use schema::{
-    ActuatorsConfig, BasisTable, BranchChoice, ControlTable, CouplingChoice,
-    DEFAULT_COULOMB_SMOOTHING, FormulationChoice, IntegratorConfig, Layout, LegConfig, LinksConfig,
-    MachineConfig, Method, ModelConfig, OutputConfig, OutputKind, ProfileChoice, SceneFile,
-    StiffnessChoice, TimeConfig, TrajectoryConfig,
+    ActuatorsConfig, BasisTable, BranchChoice, ControlTable, DEFAULT_COULOMB_SMOOTHING,
+    FormulationChoice, IntegratorConfig, Layout, LegConfig, LinksConfig, MachineConfig,
+    ModelConfig, OutputConfig, OutputKind, ProfileChoice, SceneFile, StiffnessChoice, TimeConfig,
+    TrajectoryConfig,
 };

@@ -3,11 +3,111 @@
 //! coupled model everywhere.
 
 use flexprr_dynamics::{
-    Actuation, AxialModel, CoupledOptions, CoupledSystem, CouplingModel, DynamicsError,
-    ModalSystem, NonlinearOptions, NonlinearSystem, PatchControl, SceneModel,
+    Actuation, AxialModel, CoupledOptions, CoupledSystem, DynamicsError, ModalSystem,
+    NonlinearOptions, NonlinearSystem, PatchControl, SceneModel,
 };
 
-use crate::{ScenarioError, Scene};
+use crate::{ModelCapabilities, ModelKind, ScenarioError, Scene};
+
+/// The KED model (`model.coupling = "ked"`): rigid motion prescribed, the links' modal
+/// equations linear in their state ([`ModalSystem`]).
+pub struct KedKind;
+
+/// The coupled model (`"coupled"`): the platform moved by the links' foreshortening, links in
+/// assumed modes ([`CoupledSystem`]).
+pub struct CoupledKind;
+
+/// The geometrically nonlinear model (`"nonlinear"`): co-rotational elements and a free
+/// platform ([`NonlinearSystem`]).
+pub struct NonlinearKind;
+
+impl ModelKind for KedKind {
+    fn capabilities(&self) -> ModelCapabilities {
+        ModelCapabilities {
+            linear_in_state: true,
+            assumed_modes: true,
+            ..ModelCapabilities::default()
+        }
+    }
+    fn build(&self, scene: &Scene) -> Result<Box<dyn SceneModel>, DynamicsError> {
+        let system = scene.build_ked(false)?;
+        match scene.patch_control() {
+            None => Ok(Box::new(system)),
+            Some(p) => Ok(Box::new(
+                system.with_patch_control(p, scene.output_times[0])?,
+            )),
+        }
+    }
+    fn build_without_axial_force(
+        &self,
+        scene: &Scene,
+    ) -> Result<Option<Box<dyn SceneModel>>, DynamicsError> {
+        Ok(Some(Box::new(scene.build_ked(true)?)))
+    }
+    fn describe(&self, _name: &str, scene: &Scene, sliders: &str) -> String {
+        modal_description("KED", scene, sliders)
+    }
+}
+
+impl ModelKind for CoupledKind {
+    fn capabilities(&self) -> ModelCapabilities {
+        ModelCapabilities {
+            free_platform: true,
+            assumed_modes: true,
+            consistent_only: true,
+            ..ModelCapabilities::default()
+        }
+    }
+    fn build(&self, scene: &Scene) -> Result<Box<dyn SceneModel>, DynamicsError> {
+        let system = scene.build_coupled()?;
+        match scene.patch_control() {
+            None => Ok(Box::new(system)),
+            Some(p) => Ok(Box::new(
+                system.with_patch_control(p, scene.output_times[0])?,
+            )),
+        }
+    }
+    fn describe(&self, _name: &str, scene: &Scene, sliders: &str) -> String {
+        modal_description("coupled", scene, sliders)
+    }
+}
+
+impl ModelKind for NonlinearKind {
+    fn capabilities(&self) -> ModelCapabilities {
+        ModelCapabilities {
+            mechanical_form: true,
+            free_platform: true,
+            consistent_only: true,
+            ..ModelCapabilities::default()
+        }
+    }
+    fn build(&self, scene: &Scene) -> Result<Box<dyn SceneModel>, DynamicsError> {
+        let system = scene.build_nonlinear()?;
+        match scene.patch_control() {
+            None => Ok(Box::new(system)),
+            Some(p) => Ok(Box::new(
+                system.with_patch_control(p, scene.output_times[0])?,
+            )),
+        }
+    }
+    fn describe(&self, _name: &str, scene: &Scene, sliders: &str) -> String {
+        format!(
+            "nonlinear model{sliders}, {} co-rotational elements per link",
+            scene.large_deflection.elements
+        )
+    }
+}
+
+/// `"<label> model<sliders>, <formulation> formulation, <r> modes per link: <basis>"`.
+fn modal_description(label: &str, scene: &Scene, sliders: &str) -> String {
+    let links = &scene.machine.links[0];
+    format!(
+        "{label} model{sliders}, {} formulation, {} modes per link: {}",
+        scene.formulation.name(),
+        links.modes(),
+        links.basis.name()
+    )
+}
 
 impl Scene {
     /// Builds the dynamical system the scene integrates: the KED [`ModalSystem`] with the
@@ -21,21 +121,7 @@ impl Scene {
     /// A modal mass matrix that is not positive definite, inconsistent damping, or (nonlinear)
     /// a kinematic failure at the start time.
     pub fn build_model(&self) -> Result<Box<dyn SceneModel>, DynamicsError> {
-        let t0 = self.output_times[0];
-        match (self.coupling, self.patch_control()) {
-            (CouplingModel::Ked, None) => Ok(Box::new(self.build_ked(false)?)),
-            (CouplingModel::Ked, Some(p)) => {
-                Ok(Box::new(self.build_ked(false)?.with_patch_control(p, t0)?))
-            }
-            (CouplingModel::Coupled, None) => Ok(Box::new(self.build_coupled()?)),
-            (CouplingModel::Coupled, Some(p)) => {
-                Ok(Box::new(self.build_coupled()?.with_patch_control(p, t0)?))
-            }
-            (CouplingModel::Nonlinear, None) => Ok(Box::new(self.build_nonlinear()?)),
-            (CouplingModel::Nonlinear, Some(p)) => {
-                Ok(Box::new(self.build_nonlinear()?.with_patch_control(p, t0)?))
-            }
-        }
+        self.coupling.kind().build(self)
     }
 
     /// The links' patches under their vibration control law (sensors only without one),
@@ -121,24 +207,9 @@ impl Scene {
             }
             _ => String::new(),
         };
-        let links = &self.machine.links[0];
-        match self.coupling {
-            CouplingModel::Nonlinear => format!(
-                "nonlinear model{sliders}, {} co-rotational elements per link",
-                self.large_deflection.elements
-            ),
-            coupling => format!(
-                "{} model{sliders}, {} formulation, {} modes per link: {}",
-                if coupling == CouplingModel::Ked {
-                    "KED"
-                } else {
-                    "coupled"
-                },
-                self.formulation.name(),
-                links.modes(),
-                links.basis.name()
-            ),
-        }
+        self.coupling
+            .kind()
+            .describe(self.coupling.name(), self, &sliders)
     }
 
     /// The scene's model with the axial force switched off, for the paper's comparison
@@ -151,10 +222,7 @@ impl Scene {
     pub fn build_model_without_axial_force(
         &self,
     ) -> Result<Option<Box<dyn SceneModel>>, DynamicsError> {
-        match self.coupling {
-            CouplingModel::Ked => Ok(Some(Box::new(self.build_ked(true)?))),
-            CouplingModel::Coupled | CouplingModel::Nonlinear => Ok(None),
-        }
+        self.coupling.kind().build_without_axial_force(self)
     }
 
     /// Whether a run of the scene integrates its model: for its states, or because the
@@ -163,7 +231,7 @@ impl Scene {
     pub fn integrates_model(&self) -> bool {
         use crate::OutputKind;
         self.needs_integration()
-            || (self.coupling != CouplingModel::Ked
+            || (self.coupling.capabilities().free_platform
                 && (self.outputs.contains(&OutputKind::AxialForces)
                     || self.outputs.contains(&OutputKind::DrivingForces)))
             || (self.controller.is_some() && self.outputs.contains(&OutputKind::Actuators))
@@ -194,7 +262,11 @@ impl Scene {
         )
     }
 
-    fn build_coupled(&self) -> Result<CoupledSystem, DynamicsError> {
+    /// The coupled system of the scene ([`CoupledSystem`]), with its actuation.
+    ///
+    /// # Errors
+    /// As [`Scene::build_model`].
+    pub fn build_coupled(&self) -> Result<CoupledSystem, DynamicsError> {
         let options = CoupledOptions {
             axial_stiffness: Some([self.axial_stiffness; 3]),
             elastic_chords_at_rest: !self.rigid_chords,

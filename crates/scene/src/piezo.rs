@@ -18,7 +18,7 @@ use crate::error::ScenarioError;
 use crate::link::build_section;
 use crate::registry::{Registry, TableParams};
 use crate::scene::Checker;
-use crate::schema::{CouplingChoice, SceneFile};
+use crate::schema::SceneFile;
 
 /// What `[[links.patches]]` and `[vibration_control]` build.
 pub(crate) struct PiezoParts {
@@ -150,6 +150,7 @@ pub(crate) fn with_patch_layers(
     c: &Checker<'_>,
     raw: &SceneFile,
     link: LinkModel,
+    caps: crate::ModelCapabilities,
 ) -> Result<[LinkModel; 3], ScenarioError> {
     let mut layers: [Vec<Layer>; 3] = Default::default();
     for (k, config) in raw.links.patches.iter().enumerate() {
@@ -164,7 +165,7 @@ pub(crate) fn with_patch_layers(
         ];
         for (name, value, unit) in added {
             c.non_negative(&key(name), value, unit)?;
-            if value > 0.0 && raw.model.coupling == CouplingChoice::Nonlinear {
+            if value > 0.0 && !caps.assumed_modes {
                 return Err(c.value_error(
                     &key(name),
                     "the nonlinear model's elements are uniform and carry no patch mass or \

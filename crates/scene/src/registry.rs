@@ -1,10 +1,11 @@
 //! The registry of named parts: the TOML names of integrators (`integrator.method`), bases
-//! (`links.basis.kind`), axial force models (`model.axial_force`) and control laws
-//! (`control.kind`) and how to build each.
+//! (`links.basis.kind`), axial force models (`model.axial_force`), control laws
+//! (`control.kind`) and model kinds (`model.coupling`) and how to build each.
 //!
 //! [`Registry::default`] holds the built-ins; a program adds its own parts with
 //! [`Registry::register_integrator`], [`Registry::register_basis`],
-//! [`Registry::register_axial_force`] and [`Registry::register_controller`] and loads scenes
+//! [`Registry::register_axial_force`], [`Registry::register_controller`] and
+//! [`Registry::register_model_kind`] and loads scenes
 //! through it with
 //! [`crate::Scene::load_with`] or [`crate::Scene::from_text_with`]. Nothing in the scene code
 //! matches on a name: a new part is one registration.
@@ -36,25 +37,49 @@ use flexprr_control::{ControlError, Controller};
 /// Builds an integrator from the scene's options.
 pub type IntegratorConstructor = Arc<dyn Fn(Options) -> Box<dyn DynIntegrator> + Send + Sync>;
 
-/// The integrator a scene names: its registered name and constructor.
+/// The integrator a scene names: its registered name, constructor and what it asks of the
+/// model. Scenes, the bench and `flexprr work-precision` all reach integrators through these
+/// handles, so a registered integrator runs, resolves and is benchmarked like a built-in one.
 #[derive(Clone)]
 pub struct MethodHandle {
     name: String,
     constructor: IntegratorConstructor,
+    kind: MethodKind,
 }
 
 impl MethodHandle {
-    /// A handle from a name and a constructor.
+    /// A handle from a name and a constructor, for a method that integrates any model
+    /// ([`MethodKind::General`]).
     pub fn new(name: impl Into<String>, constructor: IntegratorConstructor) -> Self {
+        Self::with_kind(name, constructor, MethodKind::General)
+    }
+
+    /// A handle from a name, a constructor and what the method asks of the model.
+    pub fn with_kind(
+        name: impl Into<String>,
+        constructor: IntegratorConstructor,
+        kind: MethodKind,
+    ) -> Self {
         Self {
             name: name.into(),
             constructor,
+            kind,
         }
     }
 
     /// The name the scene file gives (`integrator.method`).
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// What the method asks of the model.
+    pub fn kind(&self) -> &MethodKind {
+        &self.kind
+    }
+
+    /// The constructor it was registered with.
+    pub fn constructor(&self) -> &IntegratorConstructor {
+        &self.constructor
     }
 
     /// The integrator configured with `options` (built by the registered constructor).
@@ -125,13 +150,14 @@ pub enum MethodKind {
     },
 }
 
-/// Whether a scene's model has a mechanical form ([`MethodKind::Mechanical`]): the nonlinear
-/// model, with no control law or one without continuous states (a sampled or stateless law).
+/// Whether a scene's model has a mechanical form ([`MethodKind::Mechanical`]): a kind with
+/// [`crate::ModelCapabilities::mechanical_form`] (the nonlinear model), with no control law
+/// or one without continuous states (a sampled or stateless law).
 pub fn mechanical_model(
-    coupling: flexprr_dynamics::CouplingModel,
+    coupling: &crate::ModelKindHandle,
     controller: Option<&Arc<dyn flexprr_control::Controller>>,
 ) -> bool {
-    coupling == flexprr_dynamics::CouplingModel::Nonlinear
+    coupling.capabilities().mechanical_form
         && controller.is_none_or(|c| c.period() > 0.0 || c.states() == 0)
 }
 
@@ -381,7 +407,7 @@ pub(crate) struct AxialEntry {
 /// `abm`, `rk45`, `bdf`, `generalized_alpha` (mechanical models), `magnus4`, `magnus6`
 /// (linear models only) and `auto`; bases `sine`,
 /// `classical`, `hermite`; axial force models `none`, `paper`, `joint-reaction`; control
-/// laws `pd` and `pid`.
+/// laws `pd` and `pid`; model kinds `ked`, `coupled` and `nonlinear`.
 #[derive(Clone)]
 pub struct Registry {
     integrators: BTreeMap<String, IntegratorConstructor>,
@@ -390,6 +416,7 @@ pub struct Registry {
     axial: BTreeMap<String, AxialEntry>,
     controllers: BTreeMap<String, Arc<dyn ControllerFactory>>,
     vibration_controllers: BTreeMap<String, Arc<dyn VibrationControllerFactory>>,
+    model_kinds: BTreeMap<String, Arc<dyn crate::ModelKind>>,
 }
 
 impl fmt::Debug for Registry {
@@ -400,6 +427,7 @@ impl fmt::Debug for Registry {
             .field("axial_forces", &self.axial_force_names())
             .field("controllers", &self.controller_names())
             .field("vibration_controllers", &self.vibration_controller_names())
+            .field("model_kinds", &self.model_kind_names())
             .finish()
     }
 }
@@ -429,11 +457,14 @@ impl Default for Registry {
             "auto",
             Arc::new(|o| Box::new(Auto::new(o))),
             MethodKind::Auto {
-                linear: "magnus6".to_string(),
-                general: "abm".to_string(),
-                mechanical: Some("generalized_alpha".to_string()),
+                linear: Auto::LINEAR.to_string(),
+                general: Auto::GENERAL.to_string(),
+                mechanical: Some(Auto::MECHANICAL.to_string()),
             },
         );
+        r.register_model_kind("ked", Arc::new(crate::model::KedKind));
+        r.register_model_kind("coupled", Arc::new(crate::model::CoupledKind));
+        r.register_model_kind("nonlinear", Arc::new(crate::model::NonlinearKind));
         r.register_basis("sine", Arc::new(SineFactory));
         r.register_basis("classical", Arc::new(ClassicalFactory));
         r.register_basis("hermite", Arc::new(HermiteFactory));
@@ -476,7 +507,25 @@ impl Registry {
             axial: BTreeMap::new(),
             controllers: BTreeMap::new(),
             vibration_controllers: BTreeMap::new(),
+            model_kinds: BTreeMap::new(),
         }
+    }
+
+    /// Registers (or replaces) the model kind `name` for `model.coupling`.
+    pub fn register_model_kind(&mut self, name: &str, kind: Arc<dyn crate::ModelKind>) {
+        self.model_kinds.insert(name.to_string(), kind);
+    }
+
+    /// The model kind `name`, as a handle.
+    pub fn model_kind(&self, name: &str) -> Option<crate::ModelKindHandle> {
+        self.model_kinds
+            .get(name)
+            .map(|k| crate::ModelKindHandle::new(name, k.clone()))
+    }
+
+    /// Registered model kind names, sorted.
+    pub fn model_kind_names(&self) -> Vec<&str> {
+        self.model_kinds.keys().map(String::as_str).collect()
     }
 
     /// Registers (or replaces) the integrator `name` for `integrator.method`; it integrates
@@ -702,9 +751,19 @@ impl Registry {
 
     /// The integrator `name`, as a handle.
     pub fn method(&self, name: &str) -> Option<MethodHandle> {
-        self.integrators
-            .get(name)
-            .map(|c| MethodHandle::new(name, c.clone()))
+        self.integrators.get(name).map(|c| {
+            let kind = self.method_kind(name).cloned().unwrap_or_default();
+            MethodHandle::with_kind(name, c.clone(), kind)
+        })
+    }
+
+    /// Registers (or replaces) the integrator of `handle`, under its name and kind.
+    pub fn register_method(&mut self, handle: &MethodHandle) {
+        self.register_integrator_kind(
+            handle.name(),
+            handle.constructor().clone(),
+            handle.kind().clone(),
+        );
     }
 
     /// The basis kind `name`.

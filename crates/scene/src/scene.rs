@@ -13,9 +13,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use flexprr_control::{Actuator, Controller};
-use flexprr_dynamics::{
-    AxialForceModel, Coupling, CouplingModel, Formulation, LinkModel, Machine, ModalDamping,
-};
+use flexprr_dynamics::{AxialForceModel, Coupling, Formulation, LinkModel, Machine, ModalDamping};
 use flexprr_integrators::Options;
 use flexprr_kinematics::{
     Branch, Circle, Geometry, Guide, Leg, Line, PointToPoint, Pose, Profile, Trajectory,
@@ -31,9 +29,8 @@ use crate::locate::{locate, locate_value};
 use crate::parse::parse_scene;
 use crate::registry::{BasisParams, MethodHandle, Registry, quoted_list};
 use crate::schema::{
-    BranchChoice, CouplingChoice, FormulationChoice, Layout, LinksConfig, MachineConfig,
-    ModelConfig, OutputKind, ProfileChoice, SceneFile, StiffnessChoice, TimeConfig,
-    TrajectoryConfig,
+    BranchChoice, FormulationChoice, Layout, LinksConfig, MachineConfig, ModelConfig, OutputKind,
+    ProfileChoice, SceneFile, StiffnessChoice, TimeConfig, TrajectoryConfig,
 };
 
 /// A validated, built scene: ready to run.
@@ -63,8 +60,9 @@ pub struct Scene {
     pub stop_times: Vec<f64>,
     /// Requested outputs.
     pub outputs: BTreeSet<OutputKind>,
-    /// KED (prescribed rigid motion) or the coupled model.
-    pub coupling: CouplingModel,
+    /// The registered model kind `model.coupling` names (KED, coupled, nonlinear or a
+    /// program's own), with its capabilities.
+    pub coupling: crate::ModelKindHandle,
     /// Mean axial stiffness `EA` of the links (N), for the coupled model's stretch output.
     pub axial_stiffness: f64,
     /// Linear analyses at rest keep the coupled model's chords axially rigid (the paper's
@@ -305,21 +303,23 @@ impl Scene {
     ) -> Result<Self, ScenarioError> {
         let c = Checker { file, text };
         let name = scene_name(&c, raw.name.as_deref(), default_name)?;
+        let kind = model_kind(&c, registry, &raw.model)?;
+        let caps = kind.capabilities();
         let link = build_link(&c, registry, &raw.links)?;
         // Mean cross-section area from the bare link's mass: EA for the coupled model's
         // stretch output (the patches' layers carry no axial load).
         let links = &raw.links;
         let axial_stiffness =
             links.material.youngs_modulus * link.mass() / (links.length * links.material.density);
-        let link_models = crate::piezo::with_patch_layers(&c, &raw, link)?;
+        let link_models = crate::piezo::with_patch_layers(&c, &raw, link, caps)?;
         let machine = build_machine(&c, &raw.machine, link_models)?;
         let output_times = build_times(&c, &raw.time)?;
         let stop_times = build_stops(&c, &raw.time, &output_times)?;
         let trajectory = build_trajectory_checked(&c, &raw.trajectory, &machine, &output_times)?;
-        let model = build_model_section(&c, registry, &raw.model, machine.links[0].modes())?;
-        let large_deflection = build_large_deflection(&c, &raw.model, &raw.links)?;
-        let rigid_chords = rigid_chords(&c, &raw.model)?;
-        let control = build_control(&c, registry, &raw, model.coupling)?;
+        let model = build_model_section(&c, registry, &raw.model, machine.links[0].modes(), kind)?;
+        let large_deflection = build_large_deflection(&c, &raw.model, &raw.links, caps)?;
+        let rigid_chords = rigid_chords(&c, &raw.model, caps)?;
+        let control = build_control(&c, registry, &raw, caps)?;
         let piezo = crate::piezo::build_piezo(&c, registry, &raw, &machine)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
         let span = (output_times[0], output_times[output_times.len() - 1]);
@@ -347,13 +347,13 @@ impl Scene {
         let method = registry
             .resolve_method_for(
                 method.name(),
-                model.coupling == CouplingModel::Ked && piezo.patches.is_empty(),
-                crate::mechanical_model(model.coupling, control.controller.as_ref()),
+                caps.linear_in_state && piezo.patches.is_empty(),
+                crate::mechanical_model(&model.coupling, control.controller.as_ref()),
                 &model_name,
             )
             .map_err(|m| c.value_error("integrator.method", m))?;
         let options = spectral_radius(&c, registry, &raw.integrator, method.name(), options)?;
-        let outputs = build_outputs(&c, &raw)?;
+        let outputs = build_outputs(&c, &raw, caps)?;
         crate::plan::check_plan(&c, &raw, &machine, span)?;
         Ok(Scene {
             name,
@@ -433,8 +433,9 @@ pub(crate) fn build_patches(
     registry: &Registry,
     raw: &SceneFile,
 ) -> Result<(), ScenarioError> {
+    let caps = model_kind(c, registry, &raw.model)?.capabilities();
     let link = build_link(c, registry, &raw.links)?;
-    let link_models = crate::piezo::with_patch_layers(c, raw, link)?;
+    let link_models = crate::piezo::with_patch_layers(c, raw, link, caps)?;
     let machine = build_machine(c, &raw.machine, link_models)?;
     crate::piezo::build_piezo(c, registry, raw, &machine).map(|_| ())
 }
@@ -686,7 +687,25 @@ struct ModelParts {
     formulation: Formulation,
     axial_model: Arc<dyn AxialForceModel>,
     damping: ModalDamping,
-    coupling: CouplingModel,
+    coupling: crate::ModelKindHandle,
+}
+
+/// The registered model kind `model.coupling` names.
+fn model_kind(
+    c: &Checker<'_>,
+    registry: &Registry,
+    mo: &ModelConfig,
+) -> Result<crate::ModelKindHandle, ScenarioError> {
+    registry.model_kind(&mo.coupling).ok_or_else(|| {
+        c.value_error(
+            "model.coupling",
+            format!(
+                "unknown model \"{}\", expected one of {}",
+                mo.coupling,
+                quoted_list(&registry.model_kind_names())
+            ),
+        )
+    })
 }
 
 /// `[model]`: formulation preset and overrides, the registered axial force model, damping
@@ -696,7 +715,9 @@ fn build_model_section(
     registry: &Registry,
     mo: &ModelConfig,
     modes: usize,
+    coupling: crate::ModelKindHandle,
 ) -> Result<ModelParts, ScenarioError> {
+    let caps = coupling.capabilities();
     let mut formulation = match mo.formulation {
         FormulationChoice::Paper => Formulation::paper(),
         FormulationChoice::Consistent => Formulation::consistent(),
@@ -747,20 +768,14 @@ fn build_model_section(
             ),
         ));
     }
-    let coupling = match mo.coupling {
-        CouplingChoice::Ked => CouplingModel::Ked,
-        CouplingChoice::Coupled => CouplingModel::Coupled,
-        CouplingChoice::Nonlinear => CouplingModel::Nonlinear,
-    };
-    if coupling != CouplingModel::Ked && (formulation != Formulation::consistent() || custom_axial)
-    {
+    if caps.consistent_only && (formulation != Formulation::consistent() || custom_axial) {
         return Err(c.error(
             "model.coupling",
             "the coupled and nonlinear models are built on the consistent equations (actual chord tension, full Kp, \
              softening, no F_fg): set model.formulation = \"consistent\" without overrides",
         ));
     }
-    if coupling == CouplingModel::Nonlinear && !mo.damping.is_empty() {
+    if !caps.assumed_modes && !mo.damping.is_empty() {
         return Err(c.error(
             "model.damping",
             "the nonlinear model has no modes to damp: remove model.damping (model.axial_damping_time damps its axial strain rate)",
@@ -787,10 +802,14 @@ pub const DEFAULT_COLLAPSE_DEFLECTION: f64 = 0.1;
 
 /// `model.chords`: whether linear analyses at rest keep the coupled model's chords rigid;
 /// refused for the other models.
-fn rigid_chords(c: &Checker<'_>, mo: &ModelConfig) -> Result<bool, ScenarioError> {
+fn rigid_chords(
+    c: &Checker<'_>,
+    mo: &ModelConfig,
+    caps: crate::ModelCapabilities,
+) -> Result<bool, ScenarioError> {
     match mo.chords {
         None => Ok(false),
-        Some(_) if mo.coupling != CouplingChoice::Coupled => Err(c.error(
+        Some(_) if !caps.modal_machine() => Err(c.error(
             "model.chords",
             "the chords of linear analyses at rest are a setting of the coupled model (the nonlinear model's links stretch): set model.coupling = \"coupled\" or remove the key",
         )),
@@ -804,8 +823,9 @@ fn build_large_deflection(
     c: &Checker<'_>,
     mo: &ModelConfig,
     links: &crate::schema::LinksConfig,
+    caps: crate::ModelCapabilities,
 ) -> Result<LargeDeflection, ScenarioError> {
-    let nonlinear = mo.coupling == CouplingChoice::Nonlinear;
+    let nonlinear = !caps.assumed_modes;
     let elements = mo.elements.unwrap_or(DEFAULT_ELEMENTS);
     if mo.elements.is_some() && !nonlinear {
         return Err(c.error(
@@ -831,7 +851,7 @@ fn build_large_deflection(
         axial_damping_time,
         "time in seconds",
     )?;
-    if mo.collapse_deflection.is_some() && mo.coupling == CouplingChoice::Ked {
+    if mo.collapse_deflection.is_some() && !caps.free_platform {
         return Err(c.error(
             "model.collapse_deflection",
             "the KED model prescribes the rigid platform motion and cannot collapse: set model.coupling = \"coupled\" or \"nonlinear\", or remove the key",
@@ -966,7 +986,11 @@ fn build_integrator(
 }
 
 /// `[output]`: the requested outputs and deflection positions.
-fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind>, ScenarioError> {
+fn build_outputs(
+    c: &Checker<'_>,
+    raw: &SceneFile,
+    caps: crate::ModelCapabilities,
+) -> Result<BTreeSet<OutputKind>, ScenarioError> {
     for (k, xi) in raw.output.deflection_xi.iter().enumerate() {
         if !(0.0..=1.0).contains(xi) {
             return Err(c.error(
@@ -978,7 +1002,7 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
             ));
         }
     }
-    if raw.model.coupling == CouplingChoice::Ked {
+    if !caps.free_platform {
         let whole = OutputKind::MachineFrequencies;
         if let Some(k) = raw.output.requests.iter().position(|r| *r == whole) {
             return Err(c.value_error(
@@ -1004,7 +1028,7 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
             ));
         }
     }
-    if raw.model.coupling == CouplingChoice::Nonlinear {
+    if !caps.assumed_modes {
         let modal = [
             (OutputKind::Modes, "modes"),
             (OutputKind::ModalForces, "modal_forces"),

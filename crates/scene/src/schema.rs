@@ -402,19 +402,6 @@ pub enum StiffnessChoice {
     Full,
 }
 
-/// KED, coupled or geometrically nonlinear model.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum CouplingChoice {
-    /// Prescribed rigid motion (kineto-elastodynamics).
-    #[default]
-    Ked,
-    /// Platform moved by the links' foreshortening.
-    Coupled,
-    /// Co-rotational beam-element links and a free platform (large deflection).
-    Nonlinear,
-}
-
 /// How the coupled model's chords enter linear analyses at rest.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -448,9 +435,11 @@ pub struct ModelConfig {
     /// Modal damping ratios: one for all modes or one per mode.
     #[serde(default)]
     pub damping: Vec<f64>,
-    /// `"ked"` (prescribed rigid motion), `"coupled"` or `"nonlinear"`.
-    #[serde(default)]
-    pub coupling: CouplingChoice,
+    /// The registered model kind ([`crate::Registry::register_model_kind`]): `"ked"`
+    /// (prescribed rigid motion), `"coupled"` (platform moved by the links' foreshortening)
+    /// or `"nonlinear"` (co-rotational beam elements and a free platform) among the built-ins.
+    #[serde(default = "default_coupling")]
+    pub coupling: String,
     /// Nonlinear model only: co-rotational elements per link (even, at least 2; default 32).
     #[serde(default)]
     pub elements: Option<usize>,
@@ -477,7 +466,7 @@ impl Default for ModelConfig {
             coriolis_forcing: None,
             centrifugal_softening: None,
             damping: Vec::new(),
-            coupling: CouplingChoice::Ked,
+            coupling: default_coupling(),
             elements: None,
             collapse_deflection: None,
             axial_damping_time: None,
@@ -698,99 +687,7 @@ impl OutputKind {
     }
 }
 
-/// Which integrator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// Adams-Bashforth-Moulton.
-    Abm,
-    /// Dormand-Prince 5(4).
-    Rk45,
-    /// BDF.
-    Bdf,
-    /// Magnus, 4th order (linear models only).
-    Magnus4,
-    /// Magnus, 6th order (linear models only).
-    Magnus6,
-    /// `magnus6` for linear models, `abm` otherwise.
-    Auto,
-    /// Generalized-alpha (mechanical systems: the nonlinear model).
-    #[serde(rename = "generalized_alpha")]
-    GeneralizedAlpha,
-}
-
-impl Method {
-    /// Every built-in method.
-    pub const ALL: [Method; 7] = [
-        Method::Abm,
-        Method::Rk45,
-        Method::Bdf,
-        Method::Magnus4,
-        Method::Magnus6,
-        Method::Auto,
-        Method::GeneralizedAlpha,
-    ];
-
-    /// Parses a method name.
-    pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|m| m.name() == name)
-    }
-    /// Its name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Abm => "abm",
-            Method::Rk45 => "rk45",
-            Method::Bdf => "bdf",
-            Method::Magnus4 => "magnus4",
-            Method::Magnus6 => "magnus6",
-            Method::Auto => "auto",
-            Method::GeneralizedAlpha => "generalized_alpha",
-        }
-    }
-
-    /// The integrator this method names, with `options`, behind the object-safe adapter.
-    pub fn integrator(
-        self,
-        options: flexprr_integrators::Options,
-    ) -> Box<dyn flexprr_integrators::DynIntegrator> {
-        self.handle().integrator(options)
-    }
-
-    /// The registered handle of this built-in method.
-    pub fn handle(self) -> crate::MethodHandle {
-        crate::Registry::default()
-            .method(self.name())
-            .unwrap_or_else(|| unreachable!("the default registry holds every built-in method"))
-    }
-
-    /// Integrates `system` from `y0` at `t_out[0]` with this method, output at `t_out`.
-    ///
-    /// # Errors
-    /// The integrator's error (a linear-only method on a system without a linear form is
-    /// [`flexprr_integrators::IntegratorError::InvalidInput`]).
-    pub fn solve<S: flexprr_integrators::OdeSystem>(
-        self,
-        options: flexprr_integrators::Options,
-        system: &mut S,
-        y0: &[f64],
-        t_out: &[f64],
-    ) -> Result<flexprr_integrators::Solution, flexprr_integrators::IntegratorError> {
-        use flexprr_integrators::{Abm, Bdf, GeneralizedAlpha, Integrator, Magnus, Rk45};
-        let t0 = t_out[0];
-        match self {
-            Method::Abm => Abm::new(options).solve(system, t0, y0, t_out),
-            Method::Rk45 => Rk45::new(options).solve(system, t0, y0, t_out),
-            Method::Bdf => Bdf::new(options).solve(system, t0, y0, t_out),
-            Method::Magnus4 => Magnus::magnus4(options).solve(system, t0, y0, t_out),
-            Method::Magnus6 => Magnus::magnus6(options).solve(system, t0, y0, t_out),
-            Method::GeneralizedAlpha => GeneralizedAlpha::new(options).solve(system, t0, y0, t_out),
-            Method::Auto => {
-                if system.linear_form().is_some() {
-                    Magnus::magnus6(options).solve(system, t0, y0, t_out)
-                } else {
-                    Abm::new(options).solve(system, t0, y0, t_out)
-                }
-            }
-        }
-    }
+/// `model.coupling` when not given: the KED model.
+fn default_coupling() -> String {
+    "ked".to_string()
 }

@@ -1,8 +1,8 @@
 //! What a work-precision measurement measures: the models side by side, the methods, the
 //! tolerance ladder, the error measure and how the reference is computed.
 
-use flexprr_dynamics::{CouplingModel, Formulation};
-use flexprr_scene::{Method, ScenarioError, Scene};
+use flexprr_dynamics::Formulation;
+use flexprr_scene::{MethodHandle, ScenarioError, Scene};
 
 use super::{DEFAULT_TOLERANCES, ErrorMeasure};
 
@@ -46,12 +46,17 @@ impl ModelChoice {
         }
     }
 
-    /// The scene's own model.
+    /// The scene's own model, by its capabilities: linear in its state (KED), links in
+    /// co-rotational elements (nonlinear), or links in assumed modes on a free platform
+    /// (coupled).
     pub fn of(scene: &Scene) -> Self {
-        match scene.coupling {
-            CouplingModel::Ked => Self::Ked,
-            CouplingModel::Coupled => Self::Coupled,
-            CouplingModel::Nonlinear => Self::Nonlinear(Some(scene.large_deflection.elements)),
+        let caps = scene.coupling.capabilities();
+        if caps.linear_in_state {
+            Self::Ked
+        } else if !caps.assumed_modes {
+            Self::Nonlinear(Some(scene.large_deflection.elements))
+        } else {
+            Self::Coupled
         }
     }
 
@@ -73,12 +78,12 @@ impl ModelChoice {
         }
     }
 
-    /// The model kind.
-    pub fn kind(self) -> CouplingModel {
+    /// The registered name of the model kind (`model.coupling`).
+    pub fn kind(self) -> &'static str {
         match self {
-            Self::Ked => CouplingModel::Ked,
-            Self::Coupled => CouplingModel::Coupled,
-            Self::Nonlinear(_) => CouplingModel::Nonlinear,
+            Self::Ked => "ked",
+            Self::Coupled => "coupled",
+            Self::Nonlinear(_) => "nonlinear",
         }
     }
 
@@ -99,7 +104,9 @@ impl ModelChoice {
     /// a scene whose formulation is not the consistent one (they are built on it).
     pub fn apply(self, scene: &Scene) -> Result<Scene, ScenarioError> {
         let mut out = scene.clone();
-        out.coupling = self.kind();
+        out.coupling = flexprr_scene::Registry::default()
+            .model_kind(self.kind())
+            .unwrap_or_else(|| unreachable!("{} is a built-in model kind", self.kind()));
         if let Some(n) = self.elements(scene) {
             out.large_deflection.elements = n;
         }
@@ -122,50 +129,50 @@ impl ModelChoice {
 /// How the reference of a model kind is computed by default: the method, its check, the
 /// relative tolerance and the accepted disagreement (in the error measure used).
 ///
-/// * KED: [`Method::Rk45`] at `1e-14` checked by [`Method::Abm`] at the same tolerance (a
+/// * KED: `rk45` at `1e-14` checked by `abm` at the same tolerance (a
 ///   one-step Runge-Kutta pair against a multistep Adams code, so their errors are
 ///   independent); agreement below `1e-9`.
-/// * Coupled: [`Method::Abm`] at `1e-14` checked by [`Method::Rk45`] at the same tolerance;
+/// * Coupled (and any other kind): `abm` at `1e-14` checked by `rk45` at the same tolerance;
 ///   agreement below `1e-9` (the 0.2 s coupled scene at 20 Hz: `8.7e-12` in deflections).
-/// * Nonlinear: [`Method::Abm`] at `1e-10` checked by [`Method::Rk45`] at the same
+/// * Nonlinear: `abm` at `1e-10` checked by `rk45` at the same
 ///   tolerance; agreement below `1e-8`. Tighter costs minutes per run: the elements' axial
 ///   modes hold both methods to small steps already at loose tolerances, and from `1e-10`
 ///   on the steps become accuracy-limited on top (32 elements over 20 ms: 376 000 ABM steps
 ///   at `1e-10`, 1 003 000 at `1e-11`; RK45 193 000 steps of six right-hand sides each at
 ///   `1e-10`).
-pub fn default_reference(kind: CouplingModel) -> ReferencePlan {
+pub fn default_reference(kind: &str) -> ReferencePlan {
     match kind {
-        CouplingModel::Ked => ReferencePlan {
-            method: Method::Rk45,
-            check_method: Method::Abm,
+        "ked" => ReferencePlan {
+            method: builtin("rk45"),
+            check_method: builtin("abm"),
             rtol: 1e-14,
             check_factor: 1.0,
             agreement_limit: 1e-9,
         },
-        CouplingModel::Coupled => ReferencePlan {
-            method: Method::Abm,
-            check_method: Method::Rk45,
-            rtol: 1e-14,
-            check_factor: 1.0,
-            agreement_limit: 1e-9,
-        },
-        CouplingModel::Nonlinear => ReferencePlan {
-            method: Method::Abm,
-            check_method: Method::Rk45,
+        "nonlinear" => ReferencePlan {
+            method: builtin("abm"),
+            check_method: builtin("rk45"),
             rtol: 1e-10,
             check_factor: 1.0,
             agreement_limit: 1e-8,
+        },
+        _ => ReferencePlan {
+            method: builtin("abm"),
+            check_method: builtin("rk45"),
+            rtol: 1e-14,
+            check_factor: 1.0,
+            agreement_limit: 1e-9,
         },
     }
 }
 
 /// How a reference is computed: see [`default_reference`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct ReferencePlan {
     /// Method of the reference.
-    pub method: Method,
+    pub method: MethodHandle,
     /// Method of its check.
-    pub check_method: Method,
+    pub check_method: MethodHandle,
     /// Relative tolerance of the reference.
     pub rtol: f64,
     /// The check's tolerance over the reference's (1 for a second method, 0.1 for the same
@@ -180,8 +187,9 @@ pub struct ReferencePlan {
 pub struct WorkPrecisionConfig {
     /// Relative tolerances of the ladder (loose to tight).
     pub tolerances: Vec<f64>,
-    /// Methods to measure.
-    pub methods: Vec<Method>,
+    /// Methods to measure: registered integrators ([`flexprr_scene::Registry::method`]), so
+    /// a program's own integrator is measured like a built-in one.
+    pub methods: Vec<MethodHandle>,
     /// Models to measure, side by side; empty: the scene's own model.
     pub models: Vec<ModelChoice>,
     /// Model of the reference; `None`: the most faithful of [`Self::models`] (the scene's own
@@ -206,14 +214,10 @@ impl Default for WorkPrecisionConfig {
     fn default() -> Self {
         Self {
             tolerances: DEFAULT_TOLERANCES.to_vec(),
-            methods: vec![
-                Method::Abm,
-                Method::Rk45,
-                Method::Bdf,
-                Method::Magnus4,
-                Method::Magnus6,
-                Method::Auto,
-            ],
+            methods: ["abm", "rk45", "bdf", "magnus4", "magnus6", "auto"]
+                .into_iter()
+                .map(builtin)
+                .collect(),
             models: Vec::new(),
             reference_model: None,
             error: None,
@@ -372,6 +376,16 @@ impl WorkPrecisionConfig {
         }
         Ok(plan)
     }
+}
+
+/// The built-in integrator `name` of [`flexprr_scene::Registry::default`].
+///
+/// # Panics
+/// If `name` is not a built-in integrator (a programming error: callers name built-ins).
+pub fn builtin(name: &str) -> MethodHandle {
+    flexprr_scene::Registry::default()
+        .method(name)
+        .unwrap_or_else(|| unreachable!("{name} is a built-in integrator"))
 }
 
 /// The first element of `items` equal (by `same`) to an earlier one.

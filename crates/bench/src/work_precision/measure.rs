@@ -5,7 +5,7 @@ use std::time::Instant as Clock;
 
 use flexprr_dynamics::SceneModel;
 use flexprr_integrators::{Options, Solution};
-use flexprr_scene::{Method, ScenarioError, Scene};
+use flexprr_scene::{MethodHandle, ScenarioError, Scene};
 use serde::{Deserialize, Serialize};
 
 use super::config::first_repeat;
@@ -174,7 +174,7 @@ pub fn measure(
         } else {
             format!("{label}: ")
         };
-        for &method in &config.methods {
+        for method in &config.methods {
             // A linear-only method (magnus4, magnus6) does not apply to a coupled or
             // nonlinear model: said once, not once per tolerance.
             if let Err(why) = method_applies(&model_scene, method) {
@@ -216,7 +216,7 @@ fn measure_point(
     model: &mut dyn SceneModel,
     reference: &Reference,
     config: &WorkPrecisionConfig,
-    method: Method,
+    method: &MethodHandle,
     rtol: f64,
 ) -> Result<WorkPrecisionRow, String> {
     let atol = reference.atol(rtol);
@@ -253,16 +253,20 @@ fn measure_point(
 }
 
 /// Whether `method` can integrate the model of `scene`: the scene's own rule
-/// ([`flexprr_scene::Registry::resolve_method`]: a linear-only method needs the KED model).
+/// ([`flexprr_scene::Registry::resolve_method`]: a linear-only method needs the KED model),
+/// with `method` registered beside the built-ins (so a registered integrator is judged by its
+/// own kind).
 ///
 /// # Errors
 /// The registry's one-line reason.
-pub fn method_applies(scene: &Scene, method: Method) -> Result<(), String> {
-    flexprr_scene::Registry::default()
+pub fn method_applies(scene: &Scene, method: &MethodHandle) -> Result<(), String> {
+    let mut registry = flexprr_scene::Registry::default();
+    registry.register_method(method);
+    registry
         .resolve_method_for(
             method.name(),
-            scene.coupling == flexprr_dynamics::CouplingModel::Ked,
-            flexprr_scene::mechanical_model(scene.coupling, scene.controller.as_ref()),
+            scene.coupling.capabilities().linear_in_state,
+            flexprr_scene::mechanical_model(&scene.coupling, scene.controller.as_ref()),
             scene.coupling.name(),
         )
         .map(|_| ())
@@ -294,7 +298,7 @@ pub fn work_precision(
 fn solve(
     scene: &Scene,
     model: &mut dyn SceneModel,
-    method: Method,
+    method: &MethodHandle,
     options: Options,
 ) -> Result<Solution, String> {
     let _ = model.take_failure();
@@ -302,10 +306,7 @@ fn solve(
     let t_out = &scene.output_times;
     let y0 = model.initial_state();
     let stops = flexprr_run::stop_times(scene);
-    let handle = flexprr_scene::Registry::default()
-        .method(method.name())
-        .ok_or_else(|| format!("no integrator {:?} in the default registry", method.name()))?;
-    handle
+    method
         .integrator(options)
         .solve_dyn(model, t_out[0], &y0, t_out, &stops, &mut ())
         .map_err(|interrupted| match model.take_failure() {

@@ -47,7 +47,7 @@ pub mod measure;
 pub mod reference;
 pub mod report;
 
-pub use config::{ModelChoice, ReferencePlan, WorkPrecisionConfig, default_reference};
+pub use config::{ModelChoice, ReferencePlan, WorkPrecisionConfig, builtin, default_reference};
 pub use measure::{
     Timing, WorkPrecision, WorkPrecisionRow, measure, method_applies, time_runs, work_precision,
 };

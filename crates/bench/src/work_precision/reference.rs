@@ -5,7 +5,7 @@ use std::path::Path;
 
 use flexprr_dynamics::SceneModel;
 use flexprr_integrators::{Options, Solution};
-use flexprr_scene::{Method, ScenarioError, Scene};
+use flexprr_scene::{MethodHandle, ScenarioError, Scene};
 
 use super::{DEFLECTION_XI, ErrorMeasure, WorkPrecisionConfig, build};
 
@@ -68,22 +68,14 @@ fn solve_reference(
     label: &str,
     role: &str,
     model: &mut dyn SceneModel,
-    method: Method,
+    method: &MethodHandle,
     options: Options,
 ) -> Result<Solution, ScenarioError> {
     let _ = model.take_failure();
     let rtol = options.rtol;
-    let handle = flexprr_scene::Registry::default()
-        .method(method.name())
-        .ok_or_else(|| {
-            ScenarioError::Run(format!(
-                "no integrator {:?} in the default registry",
-                method.name()
-            ))
-        })?;
     let integration = flexprr_run::integrate_model(
         scene,
-        handle.integrator(options).as_ref(),
+        method.integrator(options).as_ref(),
         model,
         &mut |_| {},
     );
@@ -327,7 +319,7 @@ impl Reference {
             &label,
             "pilot run",
             system.as_mut(),
-            Method::Abm,
+            &crate::work_precision::config::builtin("abm"),
             model_scene.options.clone().rtol(pilot_rtol),
         )?;
         let pilot = Self::from_solution(measure, system.as_mut(), pilot)
@@ -340,7 +332,7 @@ impl Reference {
             &label,
             "reference",
             system.as_mut(),
-            plan.method,
+            &plan.method,
             options(plan.rtol),
         )?;
         let check = solve_reference(
@@ -348,7 +340,7 @@ impl Reference {
             &label,
             "check",
             system.as_mut(),
-            plan.check_method,
+            &plan.check_method,
             options(check_rtol),
         )?;
         let mut reference = Self::from_solution(measure, system.as_mut(), main)

@@ -13,8 +13,14 @@ use crate::{
 /// coupled model, whose coefficients depend on the state, so the Magnus expansion of a
 /// linear operator does not apply).
 ///
-/// The choice costs one call of `linear_form` and `second_order_form` per solve. [`Auto::choose`] tells which method a
-/// system gets, so that a caller can record the method actually used.
+/// This is the one definition of `auto` in the workspace: the scene registry names the same
+/// three methods ([`Auto::LINEAR`], [`Auto::MECHANICAL`], [`Auto::GENERAL`]) and resolves
+/// `auto` at load from the model's capabilities, which predict the two forms this type asks
+/// the system for, so a run records the method actually used.
+///
+/// The choice costs one call of `linear_form` and `second_order_form` per solve.
+/// [`Auto::choose`] tells which method a system gets, so that a caller can record the method
+/// actually used.
 ///
 /// ```
 /// use flexprr_integrators::{Auto, DynIntegrator, OdeSystem, Options};
@@ -26,7 +32,7 @@ use crate::{
 ///     fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) { dy[0] = -y[0] * y[0]; }
 /// }
 /// let auto = Auto::new(Options::default().rtol(1e-10).atol(1e-12));
-/// assert_eq!(auto.choose(&mut Riccati).name(), "abm");
+/// assert_eq!(auto.choose(&mut Riccati).name(), Auto::GENERAL);
 /// // y(t) = 1 / (1 + t)
 /// let sol = auto.solve_dyn(&mut Riccati, 0.0, &[1.0], &[0.0, 1.0], &[], &mut ()).unwrap();
 /// assert!((sol.y(1)[0] - 0.5).abs() < 1e-8);
@@ -39,6 +45,13 @@ pub struct Auto {
 }
 
 impl Auto {
+    /// Registered name of the method for systems linear in the state.
+    pub const LINEAR: &'static str = "magnus6";
+    /// Registered name of the method for systems with a mechanical form over the whole state.
+    pub const MECHANICAL: &'static str = "generalized_alpha";
+    /// Registered name of the method for every other system.
+    pub const GENERAL: &'static str = "abm";
+
     /// `auto` with the 6th-order Magnus method for linear systems (the faster of the two
     /// orders on the KED scenes, see docs/performance.md), generalized-alpha for mechanical
     /// systems and ABM otherwise.

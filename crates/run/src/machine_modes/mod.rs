@@ -131,7 +131,7 @@ pub const TRUNCATION_MARGIN: f64 = 1.5;
 impl Truncation {
     /// The truncation of `scene`'s links, for a model in assumed modes.
     pub fn of(scene: &Scene) -> Option<Self> {
-        if scene.coupling != flexprr_dynamics::CouplingModel::Coupled {
+        if !scene.coupling.capabilities().modal_machine() {
             return None;
         }
         scene
