@@ -23,17 +23,100 @@
 use crate::ControlError;
 use crate::error::check;
 
+/// A named signal an actuator reports beside its force (a motor's torque and speed, a
+/// linear motor's current, ...): one column per slider in `actuators.csv`, headed
+/// `{name}_{slider}_{header_unit}` (`motor_torque_1_N_m`), and the name a run's summary and
+/// channels reach it by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ActuatorSignal {
+    /// The name: an identifier (`motor_torque`).
+    pub name: &'static str,
+    /// The unit as written in a CSV header (`N_m`, `rev_s`, `flag` for a 0/1 signal).
+    pub header_unit: &'static str,
+    /// The plot symbol (`τ`).
+    pub symbol: &'static str,
+    /// The unit as written in plot labels (`N·m`).
+    pub unit: &'static str,
+}
+
+/// The most signals one actuator reports: [`ActuatorOutput`] holds their values inline, so
+/// that applying an actuator never allocates.
+pub const MAX_ACTUATOR_SIGNALS: usize = 6;
+
+/// Name of the motor torque signal of [`MotorBallScrew`] (N m, after saturation).
+pub const MOTOR_TORQUE: &str = "motor_torque";
+/// Name of the motor speed signal of [`MotorBallScrew`] (rev/s).
+pub const MOTOR_SPEED: &str = "motor_speed";
+
+/// The signals of [`MotorBallScrew`]: torque after saturation, speed, and whether the
+/// torque command was clipped at the peak (1) or not (0).
+pub const MOTOR_SIGNALS: [ActuatorSignal; 3] = [
+    ActuatorSignal {
+        name: MOTOR_TORQUE,
+        header_unit: "N_m",
+        symbol: "τ",
+        unit: "N·m",
+    },
+    ActuatorSignal {
+        name: MOTOR_SPEED,
+        header_unit: "rev_s",
+        symbol: "n",
+        unit: "rev/s",
+    },
+    ActuatorSignal {
+        name: "motor_saturated",
+        header_unit: "flag",
+        symbol: "sat",
+        unit: "1",
+    },
+];
+
 /// What an actuator does at one instant.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ActuatorOutput {
     /// Force on the slider along its guide (N).
     pub force: f64,
-    /// Motor torque after saturation (N m), where a motor is modelled.
-    pub torque: Option<f64>,
-    /// Motor speed (rev/s), where a motor is modelled.
-    pub motor_speed: Option<f64>,
     /// Whether the command was beyond the actuator's limit and was clipped.
     pub saturated: bool,
+    /// The actuator's own signals ([`Actuator::signals`]); `values[k]` is the value of
+    /// `signals[k]`.
+    pub signals: &'static [ActuatorSignal],
+    /// The signals' values, in the order of `signals` (the rest unused).
+    pub values: [f64; MAX_ACTUATOR_SIGNALS],
+}
+
+impl ActuatorOutput {
+    /// A force with the values `values` of the signals `signals` (as many values as
+    /// signals; at most [`MAX_ACTUATOR_SIGNALS`], extra signals are dropped).
+    pub fn with_signals(
+        force: f64,
+        saturated: bool,
+        signals: &'static [ActuatorSignal],
+        values: &[f64],
+    ) -> Self {
+        let n = signals.len().min(values.len()).min(MAX_ACTUATOR_SIGNALS);
+        let mut out = [0.0; MAX_ACTUATOR_SIGNALS];
+        out[..n].copy_from_slice(&values[..n]);
+        Self {
+            force,
+            saturated,
+            signals: &signals[..n],
+            values: out,
+        }
+    }
+
+    /// The value of the signal `name`, if the actuator reports it.
+    pub fn signal(&self, name: &str) -> Option<f64> {
+        self.signals
+            .iter()
+            .position(|s| s.name == name)
+            .map(|k| self.values[k])
+    }
+
+    /// The signals with their values, in the actuator's order.
+    pub fn signal_values(&self) -> impl Iterator<Item = (&'static ActuatorSignal, f64)> + '_ {
+        self.signals.iter().zip(self.values)
+    }
 }
 
 /// The ratings a motion is checked against.
@@ -50,10 +133,16 @@ pub struct MotorRatings {
 /// An actuator of one slider.
 ///
 /// Required: the force on the slider for a force command at a slider velocity, and a name.
-/// Provided: no reflected mass, no limit, no ratings (an ideal force).
+/// Provided: no signals besides the force, no reflected mass, no limit, no ratings (an ideal
+/// force). A scene names an actuator through a factory registered in the scene layer
+/// (`flexprr_scene::ActuatorFactory`).
 ///
 /// ```
-/// use flexprr_control::{Actuator, ActuatorOutput};
+/// use flexprr_control::{Actuator, ActuatorOutput, ActuatorSignal};
+///
+/// /// The part of the command it clips (N), reported as a signal.
+/// const CLIPPED: [ActuatorSignal; 1] =
+///     [ActuatorSignal { name: "clipped_force", header_unit: "N", symbol: "ΔF", unit: "N" }];
 ///
 /// /// An ideal force that clips at 500 N.
 /// #[derive(Debug)]
@@ -61,12 +150,15 @@ pub struct MotorRatings {
 /// impl Actuator for Clipped {
 ///     fn apply(&self, command: f64, _velocity: f64) -> ActuatorOutput {
 ///         let force = command.clamp(-500.0, 500.0);
-///         ActuatorOutput { force, saturated: command.abs() > 500.0, ..Default::default() }
+///         ActuatorOutput::with_signals(force, command.abs() > 500.0, &CLIPPED, &[command - force])
 ///     }
 ///     fn force_limit(&self) -> f64 { 500.0 }
 ///     fn name(&self) -> &'static str { "clipped" }
+///     fn signals(&self) -> &'static [ActuatorSignal] { &CLIPPED }
 /// }
-/// assert!(Clipped.apply(800.0, 0.0).saturated);
+/// let out = Clipped.apply(800.0, 0.0);
+/// assert!(out.saturated);
+/// assert_eq!(out.signal("clipped_force"), Some(300.0));
 /// ```
 pub trait Actuator: std::fmt::Debug + Send + Sync {
     /// The force on the slider (and the motor's state) for the force command `command` (N)
@@ -74,6 +166,11 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
     fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput;
     /// The actuator's name in scene files (`force`, `motor_ballscrew`).
     fn name(&self) -> &'static str;
+    /// The named signals [`Actuator::apply`] reports beside the force, in the order of
+    /// [`ActuatorOutput::values`] (at most [`MAX_ACTUATOR_SIGNALS`]). None by default.
+    fn signals(&self) -> &'static [ActuatorSignal] {
+        &[]
+    }
     /// Mass the actuator adds to the slider along its guide (kg): the reflected rotor inertia.
     fn reflected_mass(&self) -> f64 {
         0.0
@@ -339,12 +436,13 @@ impl Actuator for MotorBallScrew {
         let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
         let friction = self.viscous_friction * omega
             + self.coulomb_friction * (g * friction_velocity / smoothing).tanh();
-        ActuatorOutput {
-            force: g * self.efficiency * (torque - friction),
-            torque: Some(torque),
-            motor_speed: Some(velocity / self.lead),
-            saturated: wanted.abs() > peak,
-        }
+        let saturated = wanted.abs() > peak;
+        ActuatorOutput::with_signals(
+            g * self.efficiency * (torque - friction),
+            saturated,
+            &MOTOR_SIGNALS,
+            &[torque, velocity / self.lead, f64::from(u8::from(saturated))],
+        )
     }
     /// Within four smoothing speeds of rest (`|rho'| / p < 4 omega_s`), where
     /// `tanh(omega / omega_s)` is still 0.1 % or more short of the full Coulomb torque and
@@ -354,6 +452,9 @@ impl Actuator for MotorBallScrew {
     }
     fn name(&self) -> &'static str {
         "motor_ballscrew"
+    }
+    fn signals(&self) -> &'static [ActuatorSignal] {
+        &MOTOR_SIGNALS
     }
     fn reflected_mass(&self) -> f64 {
         let g = self.ratio();
@@ -413,9 +514,9 @@ mod tests {
         };
         let (v, f) = (0.5, 300.0);
         let out = frictionless.apply(f, v);
-        let (tau, omega) = (out.torque.unwrap(), g * v);
+        let (tau, omega) = (out.signal(MOTOR_TORQUE).unwrap(), g * v);
         assert!((out.force * v - 0.9 * tau * omega).abs() <= 1e-9 * f * v);
-        assert!((out.motor_speed.unwrap() - 50.0).abs() <= 1e-12);
+        assert!((out.signal(MOTOR_SPEED).unwrap() - 50.0).abs() <= 1e-12);
         // `required` inverts `apply` below the peak.
         let (torque, _) = m.required(f, v).unwrap();
         let back = m.apply(g * 0.9 * torque, v);
@@ -428,7 +529,7 @@ mod tests {
         let limit = m.force_limit();
         let out = m.apply(2.0 * limit, 0.0);
         assert!(out.saturated);
-        assert!((out.torque.unwrap() - 3.5).abs() <= 1e-12);
+        assert!((out.signal(MOTOR_TORQUE).unwrap() - 3.5).abs() <= 1e-12);
         assert!((out.force - limit).abs() <= 1e-9 * limit);
     }
 

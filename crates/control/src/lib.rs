@@ -22,7 +22,10 @@ mod error;
 mod pid;
 mod vibration;
 
-pub use actuator::{Actuator, ActuatorOutput, IdealForce, MotorBallScrew, MotorRatings};
+pub use actuator::{
+    Actuator, ActuatorOutput, ActuatorSignal, IdealForce, MAX_ACTUATOR_SIGNALS, MOTOR_SIGNALS,
+    MOTOR_SPEED, MOTOR_TORQUE, MotorBallScrew, MotorRatings,
+};
 pub use controller::{ControlInput, Controller, SliderState};
 pub use error::ControlError;
 pub use pid::Pid;

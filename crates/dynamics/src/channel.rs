@@ -409,7 +409,10 @@ pub fn check_output(
             let snapshot = model
                 .snapshot(t, y)
                 .map_err(|e| ChannelError(format!("{name}: {e}")))?;
-            match snapshot.actuators.map(|a| a[i].output.torque) {
+            match snapshot
+                .actuators
+                .map(|a| a[i].output.signal(flexprr_control::MOTOR_TORQUE))
+            {
                 Some(Some(_)) => Ok(()),
                 _ => Err(ChannelError(format!(
                     "{name}: slider {}'s actuator is an ideal force, without a motor (actuators.kind = \"motor_ballscrew\" has one)",
@@ -521,7 +524,7 @@ pub fn measure(
                     }
                     Output::MotorTorque(i) => s
                         .actuators
-                        .and_then(|a| a[i].output.torque)
+                        .and_then(|a| a[i].output.signal(flexprr_control::MOTOR_TORQUE))
                         .unwrap_or(f64::NAN),
                     Output::SliderCommand(i) => s.actuators.map_or(f64::NAN, |a| a[i].command),
                     Output::Platform(axis) => match axis {

@@ -123,6 +123,21 @@ pub enum Quantity {
     /// Mechanical power a patch's actuator delivers to its link (W; negative when it
     /// removes energy).
     PatchPower,
+    /// A quantity a layer above names itself (an actuator's signal): its own spelling.
+    Named(NamedQuantity),
+}
+
+/// The spelling of a [`Quantity::Named`]: header stem and unit, plot symbol and unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NamedQuantity {
+    /// Header stem (`motor_torque`).
+    pub stem: &'static str,
+    /// Unit as written in the header (`N_m`).
+    pub header_unit: &'static str,
+    /// Plot symbol (`τ`).
+    pub symbol: &'static str,
+    /// Unit as written in plot labels (`N·m`).
+    pub unit: &'static str,
 }
 
 /// How a quantity is written: header stem, optional suffix after the indices, unit, and the
@@ -211,6 +226,7 @@ impl Quantity {
             Q::PatchVoltage => sp("V_applied", None, "V", "V", "V"),
             Q::PatchSaturated => sp("patch_saturated", None, "flag", "sat", "1"),
             Q::PatchPower => sp("P_patch", None, "W", "P", "W"),
+            Q::Named(n) => sp(n.stem, None, n.header_unit, n.symbol, n.unit),
         }
     }
 

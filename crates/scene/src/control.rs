@@ -10,12 +10,12 @@
 
 use std::sync::Arc;
 
-use flexprr_control::{Actuator, Controller, IdealForce, MotorBallScrew, MotorRatings};
+use flexprr_control::{Actuator, Controller, IdealForce};
 
 use crate::error::ScenarioError;
 use crate::registry::{Registry, TableParams};
 use crate::scene::Checker;
-use crate::schema::{ActuatorsConfig, SceneFile};
+use crate::schema::SceneFile;
 
 /// What `[actuators]` and `[control]` build.
 pub(crate) struct ControlParts {
@@ -35,7 +35,10 @@ pub(crate) fn build_control(
     let actuator = raw
         .actuators
         .as_ref()
-        .map(|a| build_actuator(c, a))
+        .map(|a| {
+            let params = TableParams::new(c.file, c.text, "actuators", &a.params);
+            registry.build_actuator(&params, &a.kind)
+        })
         .transpose()?;
     let controller = match &raw.control {
         None => None,
@@ -61,44 +64,4 @@ pub(crate) fn build_control(
         actuator,
         controller,
     })
-}
-
-/// One actuator from `[actuators]`, its parameters checked at their keys.
-fn build_actuator(
-    c: &Checker<'_>,
-    config: &ActuatorsConfig,
-) -> Result<Arc<dyn Actuator>, ScenarioError> {
-    match *config {
-        ActuatorsConfig::Force {} => Ok(Arc::new(IdealForce)),
-        ActuatorsConfig::MotorBallscrew {
-            rotor_inertia,
-            lead,
-            efficiency,
-            peak_torque,
-            continuous_torque,
-            max_speed,
-            viscous_friction,
-            coulomb_friction,
-            coulomb_smoothing,
-        } => {
-            let motor = MotorBallScrew {
-                rotor_inertia,
-                lead,
-                efficiency,
-                ratings: MotorRatings {
-                    peak_torque,
-                    continuous_torque,
-                    max_speed,
-                },
-                viscous_friction,
-                coulomb_friction,
-                coulomb_smoothing,
-            }
-            .validated()
-            .map_err(|e| {
-                TableParams::new(c.file, c.text, "actuators", &toml::Table::new()).control_error(e)
-            })?;
-            Ok(Arc::new(motor))
-        }
-    }
 }

@@ -9,6 +9,7 @@
 //! assert_eq!(scene.name, "paper_f20");
 //! ```
 
+mod actuators;
 mod control;
 mod controllers;
 mod error;
@@ -28,6 +29,7 @@ pub mod setting;
 
 pub use flexprr_integrators::DynIntegrator;
 
+pub use actuators::ActuatorFactory;
 pub use controllers::{ControllerFactory, VibrationControllerFactory};
 pub use error::{Location, ScenarioError};
 pub use input::{
@@ -48,7 +50,7 @@ pub use scene::{
     DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, MAX_ANGLE_DEG, Scene,
 };
 pub use schema::{
-    ActuatorsConfig, BasisTable, BranchChoice, ControlTable, DEFAULT_COULOMB_SMOOTHING,
+    ActuatorsTable, BasisTable, BranchChoice, ControlTable, DEFAULT_COULOMB_SMOOTHING,
     FormulationChoice, IntegratorConfig, Layout, LegConfig, LinksConfig, MachineConfig,
     ModelConfig, OutputConfig, OutputKind, ProfileChoice, SceneFile, StiffnessChoice, TimeConfig,
     TrajectoryConfig,

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use flexprr_control::{MotorBallScrew, MotorRatings};
+use flexprr_control::MotorBallScrew;
 use flexprr_dynamics::Machine;
 use flexprr_kinematics::{
     Circle, CirclePath, GeometricPath, KinematicsError, Line, Path as _, PlannedData,
@@ -15,7 +15,7 @@ use flexprr_planning::{Boundary, PlanningError};
 
 use crate::error::ScenarioError;
 use crate::scene::Checker;
-use crate::schema::{ActuatorsConfig, ProfileChoice, SceneFile, TrajectoryConfig};
+use crate::schema::{ProfileChoice, SceneFile, TrajectoryConfig};
 
 /// The geometric path that the scene's trajectory sweeps over the span `[t0, t1]`
 /// (docs/planning.md, "Paths"): one revolution of a circle, the segment of a point-to-point
@@ -84,32 +84,10 @@ fn profile_of(choice: ProfileChoice) -> Profile {
 /// The scene's motor and ball screw (`[actuators] kind = "motor_ballscrew"`), whose ratings
 /// `[plan]` applies; `None` for any other actuator or none.
 pub fn motor_of(file: &SceneFile) -> Option<MotorBallScrew> {
-    match file.actuators.as_ref()? {
-        ActuatorsConfig::Force {} => None,
-        ActuatorsConfig::MotorBallscrew {
-            rotor_inertia,
-            lead,
-            efficiency,
-            peak_torque,
-            continuous_torque,
-            max_speed,
-            viscous_friction,
-            coulomb_friction,
-            coulomb_smoothing,
-        } => Some(MotorBallScrew {
-            rotor_inertia: *rotor_inertia,
-            lead: *lead,
-            efficiency: *efficiency,
-            ratings: MotorRatings {
-                peak_torque: *peak_torque,
-                continuous_torque: *continuous_torque,
-                max_speed: *max_speed,
-            },
-            viscous_friction: *viscous_friction,
-            coulomb_friction: *coulomb_friction,
-            coulomb_smoothing: *coulomb_smoothing,
-        }),
-    }
+    let table = file.actuators.as_ref()?;
+    (table.kind == "motor_ballscrew")
+        .then(|| crate::actuators::motor_ballscrew_of(&table.params))
+        .flatten()
 }
 
 /// A `planned` trajectory: the data's own checks, named by the field (`s_dot[12]`); a

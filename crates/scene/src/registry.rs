@@ -407,7 +407,8 @@ pub(crate) struct AxialEntry {
 /// `abm`, `rk45`, `bdf`, `generalized_alpha` (mechanical models), `magnus4`, `magnus6`
 /// (linear models only) and `auto`; bases `sine`,
 /// `classical`, `hermite`; axial force models `none`, `paper`, `joint-reaction`; control
-/// laws `pd` and `pid`; model kinds `ked`, `coupled` and `nonlinear`.
+/// laws `pd` and `pid`; model kinds `ked`, `coupled` and `nonlinear`; actuators `force` and
+/// `motor_ballscrew`.
 #[derive(Clone)]
 pub struct Registry {
     integrators: BTreeMap<String, IntegratorConstructor>,
@@ -417,6 +418,7 @@ pub struct Registry {
     controllers: BTreeMap<String, Arc<dyn ControllerFactory>>,
     vibration_controllers: BTreeMap<String, Arc<dyn VibrationControllerFactory>>,
     model_kinds: BTreeMap<String, Arc<dyn crate::ModelKind>>,
+    actuators: BTreeMap<String, Arc<dyn crate::ActuatorFactory>>,
 }
 
 impl fmt::Debug for Registry {
@@ -428,6 +430,7 @@ impl fmt::Debug for Registry {
             .field("controllers", &self.controller_names())
             .field("vibration_controllers", &self.vibration_controller_names())
             .field("model_kinds", &self.model_kind_names())
+            .field("actuators", &self.actuator_names())
             .finish()
     }
 }
@@ -468,6 +471,11 @@ impl Default for Registry {
         r.register_basis("sine", Arc::new(SineFactory));
         r.register_basis("classical", Arc::new(ClassicalFactory));
         r.register_basis("hermite", Arc::new(HermiteFactory));
+        r.register_actuator("force", Arc::new(crate::actuators::ForceFactory));
+        r.register_actuator(
+            "motor_ballscrew",
+            Arc::new(crate::actuators::MotorBallScrewFactory),
+        );
         r.register_controller("pd", Arc::new(PdFactory));
         r.register_controller("pid", Arc::new(PidFactory));
         r.register_vibration_controller("strain_rate", Arc::new(StrainRateFactory));
@@ -508,6 +516,7 @@ impl Registry {
             controllers: BTreeMap::new(),
             vibration_controllers: BTreeMap::new(),
             model_kinds: BTreeMap::new(),
+            actuators: BTreeMap::new(),
         }
     }
 
@@ -745,6 +754,45 @@ impl Registry {
                     quoted_list(&self.controller_names())
                 ),
             )
+        })?;
+        factory.build(at)
+    }
+
+    /// Registers (or replaces) the actuator kind `name` for `actuators.kind`.
+    pub fn register_actuator(&mut self, name: &str, factory: Arc<dyn crate::ActuatorFactory>) {
+        self.actuators.insert(name.to_string(), factory);
+    }
+
+    /// The factory of the actuator kind `name`.
+    pub fn actuator(&self, name: &str) -> Option<&Arc<dyn crate::ActuatorFactory>> {
+        self.actuators.get(name)
+    }
+
+    /// The registered actuator kinds, sorted.
+    pub fn actuator_names(&self) -> Vec<&str> {
+        self.actuators.keys().map(String::as_str).collect()
+    }
+
+    /// Builds the actuator of the table `at` (`actuators`): looks up `kind` and lets its
+    /// factory read its own keys.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] at the value of `kind` for an unknown kind (worded as the
+    /// scene parser words an unknown word), or the kind's own key errors.
+    pub fn build_actuator(
+        &self,
+        at: &TableParams<'_>,
+        kind: &str,
+    ) -> Result<Arc<dyn flexprr_control::Actuator>, ScenarioError> {
+        let factory = self.actuators.get(kind).ok_or_else(|| {
+            let names: Vec<String> = self.actuators.keys().map(|n| format!("`{n}`")).collect();
+            let expected = match names.as_slice() {
+                [] => "no kind is registered".to_string(),
+                [one] => format!("expected {one}"),
+                [a, b] => format!("expected {a} or {b}"),
+                all => format!("expected one of {}", all.join(", ")),
+            };
+            at.value_error("kind", format!("unknown variant `{kind}`, {expected}"))
         })?;
         factory.build(at)
     }

@@ -298,7 +298,7 @@ impl Scene {
         registry: &Registry,
         file: &str,
         text: &str,
-        raw: SceneFile,
+        mut raw: SceneFile,
         default_name: &str,
     ) -> Result<Self, ScenarioError> {
         let c = Checker { file, text };
@@ -320,6 +320,11 @@ impl Scene {
         let large_deflection = build_large_deflection(&c, &raw.model, &raw.links, caps)?;
         let rigid_chords = rigid_chords(&c, &raw.model, caps)?;
         let control = build_control(&c, registry, &raw, caps)?;
+        if let Some(table) = raw.actuators.as_mut()
+            && let Some(factory) = registry.actuator(&table.kind)
+        {
+            crate::actuators::complete(factory.as_ref(), table);
+        }
         let piezo = crate::piezo::build_piezo(&c, registry, &raw, &machine)?;
         let (method, options) = build_integrator(&c, registry, &raw)?;
         let span = (output_times[0], output_times[output_times.len() - 1]);

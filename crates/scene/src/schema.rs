@@ -41,7 +41,7 @@ pub struct SceneFile {
     /// The sliders' actuators (docs/control.md): without `[control]`, what the commanded
     /// motion is checked against (feasibility); with it, what drives the sliders.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub actuators: Option<ActuatorsConfig>,
+    pub actuators: Option<ActuatorsTable>,
     /// The control law of the sliders (docs/control.md): with it the sliders are degrees of
     /// freedom driven by the actuators (coupled and nonlinear models).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -56,46 +56,45 @@ pub struct SceneFile {
     pub plan: Option<flexprr_planning::PlanSpec>,
 }
 
-/// `[actuators]`: one actuator spec for all three sliders.
-#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum ActuatorsConfig {
-    /// An ideal force: the command is the force on the slider.
-    Force {},
-    /// A servo motor driving the slider through a ball screw.
-    MotorBallscrew {
-        /// Rotor (with coupling and screw) inertia (kg m^2).
-        rotor_inertia: f64,
-        /// Screw lead (m/rev).
-        lead: f64,
-        /// Screw efficiency, in (0, 1].
-        efficiency: f64,
-        /// Peak torque (N m): the torque saturates here.
-        peak_torque: f64,
-        /// Continuous torque (N m): the RMS torque should stay below it.
-        continuous_torque: f64,
-        /// Largest motor speed (rev/s): reported, not enforced.
-        max_speed: f64,
-        /// Viscous friction at the motor shaft (N m s/rad).
-        #[serde(default)]
-        viscous_friction: f64,
-        /// Coulomb friction torque at the motor shaft (N m).
-        #[serde(default)]
-        coulomb_friction: f64,
-        /// Speed of the Coulomb friction's tanh smoothing (rev/s).
-        #[serde(default = "default_coulomb_smoothing")]
-        coulomb_smoothing: f64,
-    },
+/// `[actuators]`: one actuator for all three sliders, the registered `kind` (`force`,
+/// `motor_ballscrew`, or one a program registered) and that kind's own keys. A loaded scene
+/// holds the keys as the kind completes them ([`crate::ActuatorFactory::canonical_keys`]:
+/// defaults filled in) and writes them back in the kind's order.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+pub struct ActuatorsTable {
+    /// Registered actuator kind.
+    pub kind: String,
+    /// The kind's own keys (each kind reads and checks them).
+    #[serde(flatten)]
+    pub params: toml::Table,
+    /// The order the keys are written back in (the rest follow, sorted).
+    #[serde(skip)]
+    pub order: Vec<String>,
+}
+
+impl Serialize for ActuatorsTable {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.params.len() + 1))?;
+        map.serialize_entry("kind", &self.kind)?;
+        for key in &self.order {
+            if let Some(value) = self.params.get(key) {
+                map.serialize_entry(key, value)?;
+            }
+        }
+        for (key, value) in &self.params {
+            if !self.order.contains(key) {
+                map.serialize_entry(key, value)?;
+            }
+        }
+        map.end()
+    }
 }
 
 /// Default smoothing speed of the Coulomb friction (rev/s): 0.01 rev/s is 0.6 rpm, so the
 /// friction has its full value (within 0.1 %) above 0.04 rev/s (2.4 rpm), far below any
 /// working speed, while the right-hand side stays continuous through rest.
 pub const DEFAULT_COULOMB_SMOOTHING: f64 = 0.01;
-
-fn default_coulomb_smoothing() -> f64 {
-    DEFAULT_COULOMB_SMOOTHING
-}
 
 /// `[control]`: the registered control law `kind` and that law's own keys.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]

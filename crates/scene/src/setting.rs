@@ -205,6 +205,13 @@ fn schema_error(
                 .build_controller(&params, &control.kind)
                 .map(|_| ())
         }
+        "actuators" => {
+            let actuators = parsed.actuators.as_ref()?;
+            let params = TableParams::new(file, &text, "actuators", &actuators.params);
+            registry
+                .build_actuator(&params, &actuators.kind)
+                .map(|_| ())
+        }
         "vibration_control" => {
             let c = crate::scene::Checker { file, text: &text };
             crate::scene::build_patches(&c, registry, &parsed)

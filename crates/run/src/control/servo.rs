@@ -2,7 +2,7 @@
 //! and, where a motor is modelled, its torque against the ratings, the saturated fraction
 //! of time and when the motor speed first exceeds its largest speed.
 
-use flexprr_control::MotorRatings;
+use flexprr_control::{MOTOR_SPEED, MOTOR_TORQUE, MotorRatings};
 use flexprr_dynamics::MachineSnapshot;
 use flexprr_scene::Scene;
 use serde_json::{Value, json};
@@ -75,8 +75,12 @@ impl ServoSummary {
                 .collect();
             let state = |k: usize| snapshots[k].actuators.map(|a| a[i]).unwrap_or_default();
             let force: Vec<f64> = (0..n).map(|k| state(k).output.force).collect();
-            let torque: Option<Vec<f64>> = (0..n).map(|k| state(k).output.torque).collect();
-            let speed: Option<Vec<f64>> = (0..n).map(|k| state(k).output.motor_speed).collect();
+            let torque: Option<Vec<f64>> = (0..n)
+                .map(|k| state(k).output.signal(MOTOR_TORQUE))
+                .collect();
+            let speed: Option<Vec<f64>> = (0..n)
+                .map(|k| state(k).output.signal(MOTOR_SPEED))
+                .collect();
             let saturated = (0..n).filter(|&k| state(k).output.saturated).count();
             let motor = torque.is_some() && n > 0;
             SliderSummary {

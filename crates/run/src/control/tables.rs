@@ -1,6 +1,7 @@
 //! The `tracking` and `actuators` tables.
 
-use flexprr_dynamics::{Column, MachineSnapshot, Quantity as Q, Table};
+use flexprr_control::{ActuatorSignal, MOTOR_SIGNALS};
+use flexprr_dynamics::{Column, MachineSnapshot, NamedQuantity, Quantity as Q, Table};
 
 use super::feasibility::Required;
 use crate::samples::Samples;
@@ -34,7 +35,7 @@ pub(crate) fn tracking(samples: &Samples, snapshots: &[MachineSnapshot]) -> Tabl
 }
 
 /// `actuators.csv` of an actuated model: per slider the force command and the force on the
-/// slider, and where a motor is modelled its torque, speed and saturation (0/1).
+/// slider, then the actuator's own signals (a motor's torque, speed and saturation, 0/1).
 pub(crate) fn actuators_of_model(snapshots: &[MachineSnapshot]) -> Table {
     let t: Vec<f64> = snapshots.iter().map(|s| s.t).collect();
     let mut table = Table::new("actuators", &t);
@@ -48,22 +49,35 @@ pub(crate) fn actuators_of_model(snapshots: &[MachineSnapshot]) -> Table {
             Column::link(Q::ActuatorForce, i),
             snapshots.iter().map(|s| state(s).output.force).collect(),
         );
-        let torque: Option<Vec<f64>> = snapshots.iter().map(|s| state(s).output.torque).collect();
-        let speed: Option<Vec<f64>> = snapshots
-            .iter()
-            .map(|s| state(s).output.motor_speed)
-            .collect();
-        if let (Some(torque), Some(speed)) = (torque, speed) {
-            table.push(Column::link(Q::MotorTorque, i), torque);
-            table.push(Column::link(Q::MotorSpeed, i), speed);
-            let saturated = snapshots
+        // The actuator's own signals (a motor's torque, speed and saturation), where every
+        // snapshot has them.
+        let signals = snapshots
+            .first()
+            .map_or(&[][..], |s| state(s).output.signals);
+        for (k, signal) in signals.iter().enumerate() {
+            let values: Option<Vec<f64>> = snapshots
                 .iter()
-                .map(|s| f64::from(u8::from(state(s).output.saturated)))
+                .map(|s| {
+                    let output = state(s).output;
+                    (output.signals.get(k) == Some(signal)).then_some(output.values[k])
+                })
                 .collect();
-            table.push(Column::link(Q::MotorSaturated, i), saturated);
+            if let Some(values) = values {
+                table.push(Column::link(signal_quantity(signal), i), values);
+            }
         }
     }
     table
+}
+
+/// The column quantity of an actuator's signal: its own name and units.
+fn signal_quantity(signal: &ActuatorSignal) -> Q {
+    Q::Named(NamedQuantity {
+        stem: signal.name,
+        header_unit: signal.header_unit,
+        symbol: signal.symbol,
+        unit: signal.unit,
+    })
 }
 
 /// `actuators.csv` of a model whose sliders are prescribed: what the actuators must deliver
@@ -77,14 +91,23 @@ pub(crate) fn actuators_required(samples: &Samples, required: &Required) -> Tabl
         table.push(Column::link(Q::ForceCommand, i), force.clone());
         table.push(Column::link(Q::ActuatorForce, i), force.clone());
         if let Some((torque, speed)) = &required.motor {
-            table.push(Column::link(Q::MotorTorque, i), torque[i].clone());
-            table.push(Column::link(Q::MotorSpeed, i), speed[i].clone());
+            table.push(
+                Column::link(signal_quantity(&MOTOR_SIGNALS[0]), i),
+                torque[i].clone(),
+            );
+            table.push(
+                Column::link(signal_quantity(&MOTOR_SIGNALS[1]), i),
+                speed[i].clone(),
+            );
             let peak = required.peak_torque.unwrap_or(f64::INFINITY);
             let saturated = torque[i]
                 .iter()
                 .map(|tau| f64::from(u8::from(tau.abs() > peak)))
                 .collect();
-            table.push(Column::link(Q::MotorSaturated, i), saturated);
+            table.push(
+                Column::link(signal_quantity(&MOTOR_SIGNALS[2]), i),
+                saturated,
+            );
         }
     }
     table

@@ -1,0 +1,194 @@
+//! Actuator kinds that a scene's `[actuators]` table names by `kind`: the factory trait and
+//! the built-in `force` and `motor_ballscrew` (docs/control.md).
+
+use std::sync::Arc;
+
+use flexprr_control::{Actuator, IdealForce, MotorBallScrew, MotorRatings};
+use serde::Deserialize;
+
+use crate::error::ScenarioError;
+use crate::registry::TableParams;
+use crate::schema::DEFAULT_COULOMB_SMOOTHING;
+
+/// A kind of actuator that a scene can name in `actuators.kind`: it reads its own keys from
+/// the `[actuators]` table (everything but `kind`) and builds the actuator of every slider.
+/// The actuator's named signals ([`Actuator::signals`]) become columns of `actuators.csv`.
+///
+/// Register one with [`crate::Registry::register_actuator`] and load scenes with
+/// [`crate::Scene::load_with`].
+///
+/// ```
+/// use std::sync::Arc;
+/// use flexprr_control::{Actuator, ActuatorOutput, ActuatorSignal};
+/// use flexprr_scene::{ActuatorFactory, Registry, ScenarioError, TableParams};
+///
+/// /// The force it delivers (N), reported as a signal.
+/// const GAIN: [ActuatorSignal; 1] =
+///     [ActuatorSignal { name: "scaled_command", header_unit: "N", symbol: "kF", unit: "N" }];
+///
+/// /// A force scaled by a gain `k` (an amplifier with a known gain error).
+/// #[derive(Debug)]
+/// struct Scaled(f64);
+/// impl Actuator for Scaled {
+///     fn apply(&self, command: f64, _velocity: f64) -> ActuatorOutput {
+///         let force = self.0 * command;
+///         ActuatorOutput::with_signals(force, false, &GAIN, &[force])
+///     }
+///     fn name(&self) -> &'static str { "scaled" }
+///     fn signals(&self) -> &'static [ActuatorSignal] { &GAIN }
+/// }
+///
+/// #[derive(serde::Deserialize)]
+/// #[serde(deny_unknown_fields)]
+/// struct Keys {
+///     k: f64,
+/// }
+///
+/// struct ScaledFactory;
+/// impl ActuatorFactory for ScaledFactory {
+///     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Actuator>, ScenarioError> {
+///         let keys: Keys = params.parse()?;
+///         if !(keys.k.is_finite() && keys.k > 0.0) {
+///             return Err(params.error("k", format!("must be finite and > 0, got {}", keys.k)));
+///         }
+///         Ok(Arc::new(Scaled(keys.k)))
+///     }
+/// }
+///
+/// let mut registry = Registry::default();
+/// registry.register_actuator("scaled", Arc::new(ScaledFactory));
+/// assert!(registry.actuator_names().contains(&"scaled"));
+/// ```
+pub trait ActuatorFactory: Send + Sync {
+    /// Builds the actuator from the keys of its table.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Input`] naming the offending key (use [`TableParams::error`], or
+    /// [`TableParams::control_error`] for a [`flexprr_control::ControlError`]).
+    fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Actuator>, ScenarioError>;
+
+    /// The keys of a table that [`ActuatorFactory::build`] accepted, as the loaded scene keeps
+    /// them and writes them back (`flexprr plan`'s `planned.toml`), in this order: a kind
+    /// with defaults fills them in. By default the keys as written, sorted.
+    fn canonical_keys(&self, params: &toml::Table) -> Vec<(String, toml::Value)> {
+        params.iter().map(|(k, v)| (k.clone(), v.clone())).collect()
+    }
+}
+
+/// Completes the scene's `[actuators]` table through its kind's
+/// [`ActuatorFactory::canonical_keys`] (after the kind built it).
+pub(crate) fn complete(factory: &dyn ActuatorFactory, table: &mut crate::ActuatorsTable) {
+    let keys = factory.canonical_keys(&table.params);
+    table.order = keys.iter().map(|(k, _)| k.clone()).collect();
+    table.params = keys.into_iter().collect();
+}
+
+/// `kind = "force"`: takes no keys.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ForceKeys {}
+
+/// `kind = "force"`: the ideal force.
+pub(crate) struct ForceFactory;
+
+impl ActuatorFactory for ForceFactory {
+    fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Actuator>, ScenarioError> {
+        let ForceKeys {} = params.parse()?;
+        Ok(Arc::new(IdealForce))
+    }
+}
+
+/// The keys of `kind = "motor_ballscrew"`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MotorKeys {
+    /// Rotor (with coupling and screw) inertia (kg m^2).
+    rotor_inertia: f64,
+    /// Screw lead (m/rev).
+    lead: f64,
+    /// Screw efficiency, in (0, 1].
+    efficiency: f64,
+    /// Peak torque (N m): the torque saturates here.
+    peak_torque: f64,
+    /// Continuous torque (N m): the RMS torque should stay below it.
+    continuous_torque: f64,
+    /// Largest motor speed (rev/s): reported, not enforced.
+    max_speed: f64,
+    /// Viscous friction at the motor shaft (N m s/rad).
+    #[serde(default)]
+    viscous_friction: f64,
+    /// Coulomb friction torque at the motor shaft (N m).
+    #[serde(default)]
+    coulomb_friction: f64,
+    /// Speed of the Coulomb friction's tanh smoothing (rev/s).
+    #[serde(default = "default_coulomb_smoothing")]
+    coulomb_smoothing: f64,
+}
+
+fn default_coulomb_smoothing() -> f64 {
+    DEFAULT_COULOMB_SMOOTHING
+}
+
+impl From<MotorKeys> for MotorBallScrew {
+    fn from(k: MotorKeys) -> Self {
+        MotorBallScrew {
+            rotor_inertia: k.rotor_inertia,
+            lead: k.lead,
+            efficiency: k.efficiency,
+            ratings: MotorRatings {
+                peak_torque: k.peak_torque,
+                continuous_torque: k.continuous_torque,
+                max_speed: k.max_speed,
+            },
+            viscous_friction: k.viscous_friction,
+            coulomb_friction: k.coulomb_friction,
+            coulomb_smoothing: k.coulomb_smoothing,
+        }
+    }
+}
+
+/// The motor and ball screw of the keys `params` of a `kind = "motor_ballscrew"` table, not
+/// yet validated; `None` if they do not read as one.
+pub(crate) fn motor_ballscrew_of(params: &toml::Table) -> Option<MotorBallScrew> {
+    params
+        .clone()
+        .try_into::<MotorKeys>()
+        .ok()
+        .map(MotorBallScrew::from)
+}
+
+/// `kind = "motor_ballscrew"`: a servo motor on a ball screw, every parameter checked at
+/// its key.
+pub(crate) struct MotorBallScrewFactory;
+
+impl ActuatorFactory for MotorBallScrewFactory {
+    fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Actuator>, ScenarioError> {
+        let keys: MotorKeys = params.parse()?;
+        let motor = MotorBallScrew::from(keys)
+            .validated()
+            .map_err(|e| params.control_error(e))?;
+        Ok(Arc::new(motor))
+    }
+
+    /// Every key, defaults filled in, as numbers (`max_speed = 100.0`), in the order of the
+    /// documentation.
+    fn canonical_keys(&self, params: &toml::Table) -> Vec<(String, toml::Value)> {
+        let Ok(k) = params.clone().try_into::<MotorKeys>() else {
+            return params.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+        };
+        [
+            ("rotor_inertia", k.rotor_inertia),
+            ("lead", k.lead),
+            ("efficiency", k.efficiency),
+            ("peak_torque", k.peak_torque),
+            ("continuous_torque", k.continuous_torque),
+            ("max_speed", k.max_speed),
+            ("viscous_friction", k.viscous_friction),
+            ("coulomb_friction", k.coulomb_friction),
+            ("coulomb_smoothing", k.coulomb_smoothing),
+        ]
+        .into_iter()
+        .map(|(key, value)| (key.to_string(), toml::Value::Float(value)))
+        .collect()
+    }
+}
