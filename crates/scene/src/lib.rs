@@ -17,6 +17,7 @@ pub mod link;
 pub mod link_file;
 mod locate;
 mod model;
+mod npz;
 mod parse;
 mod piezo;
 mod plan;
@@ -24,6 +25,7 @@ mod registry;
 mod scene;
 mod schema;
 pub mod setting;
+mod statespace_law;
 
 pub use flexprr_integrators::DynIntegrator;
 
