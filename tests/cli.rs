@@ -6,6 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "cli/margins.rs"]
+mod margins;
 #[path = "cli/plan.rs"]
 mod plan;
 

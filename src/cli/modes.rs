@@ -61,7 +61,7 @@ pub struct ModesArgs {
 }
 
 /// `X,Y,PHI_DEG` as a pose (m, m, rad).
-fn parse_pose(text: &str) -> Result<Pose, Failure> {
+pub(crate) fn parse_pose(text: &str) -> Result<Pose, Failure> {
     let bad = || {
         Failure::bad_input(format!(
             "--pose {text:?}: expected three finite numbers X_M,Y_M,PHI_DEG (m, m, deg), e.g. --pose -0.05,0,45"

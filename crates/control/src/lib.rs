@@ -20,10 +20,12 @@ mod actuator;
 mod controller;
 mod error;
 mod pid;
+mod statespace;
 mod vibration;
 
 pub use actuator::{Actuator, ActuatorOutput, IdealForce, MotorBallScrew, MotorRatings};
 pub use controller::{ControlInput, Controller, SliderState};
 pub use error::ControlError;
 pub use pid::Pid;
+pub use statespace::{MAX_MEASUREMENTS, SliderSignal, StateSpaceLaw, StateSpaceMatrices};
 pub use vibration::{ModalVelocity, StrainRate, VibrationController, VibrationInput};

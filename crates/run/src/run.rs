@@ -246,6 +246,9 @@ fn run_into(
             result.warnings.push(w);
         }
     }
+    if let Some(law) = &scene.controller {
+        result.warnings.extend(law.warnings());
+    }
     let c = ked.counters();
     result.stats.rhs_evaluations += c.rhs_evaluations;
     result.stats.inverse_dynamics_solves += c.inverse_dynamics_solves;

@@ -18,6 +18,7 @@ pub mod link_file;
 mod locate;
 mod model;
 mod model_kind;
+mod npz;
 mod parse;
 mod piezo;
 mod plan;
@@ -25,6 +26,7 @@ mod registry;
 mod scene;
 mod schema;
 pub mod setting;
+mod statespace_law;
 
 pub use flexprr_integrators::DynIntegrator;
 
