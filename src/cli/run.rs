@@ -4,8 +4,9 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use flexprr_outdir::OutputDir;
 use flexprr_run::{
-    OutputDir, RUN_PRODUCTS, RunResult, run as run_scene, table_one_markdown, write_outputs_into,
+    RUN_PRODUCTS, RunResult, run as run_scene, table_one_markdown, write_outputs_into,
 };
 use flexprr_scene::{InputKind, ScenarioError, Scene};
 

@@ -1,6 +1,6 @@
 //! Writing a run's results: one CSV per time series, `summary.json`, Table I and SVG plots.
 //!
-//! A run's directory is written whole, by the policy of [`crate::output_dir`]: every file
+//! A run's directory is written whole, by the policy of [`flexprr_outdir`]: every file
 //! goes into a staging directory, published at the end, so a crash never leaves a
 //! half-written directory and a second run never leaves stale files of the first. A
 //! directory flexprr did not write is refused unless the caller forces it, and even then
@@ -12,8 +12,8 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use crate::error::RunError;
-use crate::output_dir::{Legacy, OutputDir, Products};
 use crate::table::{RunResult, Table};
+use flexprr_outdir::{Legacy, OutputDir, Products};
 use flexprr_scene::ScenarioError;
 use flexprr_scene::Scene;
 
@@ -210,7 +210,7 @@ pub struct WriteOptions {
 }
 
 /// The files of a run (`docs/scenes.md`, "Outputs and their CSV columns" and "Plots"): what
-/// [`crate::output_dir`] refuses to write over when it finds them in a directory flexprr did
+/// [`flexprr_outdir`] refuses to write over when it finds them in a directory flexprr did
 /// not write, and what it recognises an earlier run's directory by.
 pub const RUN_PRODUCTS: Products = Products {
     kind: "run",
@@ -269,7 +269,7 @@ pub fn write_outputs(
 
 /// Writes every output of `result` (a complete run, or the partial outputs of a failed one
 /// with its `failure`) into `dir`, checked by [`OutputDir::check`] with the policy of
-/// [`crate::output_dir`]: CSV tables, `summary.json` with the status,
+/// [`flexprr_outdir`]: CSV tables, `summary.json` with the status,
 /// `table1.md`/`table1.csv` when frequencies were computed, SVG plots unless the scene turned
 /// them off. A command should rather check the directory before the run, with
 /// [`OutputDir::check`] and [`RUN_PRODUCTS`], and then call [`write_outputs_into`].
@@ -289,7 +289,7 @@ pub fn write_outputs_with(
 }
 
 /// Writes the outputs of `result` into a checked directory: into a staging directory first,
-/// published at the end ([`crate::output_dir::Staging::publish`]). Returns the paths written.
+/// published at the end ([`flexprr_outdir::Staging::publish`]). Returns the paths written.
 ///
 /// # Errors
 /// [`ScenarioError::Input`] (key `--out`) when a file would replace one flexprr did not

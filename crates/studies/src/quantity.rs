@@ -568,8 +568,8 @@ impl Quantity {
         &self,
         scene: &flexprr_scene::Scene,
     ) -> Option<Result<Vec<String>, String>> {
-        use flexprr_run::linear::OperatingPoint;
-        use flexprr_run::machine_modes::{lowest_frequency, start_pose};
+        use flexprr_linear_tools::linear::OperatingPoint;
+        use flexprr_linear_tools::machine_modes::{lowest_frequency, start_pose};
         match self {
             Quantity::LowestFrequency => Some(
                 lowest_frequency(scene, OperatingPoint::Rest(start_pose(scene)))
