@@ -17,7 +17,6 @@ use flexprr_dynamics::{FrequencyHistory, ModalSystem, SceneModel};
 use flexprr_integrators::Solution;
 use flexprr_linear::{LinearError, Mode, linearize, modes};
 use flexprr_plot::decimate::frame_indices;
-use flexprr_scene::ScenarioError;
 use serde_json::{Value, json};
 
 use crate::column::{Column, Quantity as Q};
@@ -86,9 +85,11 @@ pub(crate) struct MachineFrequencies {
 fn at_time(e: LinearError, t: f64) -> RunError {
     match e {
         LinearError::Model(e) => RunError::Model(e),
-        other => RunError::Scene(ScenarioError::Run(format!(
-            "machine_frequencies at t = {t} s: {other}"
-        ))),
+        source => RunError::Linear {
+            output: "machine_frequencies",
+            t,
+            source,
+        },
     }
 }
 

@@ -24,9 +24,19 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> ScenarioError + '_ {
     }
 }
 
-fn csv_bytes(table: &Table) -> Result<Vec<u8>, ScenarioError> {
+/// A failure to produce the bytes of output file `name` (a CSV record, an SVG figure whose
+/// data do not fit), as the I/O error of that file: it is the file that could not be written.
+fn unwritable(dir: &Path, name: &str, reason: impl std::fmt::Display) -> ScenarioError {
+    ScenarioError::Io {
+        path: dir.join(name).display().to_string(),
+        source: std::io::Error::other(reason.to_string()),
+    }
+}
+
+fn csv_bytes(table: &Table, dir: &Path) -> Result<Vec<u8>, ScenarioError> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let csv_err = |e: csv::Error| ScenarioError::Run(format!("writing {}.csv: {e}", table.name));
+    let file = format!("{}.csv", table.name);
+    let csv_err = |e: csv::Error| unwritable(dir, &file, e);
     w.write_record(table.headers()).map_err(csv_err)?;
     let mut row = Vec::with_capacity(table.columns.len());
     for k in 0..table.rows() {
@@ -34,8 +44,7 @@ fn csv_bytes(table: &Table) -> Result<Vec<u8>, ScenarioError> {
         row.extend(table.data.iter().map(|c| format!("{:.10e}", c[k])));
         w.write_record(&row).map_err(csv_err)?;
     }
-    w.into_inner()
-        .map_err(|e| ScenarioError::Run(format!("writing {}.csv: {e}", table.name)))
+    w.into_inner().map_err(|e| unwritable(dir, &file, e))
 }
 
 /// `null` for a non-finite number (JSON has none; the summary never shows `NaN` or `inf`).
@@ -327,7 +336,7 @@ fn write_files(
         write(
             &mut written,
             format!("{}.csv", table.name),
-            &csv_bytes(table)?,
+            &csv_bytes(table, dir)?,
         )?;
     }
     if let Some(md) = table_one_markdown(result) {
@@ -352,10 +361,8 @@ fn write_files(
     }
     if scene.file.output.plots {
         for (file, figure) in crate::plot::run_figures(scene, result) {
-            figure
-                .write_svg(&dir.join(&file))
-                .map_err(ScenarioError::Run)?;
-            written.push(file);
+            let svg = figure.to_svg().map_err(|e| unwritable(dir, &file, e))?;
+            write(&mut written, file, svg.as_bytes())?;
         }
     }
     for (name, text) in &result.documents {
