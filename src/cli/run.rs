@@ -187,8 +187,8 @@ fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path
             s.rhs_evaluations
         );
     }
-    if let Some(piezo) = &result.piezo {
-        print_piezo(piezo);
+    for line in result.reports.iter().flat_map(|r| r.print()) {
+        println!("{line}");
     }
     if let Some(table) = table_one_markdown(result) {
         println!("\nTable I (link 1 frequencies over the motion):\n{table}");
@@ -208,41 +208,6 @@ fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path
                 b.min_eigenvalue,
             );
         }
-    }
-}
-
-/// The patches' largest voltages and the reduction of the mid-point deflection.
-fn print_piezo(piezo: &flexprr_run::piezo::PiezoReport) {
-    for p in &piezo.patches {
-        println!(
-            "  patch {} of link {}: max |V| {:.1} V of {} V{}",
-            p.index + 1,
-            p.link + 1,
-            p.max_abs_voltage,
-            p.voltage_limit,
-            if p.saturated_fraction > 0.0 {
-                format!(
-                    ", saturated {:.1} % of the time",
-                    100.0 * p.saturated_fraction
-                )
-            } else {
-                String::new()
-            }
-        );
-    }
-    for l in piezo.reduction.iter().flatten() {
-        let percent = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.1} %"));
-        println!(
-            "  link {} mid-point deflection with/without {}: peak {:.3e}/{:.3e} m ({} lower), RMS {:.3e}/{:.3e} m ({} lower)",
-            l.link + 1,
-            piezo.law,
-            l.peak_controlled,
-            l.peak_uncontrolled,
-            percent(l.peak_reduction_percent()),
-            l.rms_controlled,
-            l.rms_uncontrolled,
-            percent(l.rms_reduction_percent()),
-        );
     }
 }
 

@@ -19,6 +19,7 @@ mod output;
 mod outputs;
 pub mod piezo;
 pub mod plot;
+pub mod report;
 mod run;
 mod samples;
 mod table;
@@ -32,5 +33,6 @@ pub use output::{
     RUN_PRODUCTS, WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs,
     write_outputs_into, write_outputs_with,
 };
+pub use report::{Report, SharedReport};
 pub use run::{integrate, run, run_model, scene_integrator};
 pub use table::{RunResult, RunStats, Table};

@@ -171,3 +171,18 @@ pub(crate) fn machine_frequencies(
         failure,
     }
 }
+
+impl crate::report::Report for MachineFrequencyNote {
+    fn name(&self) -> &'static str {
+        "machine_frequencies"
+    }
+
+    /// `machine_frequencies`.
+    fn sections(&self) -> Vec<(&'static str, Value)> {
+        vec![("machine_frequencies", self.to_json())]
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}

@@ -136,8 +136,7 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         })
         .collect();
     let (status, failure) = status_json(failure);
-    let (control, feasibility) = crate::control::summary_sections(result);
-    json!({
+    let mut summary = json!({
         "status": status,
         "failure": failure,
         "warnings": result.warnings,
@@ -163,19 +162,18 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         },
         "integrator": integrator,
         "frequencies": frequencies,
-        "control": control,
-        "feasibility": feasibility,
-        "vibration_control": result
-            .piezo
-            .as_ref()
-            .map_or(Value::Null, crate::piezo::PiezoReport::to_json),
-        "machine_frequencies": result
-            .machine_frequencies
-            .as_ref()
-            .map_or(Value::Null, |n| n.to_json()),
         "peak_abs": peaks,
         "scene_file": serde_json::to_value(&scene.file).unwrap_or(Value::Null),
-    })
+    });
+    if let Some(map) = summary.as_object_mut() {
+        for key in crate::report::BUILT_IN_SECTIONS {
+            map.insert((*key).to_string(), Value::Null);
+        }
+        for (key, value) in result.reports.iter().flat_map(|r| r.sections()) {
+            map.insert(key.to_string(), value);
+        }
+    }
+    summary
 }
 
 /// Whether a frequency range belongs to a rigid-body mode (free-free or pinned-free bases):

@@ -311,7 +311,9 @@ fn produce(
             report,
         );
         result.tables.extend(out.table);
-        result.machine_frequencies = out.note;
+        if let Some(note) = out.note {
+            result.add_report(note);
+        }
         if let Some(e) = out.failure {
             return Err(e);
         }

@@ -522,8 +522,7 @@ impl Quantity {
         match *self {
             Quantity::DeflectionReduction { .. } => {
                 let reduction = result
-                    .piezo
-                    .as_ref()
+                    .report::<flexprr_run::piezo::PiezoReport>()
                     .and_then(|p| p.reduction.as_ref())
                     .and_then(|r| r.get(i))
                     .ok_or_else(|| needs("deflections"))?;
@@ -543,8 +542,7 @@ impl Quantity {
             }
             Quantity::PatchVoltage => {
                 let piezo = result
-                    .piezo
-                    .as_ref()
+                    .report::<flexprr_run::piezo::PiezoReport>()
                     .ok_or_else(|| "quantity V_patch_max_V: the run has no patches".to_string())?;
                 let max = |f: fn(&flexprr_run::piezo::PatchSummary) -> f64| {
                     piezo.patches.iter().map(f).fold(0.0_f64, f64::max)

@@ -123,8 +123,7 @@ pub(crate) fn produce(
         }
         None => {}
     }
-    result.warnings.extend(report.warnings());
-    result.piezo = Some(report);
+    result.add_report(report);
     Ok(())
 }
 
