@@ -204,7 +204,7 @@ fn saturated_motors_on_the_20_hz_circle_let_the_mechanism_collapse() {
     let partial = &failure.partial;
     let rows = partial.table("actuators").expect("actuators").rows();
     assert!(rows > 1 && rows < scene.output_times.len());
-    let servo = flexprr_run::control::report_of(&partial)
+    let servo = flexprr_run::control::report_of(partial)
         .servo
         .as_ref()
         .expect("servo summary");
@@ -215,7 +215,7 @@ fn saturated_motors_on_the_20_hz_circle_let_the_mechanism_collapse() {
             .all(|s| s.saturated_fraction.is_some_and(|f| f > 0.5)),
         "{servo:?}"
     );
-    let feasibility = flexprr_run::control::report_of(&partial)
+    let feasibility = flexprr_run::control::report_of(partial)
         .feasibility
         .as_ref()
         .expect("checked");
