@@ -37,6 +37,9 @@ enum Command {
     Frf(cli::frf::FrfArgs),
     /// Export a scene's linear model as state space (NumPy .npz and JSON).
     Statespace(cli::statespace::StateSpaceArgs),
+    /// The fastest motion along a scene's path within its [plan] limits, written back as a
+    /// runnable scene (plan.json, planned.toml, figures).
+    Plan(cli::plan::PlanArgs),
 }
 
 /// Let a closed reader end the program quietly, as it ends `cat` or `head`.
@@ -71,6 +74,7 @@ fn main() -> ExitCode {
         Command::Modes(a) => cli::modes::run(a),
         Command::Frf(a) => cli::frf::run(a),
         Command::Statespace(a) => cli::statespace::run(a),
+        Command::Plan(a) => cli::plan::plan(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

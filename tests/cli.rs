@@ -6,6 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "cli/plan.rs"]
+mod plan;
+
 fn flexprr() -> Command {
     Command::new(env!("CARGO_BIN_EXE_flexprr"))
 }

@@ -6,6 +6,7 @@ pub mod frf;
 pub mod kinematics;
 pub mod map;
 pub mod modes;
+pub mod plan;
 pub mod progress;
 pub mod run;
 pub mod statespace;

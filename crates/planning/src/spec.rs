@@ -170,6 +170,11 @@ pub struct PlanSpec {
     /// Number of the machine's lowest modes to shape for.
     #[serde(default = "default_modes")]
     pub shaping_modes: usize,
+    /// Settling window after a rest-to-rest move over which its residual vibration (the
+    /// links' peak deflection) is measured (s); `flexprr plan` takes the scene's own time
+    /// after its move unless set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle_time: Option<f64>,
     /// Grid intervals.
     #[serde(default = "default_grid")]
     pub grid: usize,
@@ -238,6 +243,7 @@ impl Default for PlanSpec {
             shaping: Shaping::None,
             shaping_tolerance: default_tolerance(),
             shaping_modes: default_modes(),
+            settle_time: None,
             grid: default_grid(),
             check_factor: default_check_factor(),
             refinements: default_refinements(),
@@ -280,6 +286,7 @@ impl PlanSpec {
         positive("slider_jerk", self.slider_jerk)?;
         positive("slider_force", self.slider_force)?;
         positive("platform_speed", self.platform_speed)?;
+        positive("settle_time", self.settle_time)?;
         if let Some(m) = self.buckling_margin
             && !(m.is_finite() && m > 0.0 && m <= 1.0)
         {

@@ -14,6 +14,7 @@ mod convert;
 mod errors;
 mod kinematics;
 mod linear;
+mod plan;
 mod progress;
 mod run;
 mod scene;
@@ -39,6 +40,8 @@ fn flexprr_native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::run_study, m)?)?;
     m.add_function(wrap_pyfunction!(linear::linearize, m)?)?;
     m.add_function(wrap_pyfunction!(linear::frequency_response, m)?)?;
+    m.add_class::<plan::PyPlan>()?;
+    m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add("RunError", py.get_type::<errors::RunError>())?;
     m.add("KinematicsError", py.get_type::<errors::KinematicsError>())?;

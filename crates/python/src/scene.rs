@@ -35,6 +35,11 @@ pub struct PyScene {
 }
 
 impl PyScene {
+    /// A scene from TOML text (`file` names it in messages).
+    pub(crate) fn from_text(file: &str, default_name: &str, text: String) -> PyResult<Self> {
+        Self::parse(file, default_name, text)
+    }
+
     fn parse(file: &str, default_name: &str, text: String) -> PyResult<Self> {
         let table: toml::Table = flexprr_scene::parse_toml(file, &text).map_err(scene_error)?;
         Ok(Self {

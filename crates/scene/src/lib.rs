@@ -19,6 +19,7 @@ mod locate;
 mod model;
 mod parse;
 mod piezo;
+mod plan;
 mod registry;
 mod scene;
 mod schema;
@@ -35,6 +36,7 @@ pub use input::{
 pub use locate::{line_column, locate};
 pub use parse::{parse_scene, parse_toml};
 pub use piezo::PatchContext;
+pub use plan::{motor_of, path_of};
 pub use registry::{
     BasisFactory, BasisParams, IntegratorConstructor, MethodHandle, MethodKind, ModeCount,
     Registry, TableParams, mechanical_model,

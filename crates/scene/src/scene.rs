@@ -354,6 +354,7 @@ impl Scene {
             .map_err(|m| c.value_error("integrator.method", m))?;
         let options = spectral_radius(&c, registry, &raw.integrator, method.name(), options)?;
         let outputs = build_outputs(&c, &raw)?;
+        crate::plan::check_plan(&c, &raw, &machine, span)?;
         Ok(Scene {
             name,
             file: raw,
@@ -650,7 +651,7 @@ fn build_trajectory_checked(
     times: &[f64],
 ) -> Result<Arc<dyn Trajectory + Send + Sync>, ScenarioError> {
     let (t0, t1) = (times[0], times[times.len() - 1]);
-    let trajectory = build_trajectory(c, config)?;
+    let trajectory = build_trajectory(c, config, t1)?;
     let period_hint = match config {
         TrajectoryConfig::Circle { frequency, .. } => 1.0 / frequency.abs(),
         _ => t1 - t0,
@@ -1027,6 +1028,7 @@ fn build_outputs(c: &Checker<'_>, raw: &SceneFile) -> Result<BTreeSet<OutputKind
 fn build_trajectory(
     c: &Checker<'_>,
     t: &TrajectoryConfig,
+    end: f64,
 ) -> Result<Arc<dyn Trajectory + Send + Sync>, ScenarioError> {
     Ok(match t {
         TrajectoryConfig::Circle {
@@ -1091,5 +1093,6 @@ fn build_trajectory(
                     .map_err(|e| c.error("trajectory.points", e.to_string()))?,
             )
         }
+        TrajectoryConfig::Planned(data) => crate::plan::planned_trajectory(c, data, end)?,
     })
 }

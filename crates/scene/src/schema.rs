@@ -50,6 +50,10 @@ pub struct SceneFile {
     /// registered `kind` and that law's own keys.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vibration_control: Option<ControlTable>,
+    /// The settings of `flexprr plan` (docs/planning.md): limits, boundary, shaping and the
+    /// platform's orientation; `flexprr run` ignores it, `flexprr check` validates it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan: Option<flexprr_planning::PlanSpec>,
 }
 
 /// `[actuators]`: one actuator spec for all three sliders.
@@ -333,6 +337,9 @@ pub enum TrajectoryConfig {
         /// Points `[t, x, y, phi_deg]`, times increasing.
         points: Vec<[f64; 4]>,
     },
+    /// A motion planned by `flexprr plan` (docs/planning.md): a path, the path speed on a
+    /// grid, shaper impulses and smoothing, in SI units with angles in rad.
+    Planned(Box<flexprr_kinematics::PlannedData>),
 }
 
 fn default_centre() -> [f64; 2] {
