@@ -133,7 +133,8 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
     let target = OutputDir::check(&out, RUN_PRODUCTS, args.force, &[&args.scene], &[])
         .map_err(|e| failure(e.into()))?;
     target.check_writable().map_err(|e| failure(e.into()))?;
-    if flexprr_run::piezo::needs_uncontrolled(&scene) && !args.quiet {
+    if flexprr_run::SceneVariant::wanted(&flexprr_run::variant::Uncontrolled, &scene) && !args.quiet
+    {
         eprintln!(
             "{}: the scene is also run without its vibration control law, for the reduction \
              of the deflection (a second integration, the second half of the progress)",

@@ -23,6 +23,7 @@ pub mod report;
 mod run;
 mod samples;
 mod table;
+pub mod variant;
 mod viewer;
 
 pub use column::{Column, Quantity};
@@ -36,3 +37,4 @@ pub use output::{
 pub use report::{Report, SharedReport};
 pub use run::{integrate, run, run_model, scene_integrator};
 pub use table::{RunResult, RunStats, Table};
+pub use variant::{OnFailure, SceneVariant, VariantRun};

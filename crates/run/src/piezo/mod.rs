@@ -18,67 +18,11 @@ pub(crate) use figures::figures;
 pub use report::{LinkReduction, PatchSummary, PiezoReport};
 
 use crate::column::{Column, Quantity as Q};
-use crate::integrate::integrate_model;
-use crate::run::scene_integrator;
-use crate::table::{RunResult, RunStats, Table};
+use crate::table::{RunResult, Table};
+use crate::variant::VariantRun;
 
 /// Where along the links the reduction is measured: the mid-point.
 pub const REDUCTION_XI: f64 = 0.5;
-
-/// Whether a run of `scene` also runs it without its vibration control law: the scene has
-/// patches under a law, and the deflections or the piezo output are requested.
-pub fn needs_uncontrolled(scene: &Scene) -> bool {
-    !scene.patches.is_empty()
-        && scene.vibration_controller.is_some()
-        && (scene.outputs.contains(&OutputKind::Deflections)
-            || scene.outputs.contains(&OutputKind::Piezo))
-}
-
-/// The run of the scene without its vibration control law: its model and states, or why it
-/// stopped (the controlled run keeps its outputs; only the comparison is missing).
-pub(crate) enum Uncontrolled {
-    /// Integrated over the whole span.
-    Solved(Box<dyn SceneModel>, Solution),
-    /// Stopped or could not start: the reason.
-    Failed(String),
-}
-
-impl Uncontrolled {
-    /// The model and its states, when the run reached the end.
-    pub(crate) fn solved(&self) -> Option<(&dyn SceneModel, &Solution)> {
-        match self {
-            Uncontrolled::Solved(model, solution) => Some((model.as_ref(), solution)),
-            Uncontrolled::Failed(_) => None,
-        }
-    }
-}
-
-/// Integrates [`Scene::without_vibration_control`] (progress to `report`), adding its work
-/// to `stats`.
-pub(crate) fn integrate_uncontrolled(
-    scene: &Scene,
-    report: &mut dyn FnMut(f64),
-    stats: &mut RunStats,
-) -> Uncontrolled {
-    let free = scene.without_vibration_control();
-    let mut model = match free.build_model() {
-        Ok(model) => model,
-        Err(e) => return Uncontrolled::Failed(e.to_string()),
-    };
-    let integration = integrate_model(
-        &free,
-        scene_integrator(&free).as_ref(),
-        model.as_mut(),
-        report,
-    );
-    let counters = model.counters();
-    stats.rhs_evaluations += counters.rhs_evaluations;
-    stats.inverse_dynamics_solves += counters.inverse_dynamics_solves;
-    match integration.failure {
-        Some(e) => Uncontrolled::Failed(e.to_string()),
-        None => Uncontrolled::Solved(model, integration.solution),
-    }
-}
 
 /// The patch outputs of an integrated run into `result`: the `piezo` table when requested,
 /// the [`PiezoReport`] (and its warnings) whenever the scene has patches.
@@ -89,7 +33,7 @@ pub(crate) fn produce(
     scene: &Scene,
     model: &mut dyn SceneModel,
     solution: &Solution,
-    uncontrolled: Option<&Uncontrolled>,
+    uncontrolled: Option<&VariantRun>,
     result: &mut RunResult,
 ) -> Result<(), DynamicsError> {
     if scene.patches.is_empty() || solution.is_empty() {
@@ -113,11 +57,11 @@ pub(crate) fn produce(
     }
     let mut report = PiezoReport::of(scene, &solution.t, &states);
     match uncontrolled {
-        Some(Uncontrolled::Solved(free, free_solution)) => {
+        Some(VariantRun::Solved(free, free_solution)) => {
             report.uncontrolled_run = true;
             report.reduction = Some(reductions(model, solution, free.as_ref(), free_solution)?);
         }
-        Some(Uncontrolled::Failed(why)) => {
+        Some(VariantRun::Failed(why)) => {
             report.uncontrolled_run = true;
             report.uncontrolled_failure = Some(why.clone());
         }
