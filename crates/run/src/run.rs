@@ -416,7 +416,10 @@ fn produce_integrated(
                 Q::DeflectionWithoutAxialForce,
                 solved(WithoutAxialForce.name()),
             ),
-            (Q::DeflectionUncontrolled, solved(Uncontrolled.name())),
+            (
+                crate::piezo::DEFLECTION_UNCONTROLLED,
+                solved(Uncontrolled.name()),
+            ),
         ];
         tables.push(outputs::deflections(scene, model, solution, &variants)?);
     }

@@ -14,6 +14,8 @@ mod servo;
 mod stats;
 mod tables;
 
+use crate::column::Quantity;
+use flexprr_dynamics::NamedQuantity;
 use flexprr_dynamics::{DynamicsError, MachineSnapshot};
 use flexprr_scene::{OutputKind, Scene};
 use serde_json::Value;
@@ -154,4 +156,31 @@ pub fn report_of(result: &RunResult) -> &ControlReport {
         servo: None,
     };
     result.report::<ControlReport>().unwrap_or(&NONE)
+}
+
+/// Motor torque after saturation (N m): `actuators.csv`, `motor_torque_<i>_N_m`.
+pub const MOTOR_TORQUE: Quantity =
+    Quantity::Named(&NamedQuantity::new("motor_torque", "N_m", "τ", "N·m"));
+/// Motor speed (rev/s): `motor_speed_<i>_rev_s`.
+pub const MOTOR_SPEED: Quantity =
+    Quantity::Named(&NamedQuantity::new("motor_speed", "rev_s", "n", "rev/s"));
+/// Whether the motor torque is saturated at its peak (1) or not (0):
+/// `motor_saturated_<i>_flag`.
+pub const MOTOR_SATURATED: Quantity =
+    Quantity::Named(&NamedQuantity::new("motor_saturated", "flag", "sat", "1"));
+
+#[cfg(test)]
+mod tests {
+    use super::{MOTOR_SATURATED, MOTOR_SPEED, MOTOR_TORQUE};
+    use crate::column::Column;
+
+    #[test]
+    fn motor_headers_follow_the_documented_pattern() {
+        assert_eq!(Column::link(MOTOR_TORQUE, 2).header(), "motor_torque_3_N_m");
+        assert_eq!(Column::link(MOTOR_SPEED, 1).header(), "motor_speed_2_rev_s");
+        assert_eq!(
+            Column::link(MOTOR_SATURATED, 0).header(),
+            "motor_saturated_1_flag"
+        );
+    }
 }

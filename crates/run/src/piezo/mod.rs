@@ -10,7 +10,7 @@
 mod figures;
 mod report;
 
-use flexprr_dynamics::{DynamicsError, PatchState, SceneModel};
+use flexprr_dynamics::{DynamicsError, NamedQuantity, PatchState, SceneModel};
 use flexprr_integrators::Solution;
 use flexprr_scene::{OutputKind, Scene};
 
@@ -20,6 +20,22 @@ pub use report::{LinkReduction, PatchSummary, PiezoReport};
 use crate::column::{Column, Quantity as Q};
 use crate::table::{RunResult, Table};
 use crate::variant::VariantRun;
+
+/// Transverse deflection w at xi of the same scene without its vibration control (m):
+/// `w_<i>_xi<xi>_uncontrolled_m`.
+pub const DEFLECTION_UNCONTROLLED: Q =
+    Q::Named(&NamedQuantity::new("w", "m", "w", "m").with_suffix("uncontrolled"));
+/// A patch's sensor voltage `V_s` (V); link and the patch's index on it.
+pub const PATCH_SENSOR_VOLTAGE: Q = Q::Named(&NamedQuantity::new("V_sensor", "V", "V_s", "V"));
+/// A patch's voltage command from the vibration control law (V).
+pub const PATCH_COMMAND_VOLTAGE: Q = Q::Named(&NamedQuantity::new("V_command", "V", "V_c", "V"));
+/// A patch's applied voltage: the command clipped at its limit (V).
+pub const PATCH_VOLTAGE: Q = Q::Named(&NamedQuantity::new("V_applied", "V", "V", "V"));
+/// Whether a patch's command was clipped at its limit (1) or not (0).
+pub const PATCH_SATURATED: Q = Q::Named(&NamedQuantity::new("patch_saturated", "flag", "sat", "1"));
+/// Mechanical power a patch's actuator delivers to its link (W; negative when it removes
+/// energy).
+pub const PATCH_POWER: Q = Q::Named(&NamedQuantity::new("P_patch", "W", "P", "W"));
 
 /// Where along the links the reduction is measured: the mid-point.
 pub const REDUCTION_XI: f64 = 0.5;
@@ -84,11 +100,11 @@ fn table(scene: &Scene, t: &[f64], states: &[Vec<PatchState>]) -> Table {
     let mut table = Table::new("piezo", t);
     type Part = fn(&PatchState) -> f64;
     let parts: [(Q, Part); 5] = [
-        (Q::PatchSensorVoltage, |s| s.sensor),
-        (Q::PatchCommandVoltage, |s| s.command),
-        (Q::PatchVoltage, |s| s.voltage),
-        (Q::PatchSaturated, |s| f64::from(u8::from(s.saturated))),
-        (Q::PatchPower, |s| s.power),
+        (PATCH_SENSOR_VOLTAGE, |s| s.sensor),
+        (PATCH_COMMAND_VOLTAGE, |s| s.command),
+        (PATCH_VOLTAGE, |s| s.voltage),
+        (PATCH_SATURATED, |s| f64::from(u8::from(s.saturated))),
+        (PATCH_POWER, |s| s.power),
     ];
     for (p, patch) in scene.patches.iter().enumerate() {
         let index = index_on_link(scene, p);
