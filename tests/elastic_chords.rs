@@ -266,9 +266,9 @@ fn the_scene_key_keeps_the_chords_rigid_and_only_the_coupled_model_takes_it() {
             .unwrap();
     assert!(!elastic.rigid_chords);
     let count = |scene: &flexprr_scene::Scene| {
-        flexprr_run::machine_modes::machine_modes(
+        flexprr_linear_tools::machine_modes::machine_modes(
             scene,
-            flexprr_run::linear::OperatingPoint::Rest(pose()),
+            flexprr_linear_tools::linear::OperatingPoint::Rest(pose()),
             3,
             &flexprr_linear::Settings::default(),
         )

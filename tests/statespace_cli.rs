@@ -15,7 +15,7 @@ use std::process::Command;
 
 use flexprr_kinematics::Pose;
 use flexprr_linear::{Input, Output};
-use flexprr_run::linear::{OperatingPoint, linear_model};
+use flexprr_linear_tools::linear::{OperatingPoint, linear_model};
 use flexprr_scene::Scene;
 use nalgebra::DMatrix;
 use serde_json::Value;

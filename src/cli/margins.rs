@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 
 use flexprr_linear::{Input, LoopMargins, Output, linearize, loop_margins};
-use flexprr_run::linear::{OperatingPoint, operating_point};
-use flexprr_run::machine_modes::start_pose;
+use flexprr_linear_tools::linear::{OperatingPoint, operating_point};
+use flexprr_linear_tools::machine_modes::start_pose;
 use flexprr_scene::Scene;
 use serde_json::json;
 

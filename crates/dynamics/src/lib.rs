@@ -34,7 +34,7 @@ pub use actuation::Actuation;
 pub use axial::{
     AxialForceModel, AxialInput, JointReactionAxialForce, NoAxialForce, PaperAxialForce, end_forces,
 };
-pub use column::{Column, Quantity, Table};
+pub use column::{Column, NamedQuantity, Quantity, Table};
 pub use coupled::{CoupledCounters, CoupledOptions, CoupledOutput, CoupledSystem, CouplingModel};
 pub use error::DynamicsError;
 pub use formulation::{AxialModel, Formulation};

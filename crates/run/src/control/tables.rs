@@ -54,13 +54,13 @@ pub(crate) fn actuators_of_model(snapshots: &[MachineSnapshot]) -> Table {
             .map(|s| state(s).output.motor_speed)
             .collect();
         if let (Some(torque), Some(speed)) = (torque, speed) {
-            table.push(Column::link(Q::MotorTorque, i), torque);
-            table.push(Column::link(Q::MotorSpeed, i), speed);
+            table.push(Column::link(super::MOTOR_TORQUE, i), torque);
+            table.push(Column::link(super::MOTOR_SPEED, i), speed);
             let saturated = snapshots
                 .iter()
                 .map(|s| f64::from(u8::from(state(s).output.saturated)))
                 .collect();
-            table.push(Column::link(Q::MotorSaturated, i), saturated);
+            table.push(Column::link(super::MOTOR_SATURATED, i), saturated);
         }
     }
     table
@@ -77,14 +77,14 @@ pub(crate) fn actuators_required(samples: &Samples, required: &Required) -> Tabl
         table.push(Column::link(Q::ForceCommand, i), force.clone());
         table.push(Column::link(Q::ActuatorForce, i), force.clone());
         if let Some((torque, speed)) = &required.motor {
-            table.push(Column::link(Q::MotorTorque, i), torque[i].clone());
-            table.push(Column::link(Q::MotorSpeed, i), speed[i].clone());
+            table.push(Column::link(super::MOTOR_TORQUE, i), torque[i].clone());
+            table.push(Column::link(super::MOTOR_SPEED, i), speed[i].clone());
             let peak = required.peak_torque.unwrap_or(f64::INFINITY);
             let saturated = torque[i]
                 .iter()
                 .map(|tau| f64::from(u8::from(tau.abs() > peak)))
                 .collect();
-            table.push(Column::link(Q::MotorSaturated, i), saturated);
+            table.push(Column::link(super::MOTOR_SATURATED, i), saturated);
         }
     }
     table

@@ -22,7 +22,7 @@ use serde_json::{Value, json};
 
 use flexprr_linear::{Complex, Input, Mode, Output};
 
-use crate::plot::{Axis, Figure, Marker, Panel, Series, Style};
+use flexprr_plot::{Axis, Figure, Marker, Panel, Series, Style};
 
 /// Lines of each zoom band.
 const ZOOM_LINES: usize = 41;

@@ -7,9 +7,9 @@ use flexprr_kinematics::Pose;
 use flexprr_linear::{Input, Linearization, Output, Settings, linearize_with_settings};
 use flexprr_scene::{ScenarioError, Scene};
 
-use crate::error::RunError;
-use crate::integrate::integrate_model;
-use crate::run::scene_integrator;
+use flexprr_run::RunError;
+use flexprr_run::integrate_model;
+use flexprr_run::scene_integrator;
 
 /// The largest orientation of a pose at rest (deg): two turns. Beyond it an angle is far
 /// more likely a slip (radians for degrees, a missing decimal point) than meant, and its

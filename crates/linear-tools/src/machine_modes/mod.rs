@@ -20,9 +20,9 @@ use flexprr_linear::{
 };
 use flexprr_scene::{ScenarioError, Scene};
 
-use crate::error::RunError;
 use crate::linear::{OperatingPoint, operating_point};
-use crate::output_dir::Products;
+use flexprr_outdir::Products;
+use flexprr_run::RunError;
 
 pub use figure::modes_svg;
 pub use report::{modes_csv, modes_json, modes_summary_json};

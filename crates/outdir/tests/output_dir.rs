@@ -1,11 +1,11 @@
-//! The output-directory policy (`flexprr_run::output_dir`, docs/scenes.md "Output
+//! The output-directory policy (`flexprr_outdir`, docs/scenes.md "Output
 //! directory and run status"), checked on the file system: what is refused, what is kept,
 //! what is replaced, and that an input or a foreign file is never overwritten or deleted.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use flexprr_run::output_dir::{
+use flexprr_outdir::{
     MARKER, OutputDir, OutputError, Products, check_output_file, write_file_atomic,
 };
 
@@ -13,7 +13,7 @@ const PRODUCTS: Products = Products {
     kind: "test",
     names: &["a.csv", "b.csv", "summary.json"],
     patterns: &[("plot_", ".svg")],
-    legacy: Some(flexprr_run::output_dir::Legacy::JsonKey {
+    legacy: Some(flexprr_outdir::Legacy::JsonKey {
         file: "summary.json",
         key: "flexprr_version",
     }),

@@ -23,8 +23,8 @@
 //! - `/` is refused, whatever the options.
 //!
 //! ```no_run
-//! use flexprr_run::output_dir::{OutputDir, Products};
-//! # fn main() -> Result<(), flexprr_run::output_dir::OutputError> {
+//! use flexprr_outdir::{OutputDir, Products};
+//! # fn main() -> Result<(), flexprr_outdir::OutputError> {
 //! const PRODUCTS: Products = Products {
 //!     kind: "example",
 //!     names: &["table.csv"],
@@ -35,7 +35,7 @@
 //! let dir = OutputDir::check(std::path::Path::new("out/x"), PRODUCTS, false, &[input], &[])?;
 //! let staging = dir.stage()?;
 //! std::fs::write(staging.path().join("table.csv"), "t_s\n0\n")
-//!     .map_err(|e| flexprr_run::output_dir::OutputError::io(staging.path(), e))?;
+//!     .map_err(|e| flexprr_outdir::OutputError::io(staging.path(), e))?;
 //! staging.publish()?;
 //! # Ok(())
 //! # }
@@ -192,7 +192,7 @@ pub const WORK_PRECISION: Products = Products {
     }),
 };
 
-/// The products of `flexprr frf` (`crate::frf`; the mode shapes with `--identify`).
+/// The products of `flexprr frf` (`flexprr_linear_tools::frf`; the mode shapes with `--identify`).
 pub const FRF: Products = Products {
     kind: "frf",
     names: &[
@@ -206,7 +206,7 @@ pub const FRF: Products = Products {
     legacy: None,
 };
 
-/// The products of `flexprr statespace` (`crate::statespace`).
+/// The products of `flexprr statespace` (`flexprr_linear_tools::statespace`).
 pub const STATESPACE: Products = Products {
     kind: "statespace",
     names: &["statespace.npz", "statespace.json"],

@@ -16,10 +16,10 @@ use flexprr_linear::{
 use flexprr_scene::{ScenarioError, Scene};
 use serde_json::{Value, json};
 
-use crate::error::RunError;
 use crate::linear::{OperatingPoint, linear_model};
 use crate::modal_test::{self, IdentifiedMode};
-use crate::plot::{Axis, Color, Dash, Figure, Panel, Series, Style};
+use flexprr_plot::{Axis, Color, Dash, Figure, Panel, Series, Style};
+use flexprr_run::RunError;
 
 /// Points of the default grid (log-spaced).
 pub const DEFAULT_POINTS: usize = 2000;
@@ -742,12 +742,12 @@ pub fn at_words(at: &OperatingPoint) -> String {
 pub fn write_frf(
     scene: &Scene,
     frf: &Frf,
-    dir: &crate::OutputDir,
+    dir: &flexprr_outdir::OutputDir,
 ) -> Result<Vec<String>, ScenarioError> {
     let staging = dir.stage()?;
     let put = |name: &str, text: &str| {
         std::fs::write(staging.path().join(name), text)
-            .map_err(|e| crate::OutputError::io(&staging.path().join(name), e))
+            .map_err(|e| flexprr_outdir::OutputError::io(&staging.path().join(name), e))
     };
     put("frf.csv", &frf_csv(frf))?;
     let json = frf_json(scene, frf);

@@ -21,10 +21,10 @@ use flexprr_linear::{
 use flexprr_scene::{ScenarioError, Scene};
 use serde_json::{Value, json};
 
-use crate::error::RunError;
 use crate::frf::{modes_json, operating_point_json};
 use crate::linear::{OperatingPoint, along_motion_states, linear_error, operating_point};
 use crate::npz::{NpyData, npz};
+use flexprr_run::RunError;
 
 /// What to export.
 #[derive(Debug, Clone, PartialEq)]
@@ -446,7 +446,7 @@ pub fn series_json(scene: &Scene, series: &StateSpaceSeries) -> Value {
 pub fn write_statespace(
     scene: &Scene,
     ss: &StateSpace,
-    dir: &crate::OutputDir,
+    dir: &flexprr_outdir::OutputDir,
 ) -> Result<Vec<String>, ScenarioError> {
     let archive =
         statespace_npz(ss).map_err(|m| ScenarioError::Run(format!("statespace.npz: {m}")))?;
@@ -460,7 +460,7 @@ pub fn write_statespace(
 pub fn write_series(
     scene: &Scene,
     series: &StateSpaceSeries,
-    dir: &crate::OutputDir,
+    dir: &flexprr_outdir::OutputDir,
 ) -> Result<Vec<String>, ScenarioError> {
     let archive =
         series_npz(series).map_err(|m| ScenarioError::Run(format!("statespace.npz: {m}")))?;
@@ -468,14 +468,14 @@ pub fn write_series(
 }
 
 fn write_pair(
-    dir: &crate::OutputDir,
+    dir: &flexprr_outdir::OutputDir,
     archive: &[u8],
     json: &Value,
 ) -> Result<Vec<String>, ScenarioError> {
     let staging = dir.stage()?;
     let put = |name: &str, bytes: &[u8]| {
         std::fs::write(staging.path().join(name), bytes)
-            .map_err(|e| crate::OutputError::io(&staging.path().join(name), e))
+            .map_err(|e| flexprr_outdir::OutputError::io(&staging.path().join(name), e))
     };
     put("statespace.npz", archive)?;
     let text = serde_json::to_string_pretty(json).unwrap_or_else(|_| json.to_string()) + "\n";

@@ -10,8 +10,8 @@ use std::path::Path;
 use faer::linalg::solvers::Eigen;
 use flexprr_kinematics::Pose;
 use flexprr_linear::{Input, Linearization, Output, linearize};
-use flexprr_run::linear::{OperatingPoint, operating_point};
-use flexprr_run::npz::{NpyData, npz};
+use flexprr_linear_tools::linear::{OperatingPoint, operating_point};
+use flexprr_linear_tools::npz::{NpyData, npz};
 use flexprr_run::{integrate, run};
 use flexprr_scene::Scene;
 
