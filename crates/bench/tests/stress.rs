@@ -62,7 +62,7 @@ fn methods(s: &Scene) -> Vec<MethodHandle> {
 
 /// Loads `configs/stress/<name>.toml`, applies `edit` (short horizon, caps) and validates it.
 fn load(name: &str, edit: impl FnOnce(&mut SceneFile)) -> Result<Scene, ScenarioError> {
-    let path = format!("{}/configs/stress/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/configs/stress/{name}.toml", WORKSPACE);
     let text = std::fs::read_to_string(&path).map_err(|source| ScenarioError::Io {
         path: path.clone(),
         source,
@@ -728,3 +728,6 @@ fn survey_full_length() {
         classify_all(name, |_| {}, 3);
     }
 }
+
+/// The workspace root: the tests read its configs and validation data.
+const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");

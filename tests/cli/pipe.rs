@@ -1,8 +1,6 @@
 //! A reader that stops early (`flexprr kinematics scene.toml | head`) ends the program
 //! quietly, as it ends `cat`: no `error: Broken pipe`, no panic on stdout or stderr.
 
-#![cfg(unix)]
-
 use std::io::Read;
 use std::os::unix::process::ExitStatusExt;
 use std::path::Path;

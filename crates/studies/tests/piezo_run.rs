@@ -21,7 +21,7 @@ const K_S: f64 = 8.0e3;
 
 /// The shipped scene with its gain, limit and requests replaced, over 50 ms.
 fn scene(gain: f64, limit: f64, requests: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/piezo_f20.toml");
+    let path = Path::new(WORKSPACE).join("configs/piezo_f20.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     let text = text
         .lines()
@@ -186,7 +186,7 @@ fn no_second_run_without_deflections_or_piezo_requested() {
 
 #[test]
 fn piezo_without_patches_is_refused_at_its_request() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/paper_f20.toml");
+    let path = Path::new(WORKSPACE).join("configs/paper_f20.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     let text = text.replace(
         "requests = [\"kinematics\",",
@@ -237,8 +237,11 @@ fn the_study_quantities_are_the_runs_reduction_and_voltage() {
             .unavailable(&free)
             .is_some()
     );
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/paper_f20.toml");
+    let path = Path::new(WORKSPACE).join("configs/paper_f20.toml");
     let paper = Scene::load(&path).unwrap();
     let why = Quantity::PatchVoltage.unavailable(&paper).unwrap();
     assert!(why.contains("[[links.patches]]"), "{why}");
 }
+
+/// The workspace root: the tests read its configs and validation data.
+const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");

@@ -2,21 +2,13 @@
 //! writes the control outputs and figures, and a motor beyond its ratings is a warning on
 //! stderr (exit 0) while a bad control key is one located line (exit 2).
 
+use crate::common::{flexprr, stderr_of};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
 
 fn config(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("configs")
         .join(name)
-}
-
-fn stderr_of(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
 #[test]

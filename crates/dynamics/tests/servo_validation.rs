@@ -25,7 +25,7 @@ struct External {
 
 impl External {
     fn load(name: &str) -> External {
-        let path = format!("{}/validation/data/{name}.csv", env!("CARGO_MANIFEST_DIR"));
+        let path = format!("{}/validation/data/{name}.csv", WORKSPACE);
         let text = std::fs::read_to_string(&path)
             .unwrap_or_else(|e| panic!("validation data {path} missing or unreadable: {e}"));
         let mut lines = text.lines();
@@ -178,3 +178,6 @@ fn nonlinear_servo_model_matches_external_at_20_hz() {
     assert!(w < 0.02, "deflections {w}");
     assert!(e < 0.05, "slider errors {e}");
 }
+
+/// The workspace root: the tests read its configs and validation data.
+const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");

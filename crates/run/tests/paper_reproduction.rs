@@ -83,7 +83,7 @@ fn check_table_one(hist: &FrequencyHistory) {
 }
 
 fn reference_state() -> Vec<f64> {
-    let text = include_str!("data/paper_f20_state_t0.2.json");
+    let text = include_str!("../../../tests/data/paper_f20_state_t0.2.json");
     let json: serde_json::Value = serde_json::from_str(text).unwrap();
     json["state"]
         .as_array()
@@ -151,7 +151,7 @@ fn reference_state_at_0_2_s_with_every_integrator() {
 /// relative (the velocities are checked above: the run writes displacements only).
 #[test]
 fn table_one_and_reference_state_through_the_scene_with_auto() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/paper_f20.toml");
+    let path = &format!("{}/configs/paper_f20.toml", WORKSPACE);
     let text = std::fs::read_to_string(path).unwrap();
     assert!(
         text.contains("method = \"abm\""),
@@ -186,3 +186,6 @@ fn table_one_and_reference_state_through_the_scene_with_auto() {
     println!("auto (magnus6) through the scene: displacement error {error:.2e}");
     assert!(error < 1e-6, "displacement error {error:e}");
 }
+
+/// The workspace root: the tests read its configs and validation data.
+const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");

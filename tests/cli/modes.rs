@@ -2,13 +2,10 @@
 //! closed form, the JSON's shape and order, the files of `--out`, and every refusal (exit
 //! code 2, one line naming the option or the scene key and the rule).
 
+use crate::common::flexprr;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
+use std::process::Output;
 
 fn config(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

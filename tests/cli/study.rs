@@ -1,12 +1,9 @@
 //! `flexprr study` and `flexprr merge` as a user runs them: a study killed midway leaves only
 //! complete case records, and `--resume` completes it with the table of an uninterrupted run.
 
+use crate::common::flexprr;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
+use std::process::Stdio;
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")

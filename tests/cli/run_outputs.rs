@@ -3,12 +3,9 @@
 //! whole (no stale files); a directory that is not a flexprr output is refused unless
 //! `--force`; rigid-body modes are reported as rigid, never as `NaN %`.
 
+use crate::common::{flexprr, stderr_of};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
+use std::process::Output;
 
 fn config(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -26,10 +23,6 @@ fn run_into(scene: &Path, out: &Path, extra: &[&str]) -> Output {
         .args(extra)
         .output()
         .unwrap()
-}
-
-fn stderr_of(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
 fn summary(dir: &Path) -> serde_json::Value {

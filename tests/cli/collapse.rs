@@ -3,12 +3,8 @@
 //! object of kind `collapse`; the collapse time agrees with the external ANCF model
 //! (`validation/data/collapse_f30.csv`, independent data) passing 20 mm, 10 % of the link.
 
+use crate::common::flexprr;
 use std::path::Path;
-use std::process::Command;
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
 
 /// `configs/coupled_f20.toml` with the circle frequency set to 30 Hz, written into `dir`.
 fn coupled_f30(dir: &Path) -> std::path::PathBuf {
@@ -28,7 +24,7 @@ fn coupled_f30(dir: &Path) -> std::path::PathBuf {
 /// The first time the external model's largest mid-point deflection passes `limit` (m),
 /// linearly interpolated between its samples (every 0.25 ms), and the sample interval.
 fn external_crossing(limit: f64) -> (f64, f64) {
-    let text = include_str!("../validation/data/collapse_f30.csv");
+    let text = include_str!("../../validation/data/collapse_f30.csv");
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();

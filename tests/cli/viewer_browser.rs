@@ -8,10 +8,10 @@
 //! README's pictures there (docs/viewer.md):
 //!
 //! ```text
-//! FLEXPRR_README_IMAGES=$PWD/docs/img cargo test --release --test viewer_browser
+//! FLEXPRR_README_IMAGES=$PWD/docs/img cargo test --release --test cli viewer_browser
 //! ```
 
-#[path = "../crates/viewer/tests/chromium/mod.rs"]
+#[path = "../../crates/viewer/tests/chromium/mod.rs"]
 mod chromium;
 
 use std::path::{Path, PathBuf};

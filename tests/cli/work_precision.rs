@@ -3,16 +3,9 @@
 //! the cost-against-fidelity table; model names, error measures and tolerances that do not
 //! apply are refused with exit code 2 and one line naming the option and the value.
 
+use crate::common::{flexprr, stderr_of};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
-
-fn stderr_of(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
+use std::process::Output;
 
 /// The paper scene at 30 Hz over 2 ms, consistent formulation, with the nonlinear model at 4
 /// elements per link (a few thousand steps).

@@ -1,13 +1,9 @@
 //! `flexprr beam` on the example link file: the printed frequencies against the exact
 //! axially loaded pinned-pinned frequencies, and bad input reported with its place.
 
+use crate::common::flexprr;
 use std::f64::consts::PI;
 use std::path::Path;
-use std::process::Command;
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
 
 fn example() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/link_paper.toml")

@@ -9,7 +9,7 @@
 //! * a point force's static response: the platform moves by the chords' compliance `K_d^-1`
 //!   (from `G` and `EA / l`, computed here from the geometry), the sliders not at all.
 //!
-//! The external eigen-analysis (axially elastic ANCF links) is in `tests/modes_validation.rs`.
+//! The external eigen-analysis (axially elastic ANCF links) is in `crates/linear/tests/modes_validation.rs`.
 
 use std::sync::Arc;
 
@@ -250,7 +250,7 @@ fn a_point_force_moves_the_platform_by_the_chords_compliance() {
 
 #[test]
 fn the_scene_key_keeps_the_chords_rigid_and_only_the_coupled_model_takes_it() {
-    let base = format!("{}/configs/coupled_f20.toml", env!("CARGO_MANIFEST_DIR"));
+    let base = format!("{}/configs/coupled_f20.toml", WORKSPACE);
     let text = std::fs::read_to_string(&base).unwrap();
     let with = |coupling: &str, chords: &str| {
         text.replace(
@@ -292,3 +292,6 @@ fn the_scene_key_keeps_the_chords_rigid_and_only_the_coupled_model_takes_it() {
         "{refused}"
     );
 }
+
+/// The workspace root: the tests read its configs and validation data.
+const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");

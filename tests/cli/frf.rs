@@ -10,23 +10,15 @@
 //! `sum_k -w^2 sin(k pi xi) sin(k pi xi_f) / ((rho A l / 2)(w_k^2 - w^2 + 2 i zeta w_k w))`
 //! (the three sine modes the model has).
 
+use crate::common::{flexprr, read_csv, stderr_of};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
 
 fn config(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("configs")
         .join(name)
-}
-
-fn stderr_of(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
 /// The paper's link (docs/model.md): E, rho, l, thickness, height.
@@ -65,22 +57,6 @@ fn accelerance(f: f64, xi: f64, xi_f: f64) -> (f64, f64) {
 
 fn read_json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-/// Rows of a CSV as numbers (header first, as text).
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
-        .collect();
-    (header, rows)
 }
 
 #[test]

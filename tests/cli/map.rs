@@ -2,12 +2,8 @@
 //! grid pose is what `flexprr modes --pose` gives there, its files and summary, and the
 //! options a map refuses.
 
+use crate::common::flexprr;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
 
 fn config(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

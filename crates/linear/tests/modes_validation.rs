@@ -31,7 +31,7 @@ use nalgebra::Vector3;
 use serde_json::Value;
 
 fn external() -> Value {
-    let path = format!("{}/validation/data/modes.json", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/validation/data/modes.json", WORKSPACE);
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
     serde_json::from_str(&text).expect("modes.json")
 }
@@ -214,3 +214,6 @@ fn nonlinear_whole_machine_modes_match_the_external_eigen_analysis() {
         }
     }
 }
+
+/// The workspace root: the tests read its configs and validation data.
+const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");

@@ -22,10 +22,7 @@ struct External {
 
 impl External {
     fn load(frequency: u32) -> External {
-        let path = format!(
-            "{}/validation/data/coupled_f{frequency}.csv",
-            env!("CARGO_MANIFEST_DIR")
-        );
+        let path = format!("{}/validation/data/coupled_f{frequency}.csv", WORKSPACE);
         let text = std::fs::read_to_string(&path)
             .unwrap_or_else(|e| panic!("validation data {path} missing or unreadable: {e}"));
         let mut lines = text.lines();
@@ -194,3 +191,6 @@ fn coupled_model_matches_external_at_10_hz() {
 fn coupled_model_matches_external_at_20_hz() {
     check(&compare(20), 0.04, 0.47);
 }
+
+/// The workspace root: the tests read its configs and validation data.
+const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");

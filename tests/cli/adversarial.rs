@@ -4,19 +4,12 @@
 //! command now does, and checks numbers against a second method (a direct `flexprr run`, the
 //! Euler buckling load) where there are numbers.
 
+use crate::common::{flexprr, read_csv, stderr_of};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
-
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
-}
-
-fn stderr_of(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
 /// Runs `flexprr args...` in `dir`.
@@ -794,22 +787,6 @@ fn with_key(text: &str, key: &str, value: &str) -> String {
         })
         .collect::<Vec<_>>()
         .join("\n")
-}
-
-/// The columns of a CSV file written by a run: its header and its rows.
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-        .collect();
-    (header, rows)
 }
 
 /// Runs `scene` (text) and checks that its outcome agrees with the data it wrote: a run that

@@ -3,26 +3,18 @@
 //! and labelled SVG plots; `check` validates; bad input exits 2 and a failed run exits 1, each
 //! with one line on stderr; `kinematics` prints CSV.
 
+use crate::common::{flexprr, stderr_of};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-#[path = "cli/margins.rs"]
+#[path = "margins.rs"]
 mod margins;
-#[path = "cli/plan.rs"]
+#[path = "plan.rs"]
 mod plan;
-
-fn flexprr() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-}
 
 fn config(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("configs")
         .join(name)
-}
-
-fn stderr_of(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
 /// Writes `text` as `name` in `dir` and returns its path.
