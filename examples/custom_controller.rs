@@ -147,7 +147,10 @@ fn errors(registry: &Registry, text: &str) -> (String, [(f64, f64); 3]) {
     let scene = Scene::from_text_with(registry, "custom_controller.toml", "custom", text)
         .unwrap_or_else(|e| panic!("scene rejected: {e}"));
     let result = flexprr_run::run(&scene, &mut |_| {}).unwrap_or_else(|e| panic!("run: {e}"));
-    let servo = result.control.servo.expect("an actuated run");
+    let servo = flexprr_run::control::report_of(&result)
+        .servo
+        .clone()
+        .expect("an actuated run");
     let errors = servo.sliders.map(|s| (s.error.value, s.rms_error));
     (servo.controller, errors)
 }

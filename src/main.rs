@@ -33,6 +33,8 @@ enum Command {
     /// The whole machine's natural frequencies, damping ratios and mode shapes at a pose or
     /// a time of the motion.
     Modes(cli::modes::ModesArgs),
+    /// Gain and phase margins and the sensitivity peak of each slider loop, broken at its actuator.
+    Margins(cli::margins::MarginsArgs),
     /// Frequency responses of a scene's linear model (CSV, JSON, Bode SVG; mode shapes from a modal test).
     Frf(cli::frf::FrfArgs),
     /// Export a scene's linear model as state space (NumPy .npz and JSON).
@@ -72,6 +74,7 @@ fn main() -> ExitCode {
         Command::Merge(a) => cli::study::merge(a),
         Command::WorkPrecision(a) => cli::work_precision::run(a),
         Command::Modes(a) => cli::modes::run(a),
+        Command::Margins(a) => cli::margins::run(a),
         Command::Frf(a) => cli::frf::run(a),
         Command::Statespace(a) => cli::statespace::run(a),
         Command::Plan(a) => cli::plan::plan(a),

@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use flexprr_kinematics::Pose;
 use flexprr_linear::{Input, Output};
-use flexprr_run::OutputDir;
-use flexprr_run::frf::{FrfRequest, Grid, frequency_responses_with_progress, write_frf};
-use flexprr_run::frf_plan::{FrfPlan, read_frequencies};
-use flexprr_run::linear::OperatingPoint;
-use flexprr_run::output_dir::FRF;
+use flexprr_linear_tools::frf::{FrfRequest, Grid, frequency_responses_with_progress, write_frf};
+use flexprr_linear_tools::frf_plan::{FrfPlan, read_frequencies};
+use flexprr_linear_tools::linear::OperatingPoint;
+use flexprr_outdir::FRF;
+use flexprr_outdir::OutputDir;
 use flexprr_scene::{ScenarioError, Scene};
 
 use super::Failure;
@@ -122,7 +122,7 @@ pub fn parse_pose(text: &str) -> Result<Pose, Failure> {
         .map_err(|_| bad_pose(text))?;
     match values.as_slice() {
         [x, y, phi] if values.iter().all(|v| v.is_finite()) => {
-            flexprr_run::linear::check_orientation_deg(*phi)
+            flexprr_linear_tools::linear::check_orientation_deg(*phi)
                 .map_err(|m| Failure::bad_input(format!("--pose {text}: {m}")))?;
             Ok(Pose::new(*x, *y, phi.to_radians()))
         }
@@ -346,7 +346,7 @@ fn rounded(f: f64) -> String {
 /// identification that failed exits 1 after the responses were written.
 fn report(
     scene: &Scene,
-    frf: &flexprr_run::frf::Frf,
+    frf: &flexprr_linear_tools::frf::Frf,
     files: usize,
     out: &Path,
 ) -> Result<(), Failure> {
@@ -355,7 +355,7 @@ fn report(
         "{}: {} model, {}: {} x {} responses at {} frequencies ({} to {} Hz); {files} files written to {}",
         scene.name,
         frf.model,
-        flexprr_run::frf::at_words(&frf.at),
+        flexprr_linear_tools::frf::at_words(&frf.at),
         frf.lin.outputs.len(),
         frf.lin.inputs.len(),
         frf.frequencies_hz.len(),

@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use flexprr_run::output_dir::{check_output_file, write_file_atomic};
+use flexprr_outdir::{check_output_file, write_file_atomic};
 use flexprr_scene::Scene;
 
 use super::Failure;

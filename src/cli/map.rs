@@ -5,7 +5,7 @@ use std::io::IsTerminal;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use flexprr_run::machine_modes::RestFrequency;
+use flexprr_linear_tools::machine_modes::RestFrequency;
 use flexprr_studies::map::MapProgress;
 use flexprr_studies::run_map_study;
 use flexprr_studies::study::{Study, StudyError, StudyOptions, format_value};

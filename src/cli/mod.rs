@@ -5,6 +5,7 @@ pub mod beam;
 pub mod frf;
 pub mod kinematics;
 pub mod map;
+pub mod margins;
 pub mod modes;
 pub mod plan;
 pub mod progress;

@@ -9,12 +9,13 @@
 use std::path::{Path, PathBuf};
 
 use flexprr_kinematics::Pose;
-use flexprr_run::linear::OperatingPoint;
-use flexprr_run::machine_modes::{
+use flexprr_linear_tools::linear::OperatingPoint;
+use flexprr_linear_tools::machine_modes::{
     MODES_PRODUCTS, MachineModes, SHAPE_POINTS, machine_modes_with_progress, modes_csv, modes_json,
     modes_summary_json, modes_svg, start_pose,
 };
-use flexprr_run::{OutputDir, RunError};
+use flexprr_outdir::OutputDir;
+use flexprr_run::RunError;
 use flexprr_scene::{ScenarioError, Scene};
 
 use super::Failure;
@@ -61,7 +62,7 @@ pub struct ModesArgs {
 }
 
 /// `X,Y,PHI_DEG` as a pose (m, m, rad).
-fn parse_pose(text: &str) -> Result<Pose, Failure> {
+pub(crate) fn parse_pose(text: &str) -> Result<Pose, Failure> {
     let bad = || {
         Failure::bad_input(format!(
             "--pose {text:?}: expected three finite numbers X_M,Y_M,PHI_DEG (m, m, deg), e.g. --pose -0.05,0,45"
@@ -74,7 +75,7 @@ fn parse_pose(text: &str) -> Result<Pose, Failure> {
         .map_err(|_| bad())?;
     match values.as_slice() {
         [x, y, phi] if values.iter().all(|v| v.is_finite()) => {
-            flexprr_run::linear::check_orientation_deg(*phi)
+            flexprr_linear_tools::linear::check_orientation_deg(*phi)
                 .map_err(|m| Failure::bad_input(format!("--pose {text}: {m}")))?;
             Ok(Pose::new(*x, *y, phi.to_radians()))
         }
@@ -229,7 +230,7 @@ fn write_files(
     count: usize,
     target: &OutputDir,
 ) -> Result<(), Failure> {
-    let io = |e: flexprr_run::OutputError| Failure::run(e);
+    let io = |e: flexprr_outdir::OutputError| Failure::run(e);
     let staging = target.stage().map_err(io)?;
     let dir = staging.path();
     let write = |name: &str, bytes: &[u8]| {

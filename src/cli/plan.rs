@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use flexprr_outdir::OutputDir;
 use flexprr_plan::{Options, PLAN_PRODUCTS, PlanError, PlanOutcome, plan_scene, write_plan};
-use flexprr_run::OutputDir;
 use flexprr_scene::{ScenarioError, Scene};
 
 use super::Failure;

@@ -4,8 +4,9 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use flexprr_outdir::OutputDir;
 use flexprr_run::{
-    OutputDir, RUN_PRODUCTS, RunResult, run as run_scene, table_one_markdown, write_outputs_into,
+    RUN_PRODUCTS, RunResult, run as run_scene, table_one_markdown, write_outputs_into,
 };
 use flexprr_scene::{InputKind, ScenarioError, Scene};
 
@@ -132,7 +133,8 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
     let target = OutputDir::check(&out, RUN_PRODUCTS, args.force, &[&args.scene], &[])
         .map_err(|e| failure(e.into()))?;
     target.check_writable().map_err(|e| failure(e.into()))?;
-    if flexprr_run::piezo::needs_uncontrolled(&scene) && !args.quiet {
+    if flexprr_run::SceneVariant::wanted(&flexprr_run::variant::Uncontrolled, &scene) && !args.quiet
+    {
         eprintln!(
             "{}: the scene is also run without its vibration control law, for the reduction \
              of the deflection (a second integration, the second half of the progress)",
@@ -186,8 +188,8 @@ fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path
             s.rhs_evaluations
         );
     }
-    if let Some(piezo) = &result.piezo {
-        print_piezo(piezo);
+    for line in result.reports.iter().flat_map(|r| r.print()) {
+        println!("{line}");
     }
     if let Some(table) = table_one_markdown(result) {
         println!("\nTable I (link 1 frequencies over the motion):\n{table}");
@@ -207,41 +209,6 @@ fn report(scene: &Scene, result: &RunResult, files: usize, out: &std::path::Path
                 b.min_eigenvalue,
             );
         }
-    }
-}
-
-/// The patches' largest voltages and the reduction of the mid-point deflection.
-fn print_piezo(piezo: &flexprr_run::piezo::PiezoReport) {
-    for p in &piezo.patches {
-        println!(
-            "  patch {} of link {}: max |V| {:.1} V of {} V{}",
-            p.index + 1,
-            p.link + 1,
-            p.max_abs_voltage,
-            p.voltage_limit,
-            if p.saturated_fraction > 0.0 {
-                format!(
-                    ", saturated {:.1} % of the time",
-                    100.0 * p.saturated_fraction
-                )
-            } else {
-                String::new()
-            }
-        );
-    }
-    for l in piezo.reduction.iter().flatten() {
-        let percent = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.1} %"));
-        println!(
-            "  link {} mid-point deflection with/without {}: peak {:.3e}/{:.3e} m ({} lower), RMS {:.3e}/{:.3e} m ({} lower)",
-            l.link + 1,
-            piezo.law,
-            l.peak_controlled,
-            l.peak_uncontrolled,
-            percent(l.peak_reduction_percent()),
-            l.rms_controlled,
-            l.rms_uncontrolled,
-            percent(l.rms_reduction_percent()),
-        );
     }
 }
 

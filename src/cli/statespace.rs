@@ -5,12 +5,12 @@ use std::path::PathBuf;
 
 use flexprr_linear::realization::Realization;
 use flexprr_linear::{Input, Output};
-use flexprr_run::OutputDir;
-use flexprr_run::output_dir::STATESPACE;
-use flexprr_run::statespace::{
+use flexprr_linear_tools::statespace::{
     StateSpaceRequest, check_channels, state_space, state_space_series, write_series,
     write_statespace,
 };
+use flexprr_outdir::OutputDir;
+use flexprr_outdir::STATESPACE;
 use flexprr_scene::{ScenarioError, Scene};
 
 use super::Failure;
@@ -191,7 +191,7 @@ pub fn run(args: StateSpaceArgs) -> Result<(), Failure> {
         "{}: {} model, {}: {} states, {} inputs, {} outputs ({} realisation, cond(A) {:.1e}{}); {} files written to {}",
         scene.name,
         ss.model,
-        flexprr_run::frf::at_words(&ss.at),
+        flexprr_linear_tools::frf::at_words(&ss.at),
         lin.a.nrows(),
         lin.b.ncols(),
         lin.c.nrows(),

@@ -424,7 +424,10 @@ fn refuse_repeats(option: &str, names: &[String]) -> Result<(), Failure> {
 ///
 /// # Errors
 /// Bad input (exit 2) saying why the directory is refused.
-fn output_dir(args: &WorkPrecisionArgs, scene: &Scene) -> Result<flexprr_run::OutputDir, Failure> {
+fn output_dir(
+    args: &WorkPrecisionArgs,
+    scene: &Scene,
+) -> Result<flexprr_outdir::OutputDir, Failure> {
     let out = args.out.clone().unwrap_or_else(|| {
         PathBuf::from("out")
             .join(&scene.name)
@@ -436,9 +439,9 @@ fn output_dir(args: &WorkPrecisionArgs, scene: &Scene) -> Result<flexprr_run::Ou
         .chain(args.peers.iter().map(PathBuf::as_path))
         .chain(args.compare.iter().map(PathBuf::as_path))
         .collect();
-    flexprr_run::OutputDir::check(
+    flexprr_outdir::OutputDir::check(
         &out,
-        flexprr_run::output_dir::WORK_PRECISION,
+        flexprr_outdir::WORK_PRECISION,
         args.force,
         &inputs,
         &[],

@@ -100,4 +100,9 @@ pub trait Controller: fmt::Debug + Send + Sync {
     fn name(&self) -> String {
         "custom".to_string()
     }
+    /// Warnings about the law on its own (a state-space law unstable without the machine),
+    /// reported with a run's.
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
 }

@@ -20,6 +20,7 @@ mod actuator;
 mod controller;
 mod error;
 mod pid;
+mod statespace;
 mod vibration;
 
 pub use actuator::{
@@ -29,4 +30,5 @@ pub use actuator::{
 pub use controller::{ControlInput, Controller, SliderState};
 pub use error::ControlError;
 pub use pid::Pid;
+pub use statespace::{MAX_MEASUREMENTS, SliderSignal, StateSpaceLaw, StateSpaceMatrices};
 pub use vibration::{ModalVelocity, StrainRate, VibrationController, VibrationInput};

@@ -100,44 +100,58 @@ pub enum Quantity {
     ForceCommand,
     /// The force an actuator exerts on its slider along the guide (N).
     ActuatorForce,
-    /// Motor torque after saturation (N m).
-    MotorTorque,
-    /// Motor speed (rev/s).
-    MotorSpeed,
-    /// Whether the motor torque is saturated at its peak (1) or not (0).
-    MotorSaturated,
-    /// A whole-machine natural frequency `|lambda| / 2 pi` of the linearised model (Hz).
-    MachineFrequency,
-    /// A whole-machine damping ratio `-Re(lambda) / |lambda|` (dimensionless).
-    MachineDampingRatio,
-    /// Transverse deflection w at xi of the same scene without its vibration control (m).
-    DeflectionUncontrolled,
-    /// A piezoelectric patch's sensor voltage `V_s` (V); link and the patch's index on it.
-    PatchSensorVoltage,
-    /// A patch's voltage command from the vibration control law (V).
-    PatchCommandVoltage,
-    /// A patch's applied voltage: the command clipped at its limit (V).
-    PatchVoltage,
-    /// Whether a patch's command was clipped at its limit (1) or not (0).
-    PatchSaturated,
-    /// Mechanical power a patch's actuator delivers to its link (W; negative when it
-    /// removes energy).
-    PatchPower,
-    /// A quantity a layer above names itself (an actuator's signal): its own spelling.
+    /// A quantity defined by a layer above (a motor's torque, a patch's voltage, a
+    /// whole-machine frequency, or one registered from outside): its own spelling.
     Named(NamedQuantity),
 }
 
-/// The spelling of a [`Quantity::Named`]: header stem and unit, plot symbol and unit.
+/// A quantity defined outside this crate, with how it is written: header stem, optional
+/// suffix after the indices, unit in the header, plot symbol and SI unit.
+///
+/// ```
+/// use flexprr_dynamics::{Column, NamedQuantity, Quantity};
+///
+/// const TIP_SPEED: Quantity = Quantity::Named(NamedQuantity::new("tip_speed", "m_s", "v", "m/s"));
+/// assert_eq!(Column::link(TIP_SPEED, 0).header(), "tip_speed_1_m_s");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct NamedQuantity {
     /// Header stem (`motor_torque`).
     pub stem: &'static str,
+    /// Suffix after the indices (`uncontrolled` in `w_1_xi0.5_uncontrolled_m`).
+    pub suffix: Option<&'static str>,
     /// Unit as written in the header (`N_m`).
     pub header_unit: &'static str,
     /// Plot symbol (`τ`).
     pub symbol: &'static str,
-    /// Unit as written in plot labels (`N·m`).
+    /// SI unit in plot labels (`N·m`).
     pub unit: &'static str,
+}
+
+impl NamedQuantity {
+    /// A quantity without a suffix.
+    pub const fn new(
+        stem: &'static str,
+        header_unit: &'static str,
+        symbol: &'static str,
+        unit: &'static str,
+    ) -> Self {
+        Self {
+            stem,
+            suffix: None,
+            header_unit,
+            symbol,
+            unit,
+        }
+    }
+
+    /// The same quantity with `suffix` after the indices.
+    pub const fn with_suffix(self, suffix: &'static str) -> Self {
+        Self {
+            suffix: Some(suffix),
+            ..self
+        }
+    }
 }
 
 /// How a quantity is written: header stem, optional suffix after the indices, unit, and the
@@ -213,20 +227,9 @@ impl Quantity {
             Q::PlatformErrorX => sp("platform_error_x", None, "m", "e_x", "m"),
             Q::PlatformErrorY => sp("platform_error_y", None, "m", "e_y", "m"),
             Q::PlatformErrorPhi => sp("platform_error_phi", None, "rad", "e_φ", "rad"),
+            Q::Named(n) => sp(n.stem, n.suffix, n.header_unit, n.symbol, n.unit),
             Q::ForceCommand => sp("force_command", None, "N", "F_c", "N"),
             Q::ActuatorForce => sp("actuator_force", None, "N", "F", "N"),
-            Q::MotorTorque => sp("motor_torque", None, "N_m", "τ", "N·m"),
-            Q::MotorSpeed => sp("motor_speed", None, "rev_s", "n", "rev/s"),
-            Q::MotorSaturated => sp("motor_saturated", None, "flag", "sat", "1"),
-            Q::MachineFrequency => sp("f_machine", None, "Hz", "f", "Hz"),
-            Q::MachineDampingRatio => sp("zeta_machine", None, "ratio", "ζ", "1"),
-            Q::DeflectionUncontrolled => sp("w", Some("uncontrolled"), "m", "w", "m"),
-            Q::PatchSensorVoltage => sp("V_sensor", None, "V", "V_s", "V"),
-            Q::PatchCommandVoltage => sp("V_command", None, "V", "V_c", "V"),
-            Q::PatchVoltage => sp("V_applied", None, "V", "V", "V"),
-            Q::PatchSaturated => sp("patch_saturated", None, "flag", "sat", "1"),
-            Q::PatchPower => sp("P_patch", None, "W", "P", "W"),
-            Q::Named(n) => sp(n.stem, None, n.header_unit, n.symbol, n.unit),
         }
     }
 
@@ -423,18 +426,6 @@ mod tests {
         assert_eq!(
             Column::of(Q::PlatformErrorPhi).header(),
             "platform_error_phi_rad"
-        );
-        assert_eq!(
-            Column::link(Q::MotorTorque, 2).header(),
-            "motor_torque_3_N_m"
-        );
-        assert_eq!(
-            Column::link(Q::MotorSpeed, 1).header(),
-            "motor_speed_2_rev_s"
-        );
-        assert_eq!(
-            Column::link(Q::MotorSaturated, 0).header(),
-            "motor_saturated_1_flag"
         );
     }
 }

@@ -17,6 +17,7 @@ mod error;
 pub mod expm;
 mod frf;
 mod linearize;
+mod margins;
 mod modes;
 mod names;
 mod outputs;
@@ -31,4 +32,5 @@ pub use linearize::{
     Coulomb, Derivatives, Linearization, Settings, StateName, linearize, linearize_with,
     linearize_with_settings,
 };
+pub use margins::{LoopMargins, loop_margins, margin_grid};
 pub use modes::{Mode, modes};

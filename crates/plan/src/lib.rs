@@ -27,7 +27,7 @@ pub use pipeline::{
     DEFAULT_SETTLE_TIME, Options, OrientationSearch, PlanOutcome, SceneTiming, plan_scene,
 };
 pub use report::plan_report;
-pub use variant::{planned_scene_file, scene_toml, unshaped};
+pub use variant::{Unshaped, planned_scene_file, scene_toml, unshaped};
 pub use vibration::{
     FlexibleCheck, MODE_POSES, ModesAt, MotionVibration, ShapedMode, ShapingDesign, design_shaper,
     vibration_of,

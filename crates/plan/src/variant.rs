@@ -1,9 +1,11 @@
 //! The scenes `flexprr plan` derives from the user's: the planned scene (its motion the
-//! plan, its `[plan]` removed) and its unshaped variant. Each is one function on the scene
-//! file, so that it can become a registered scene transformation.
+//! plan, its `[plan]` removed) and its unshaped variant, a named scene transformation of the
+//! run layer ([`Unshaped`], a [`SceneVariant`] like the runs without axial force or without
+//! vibration control).
 
 use flexprr_kinematics::PlannedData;
-use flexprr_scene::{SceneFile, TrajectoryConfig};
+use flexprr_run::{RunError, SceneVariant};
+use flexprr_scene::{Scene, SceneFile, TrajectoryConfig};
 
 /// The scene with `data` as its trajectory, `[plan]` removed, its time span from its own
 /// start to `end` (s) and its stop times dropped (they belong to the old motion; a planned
@@ -40,6 +42,26 @@ pub fn unshaped(file: &SceneFile) -> SceneFile {
         }
     }
     out
+}
+
+/// The unshaped variant of a planned scene ([`unshaped`] on its file, built and checked
+/// like any scene): the scene transformation `unshaped`.
+#[derive(Debug, Clone, Copy)]
+pub struct Unshaped;
+
+impl SceneVariant for Unshaped {
+    fn name(&self) -> &'static str {
+        "unshaped"
+    }
+    fn description(&self) -> &'static str {
+        "the planned motion without its input shaper (same timing, span shortened by the shaper's length)"
+    }
+    fn transform(&self, scene: &Scene) -> Result<Option<Scene>, RunError> {
+        let file = unshaped(&scene.file);
+        let text = scene_toml(&file, "").unwrap_or_default();
+        let label = format!("{} (planned)", scene.name);
+        Ok(Some(Scene::from_file(&label, &text, file, &scene.name)?))
+    }
 }
 
 /// The scene file as TOML text, with a header saying where it came from.

@@ -4,14 +4,14 @@
 //! the residual vibration after each move.
 
 use flexprr_kinematics::{GeometricPath, Impulse, Path, Pose};
+use flexprr_linear_tools::linear::{OperatingPoint, operating_point};
 use flexprr_planning::shaping::{self, Mode};
-use flexprr_run::RunResult;
-use flexprr_run::linear::{OperatingPoint, operating_point};
+use flexprr_run::{RunError, RunResult, SceneVariant};
 use flexprr_scene::{OutputKind, Scene, SceneFile};
 
 use crate::error::PlanError;
 use crate::pipeline::{PlanOutcome, build_scene};
-use crate::variant::unshaped;
+use crate::variant::Unshaped;
 
 /// Poses along the path at which the lowest modes are computed for the shaper.
 pub const MODE_POSES: usize = 5;
@@ -318,8 +318,27 @@ pub fn flexible_check(
         None
     } else {
         progress("running the unshaped motion");
-        let file = with_deflections(&unshaped(&outcome.planned_file), false);
-        let variant = build_scene(&outcome.scene, &file)?;
+        let shaped = build_scene(
+            &outcome.scene,
+            &with_deflections(&outcome.planned_file, false),
+        )?;
+        let variant = match Unshaped.transform(&shaped) {
+            Ok(Some(variant)) => variant,
+            Ok(None) => shaped,
+            Err(RunError::Scene(e)) => {
+                return Err(PlanError::PlannedScene {
+                    scene: outcome.scene.clone(),
+                    source: Box::new(e),
+                });
+            }
+            Err(e) => {
+                return Err(PlanError::Run {
+                    scene: outcome.scene.clone(),
+                    motion: "the unshaped motion",
+                    source: Box::new(e),
+                });
+            }
+        };
         let result = run(&variant, "the unshaped motion")?;
         let end = outcome.start + outcome.plan.timing.duration() + outcome.plan.smoothing;
         Some(vibration_of(&result, rest.then_some(end), settle))

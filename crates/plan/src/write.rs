@@ -1,9 +1,9 @@
 //! The products of `flexprr plan` in one output directory, under the run's output-directory
-//! policy (`flexprr_run::output_dir`): staged, published at the end, nothing written outside.
+//! policy (`flexprr_outdir`): staged, published at the end, nothing written outside.
 
 use std::path::Path;
 
-use flexprr_run::output_dir::{OutputDir, Products};
+use flexprr_outdir::{OutputDir, Products};
 use flexprr_run::{WriteOptions, write_outputs_with};
 use flexprr_scene::ScenarioError;
 

@@ -8,8 +8,10 @@
 use flexprr_kinematics::Pose;
 use flexprr_linear::realization::Realization;
 use flexprr_linear::{Coulomb, Input, Linearization, Output, Settings};
-use flexprr_run::linear::OperatingPoint;
-use flexprr_run::statespace::{StateSpace, StateSpaceRequest, state_space, state_space_series};
+use flexprr_linear_tools::linear::OperatingPoint;
+use flexprr_linear_tools::statespace::{
+    StateSpace, StateSpaceRequest, state_space, state_space_series,
+};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{Complex64, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
@@ -126,7 +128,7 @@ pub fn linearize<'py>(
                     format!("({x}, {y}, {phi}): expected three finite numbers (m, m, deg)"),
                 ));
             }
-            flexprr_run::linear::check_orientation_deg(phi)
+            flexprr_linear_tools::linear::check_orientation_deg(phi)
                 .map_err(|m| key_error("pose", format!("({x}, {y}, {phi}): {m}")))?;
             Where::One(OperatingPoint::Rest(Pose::new(x, y, phi.to_radians())))
         }

@@ -2,7 +2,9 @@
 
 use flexprr_dynamics::DynamicsError;
 use flexprr_integrators::IntegratorError;
+use flexprr_linear::LinearError;
 use flexprr_scene::ScenarioError;
+use flexprr_viewer::ViewerError;
 use thiserror::Error;
 
 use crate::RunResult;
@@ -58,6 +60,27 @@ pub enum RunError {
         /// The link (0-based), where the component belongs to one.
         link: Option<usize>,
     },
+    /// Linearising the run's model along its motion failed (an output such as
+    /// `machine_frequencies`): the output, the time and why.
+    #[error("{output} at t = {t} s: {source}")]
+    Linear {
+        /// The output that linearises (`machine_frequencies`).
+        output: &'static str,
+        /// Time of the operating point (s).
+        t: f64,
+        /// Why the linearisation or its eigenvalue problem failed.
+        #[source]
+        source: LinearError,
+    },
+    /// A figure or document of the run could not be drawn from the run's data.
+    #[error("{file}: {source}")]
+    Figure {
+        /// The file it was for (`viewer.html`, `snapshots.svg`, `machine.svg`).
+        file: String,
+        /// What is wrong with the data.
+        #[source]
+        source: ViewerError,
+    },
     /// Reading or writing outputs, or bad input met while running.
     #[error(transparent)]
     Scene(#[from] ScenarioError),
@@ -66,7 +89,8 @@ pub enum RunError {
 impl RunError {
     /// A one-word kind for `summary.json` and study records: `collapse` (the mechanism
     /// collapsed: a physical outcome), `diverged`, `singular-pose`, `kinematics`,
-    /// `step-size-collapse`, `too-many-steps`, `non-finite`, `integrator`, `model`, `io`.
+    /// `step-size-collapse`, `too-many-steps`, `non-finite`, `integrator`, `model`,
+    /// `linearisation`, `figure`, `io`, `input`.
     pub fn kind(&self) -> &'static str {
         match self {
             RunError::Model(DynamicsError::Collapse { .. }) => "collapse",
@@ -82,6 +106,8 @@ impl RunError {
                 IntegratorError::Stiff { .. } => "stiff",
                 _ => "integrator",
             },
+            RunError::Linear { .. } => "linearisation",
+            RunError::Figure { .. } => "figure",
             RunError::Scene(ScenarioError::Io { .. }) => "io",
             RunError::Scene(_) => "input",
         }
@@ -90,7 +116,9 @@ impl RunError {
     /// When it happened (s), where the error knows.
     pub fn time(&self) -> Option<f64> {
         match self {
-            RunError::Diverged { t, .. } | RunError::NonFinite { t, .. } => Some(*t),
+            RunError::Diverged { t, .. }
+            | RunError::NonFinite { t, .. }
+            | RunError::Linear { t, .. } => Some(*t),
             RunError::Model(DynamicsError::SingularInverseDynamics { t, .. })
             | RunError::Model(DynamicsError::Kinematics { t, .. })
             | RunError::Model(DynamicsError::Collapse { t, .. }) => Some(*t),

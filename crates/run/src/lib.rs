@@ -12,24 +12,18 @@
 pub mod column;
 pub mod control;
 mod error;
-pub mod frf;
-pub mod frf_plan;
 pub mod guard;
 mod integrate;
-pub mod linear;
 pub mod machine_frequencies;
-pub mod machine_modes;
-pub mod modal_test;
-pub mod npz;
 mod output;
-pub mod output_dir;
 mod outputs;
 pub mod piezo;
 pub mod plot;
+pub mod report;
 mod run;
 mod samples;
-pub mod statespace;
 mod table;
+pub mod variant;
 mod viewer;
 
 pub use column::{Column, Quantity};
@@ -40,6 +34,7 @@ pub use output::{
     RUN_PRODUCTS, WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs,
     write_outputs_into, write_outputs_with,
 };
-pub use output_dir::{OutputDir, OutputError};
+pub use report::{Report, SharedReport};
 pub use run::{integrate, run, run_model, scene_integrator};
 pub use table::{RunResult, RunStats, Table};
+pub use variant::{OnFailure, SceneVariant, VariantRun};

@@ -13,16 +13,23 @@
 
 use std::time::Instant;
 
-use flexprr_dynamics::{FrequencyHistory, ModalSystem, SceneModel};
+use flexprr_dynamics::{FrequencyHistory, ModalSystem, NamedQuantity, SceneModel};
 use flexprr_integrators::Solution;
 use flexprr_linear::{LinearError, Mode, linearize, modes};
 use flexprr_plot::decimate::frame_indices;
-use flexprr_scene::ScenarioError;
 use serde_json::{Value, json};
 
 use crate::column::{Column, Quantity as Q};
 use crate::error::RunError;
 use crate::table::Table;
+
+/// A whole-machine natural frequency `|lambda| / 2 pi` of the linearised model (Hz):
+/// `f_machine_<k>_Hz`.
+pub const MACHINE_FREQUENCY: Q = Q::Named(NamedQuantity::new("f_machine", "Hz", "f", "Hz"));
+/// A whole-machine damping ratio `-Re(lambda) / |lambda|` (dimensionless):
+/// `zeta_machine_<k>_ratio`.
+pub const MACHINE_DAMPING_RATIO: Q =
+    Q::Named(NamedQuantity::new("zeta_machine", "ratio", "ζ", "1"));
 
 /// Most instants linearised: every `ceil((n - 1) / 200)`-th output time, with the first
 /// and the last (201 of 2001 output times, for instance).
@@ -86,9 +93,11 @@ pub(crate) struct MachineFrequencies {
 fn at_time(e: LinearError, t: f64) -> RunError {
     match e {
         LinearError::Model(e) => RunError::Model(e),
-        other => RunError::Scene(ScenarioError::Run(format!(
-            "machine_frequencies at t = {t} s: {other}"
-        ))),
+        source => RunError::Linear {
+            output: "machine_frequencies",
+            t,
+            source,
+        },
     }
 }
 
@@ -137,11 +146,11 @@ pub(crate) fn machine_frequencies(
     };
     for k in 0..count {
         let f = found.iter().map(|m| m[k].frequency_hz).collect();
-        table.push(column(Q::MachineFrequency, k), f);
+        table.push(column(MACHINE_FREQUENCY, k), f);
     }
     for k in 0..count {
         let zeta = found.iter().map(|m| m[k].damping_ratio).collect();
-        table.push(column(Q::MachineDampingRatio, k), zeta);
+        table.push(column(MACHINE_DAMPING_RATIO, k), zeta);
     }
     match FrequencyHistory::sample(ked, &times) {
         Ok(history) => {
@@ -168,5 +177,20 @@ pub(crate) fn machine_frequencies(
         table: Some(table),
         note: Some(note),
         failure,
+    }
+}
+
+impl crate::report::Report for MachineFrequencyNote {
+    fn name(&self) -> &'static str {
+        "machine_frequencies"
+    }
+
+    /// `machine_frequencies`.
+    fn sections(&self) -> Vec<(&'static str, Value)> {
+        vec![("machine_frequencies", self.to_json())]
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }

@@ -1,6 +1,6 @@
 //! Writing a run's results: one CSV per time series, `summary.json`, Table I and SVG plots.
 //!
-//! A run's directory is written whole, by the policy of [`crate::output_dir`]: every file
+//! A run's directory is written whole, by the policy of [`flexprr_outdir`]: every file
 //! goes into a staging directory, published at the end, so a crash never leaves a
 //! half-written directory and a second run never leaves stale files of the first. A
 //! directory flexprr did not write is refused unless the caller forces it, and even then
@@ -12,8 +12,8 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use crate::error::RunError;
-use crate::output_dir::{Legacy, OutputDir, Products};
 use crate::table::{RunResult, Table};
+use flexprr_outdir::{Legacy, OutputDir, Products};
 use flexprr_scene::ScenarioError;
 use flexprr_scene::Scene;
 
@@ -24,9 +24,19 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> ScenarioError + '_ {
     }
 }
 
-fn csv_bytes(table: &Table) -> Result<Vec<u8>, ScenarioError> {
+/// A failure to produce the bytes of output file `name` (a CSV record, an SVG figure whose
+/// data do not fit), as the I/O error of that file: it is the file that could not be written.
+fn unwritable(dir: &Path, name: &str, reason: impl std::fmt::Display) -> ScenarioError {
+    ScenarioError::Io {
+        path: dir.join(name).display().to_string(),
+        source: std::io::Error::other(reason.to_string()),
+    }
+}
+
+fn csv_bytes(table: &Table, dir: &Path) -> Result<Vec<u8>, ScenarioError> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let csv_err = |e: csv::Error| ScenarioError::Run(format!("writing {}.csv: {e}", table.name));
+    let file = format!("{}.csv", table.name);
+    let csv_err = |e: csv::Error| unwritable(dir, &file, e);
     w.write_record(table.headers()).map_err(csv_err)?;
     let mut row = Vec::with_capacity(table.columns.len());
     for k in 0..table.rows() {
@@ -34,8 +44,7 @@ fn csv_bytes(table: &Table) -> Result<Vec<u8>, ScenarioError> {
         row.extend(table.data.iter().map(|c| format!("{:.10e}", c[k])));
         w.write_record(&row).map_err(csv_err)?;
     }
-    w.into_inner()
-        .map_err(|e| ScenarioError::Run(format!("writing {}.csv: {e}", table.name)))
+    w.into_inner().map_err(|e| unwritable(dir, &file, e))
 }
 
 /// `null` for a non-finite number (JSON has none; the summary never shows `NaN` or `inf`).
@@ -127,8 +136,7 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         })
         .collect();
     let (status, failure) = status_json(failure);
-    let (control, feasibility) = crate::control::summary_sections(result);
-    json!({
+    let mut summary = json!({
         "status": status,
         "failure": failure,
         "warnings": result.warnings,
@@ -154,19 +162,18 @@ pub fn summary_json(scene: &Scene, result: &RunResult, failure: Option<&RunError
         },
         "integrator": integrator,
         "frequencies": frequencies,
-        "control": control,
-        "feasibility": feasibility,
-        "vibration_control": result
-            .piezo
-            .as_ref()
-            .map_or(Value::Null, crate::piezo::PiezoReport::to_json),
-        "machine_frequencies": result
-            .machine_frequencies
-            .as_ref()
-            .map_or(Value::Null, |n| n.to_json()),
         "peak_abs": peaks,
         "scene_file": serde_json::to_value(&scene.file).unwrap_or(Value::Null),
-    })
+    });
+    if let Some(map) = summary.as_object_mut() {
+        for key in crate::report::BUILT_IN_SECTIONS {
+            map.insert((*key).to_string(), Value::Null);
+        }
+        for (key, value) in result.reports.iter().flat_map(|r| r.sections()) {
+            map.insert(key.to_string(), value);
+        }
+    }
+    summary
 }
 
 /// Whether a frequency range belongs to a rigid-body mode (free-free or pinned-free bases):
@@ -210,7 +217,7 @@ pub struct WriteOptions {
 }
 
 /// The files of a run (`docs/scenes.md`, "Outputs and their CSV columns" and "Plots"): what
-/// [`crate::output_dir`] refuses to write over when it finds them in a directory flexprr did
+/// [`flexprr_outdir`] refuses to write over when it finds them in a directory flexprr did
 /// not write, and what it recognises an earlier run's directory by.
 pub const RUN_PRODUCTS: Products = Products {
     kind: "run",
@@ -269,7 +276,7 @@ pub fn write_outputs(
 
 /// Writes every output of `result` (a complete run, or the partial outputs of a failed one
 /// with its `failure`) into `dir`, checked by [`OutputDir::check`] with the policy of
-/// [`crate::output_dir`]: CSV tables, `summary.json` with the status,
+/// [`flexprr_outdir`]: CSV tables, `summary.json` with the status,
 /// `table1.md`/`table1.csv` when frequencies were computed, SVG plots unless the scene turned
 /// them off. A command should rather check the directory before the run, with
 /// [`OutputDir::check`] and [`RUN_PRODUCTS`], and then call [`write_outputs_into`].
@@ -289,7 +296,7 @@ pub fn write_outputs_with(
 }
 
 /// Writes the outputs of `result` into a checked directory: into a staging directory first,
-/// published at the end ([`crate::output_dir::Staging::publish`]). Returns the paths written.
+/// published at the end ([`flexprr_outdir::Staging::publish`]). Returns the paths written.
 ///
 /// # Errors
 /// [`ScenarioError::Input`] (key `--out`) when a file would replace one flexprr did not
@@ -327,7 +334,7 @@ fn write_files(
         write(
             &mut written,
             format!("{}.csv", table.name),
-            &csv_bytes(table)?,
+            &csv_bytes(table, dir)?,
         )?;
     }
     if let Some(md) = table_one_markdown(result) {
@@ -352,10 +359,8 @@ fn write_files(
     }
     if scene.file.output.plots {
         for (file, figure) in crate::plot::run_figures(scene, result) {
-            figure
-                .write_svg(&dir.join(&file))
-                .map_err(ScenarioError::Run)?;
-            written.push(file);
+            let svg = figure.to_svg().map_err(|e| unwritable(dir, &file, e))?;
+            write(&mut written, file, svg.as_bytes())?;
         }
     }
     for (name, text) in &result.documents {

@@ -173,9 +173,12 @@ pub(crate) fn modes(model: &dyn SceneModel, solution: &Solution) -> Table {
     table
 }
 
-/// Deflections at the requested `xi`, without axial force when that run was made
-/// (`deflections.csv`, the paper's figures 6-8), and without vibration control when that
-/// run was made (docs/piezo.md).
+/// A model and its states over the output times.
+pub(crate) type Solved<'a> = (&'a dyn SceneModel, &'a Solution);
+
+/// Deflections at the requested `xi` (`deflections.csv`), and for each variant run that was
+/// made, its deflections as the column quantity it is paired with: without axial force
+/// (the paper's figures 6-8), without vibration control (docs/piezo.md).
 ///
 /// # Errors
 /// A deflection the model cannot compute at an output time (a kinematic failure).
@@ -183,8 +186,7 @@ pub(crate) fn deflections(
     scene: &Scene,
     model: &dyn SceneModel,
     solution: &Solution,
-    without_axial: Option<(&dyn SceneModel, &Solution)>,
-    uncontrolled: Option<(&dyn SceneModel, &Solution)>,
+    variants: &[(Q, Option<Solved<'_>>)],
 ) -> Result<Table, DynamicsError> {
     let mut table = Table::new("deflections", &solution.t);
     let deflection = |model: &dyn SceneModel, states: &Solution, i: usize, xi: f64| {
@@ -198,17 +200,13 @@ pub(crate) fn deflections(
                 Column::at(Q::Deflection, i, xi),
                 deflection(model, solution, i, xi)?,
             );
-            if let Some((plain, states)) = without_axial {
-                table.push(
-                    Column::at(Q::DeflectionWithoutAxialForce, i, xi),
-                    deflection(plain, states, i, xi)?,
-                );
-            }
-            if let Some((free, states)) = uncontrolled {
-                table.push(
-                    Column::at(Q::DeflectionUncontrolled, i, xi),
-                    deflection(free, states, i, xi)?,
-                );
+            for (quantity, run) in variants {
+                if let Some((other, states)) = run {
+                    table.push(
+                        Column::at(*quantity, i, xi),
+                        deflection(*other, states, i, xi)?,
+                    );
+                }
             }
         }
     }

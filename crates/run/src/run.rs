@@ -11,11 +11,13 @@ use flexprr_dynamics::{DynamicsError, MachineSnapshot, ModalSystem, SceneModel};
 use flexprr_integrators::{DynIntegrator, Solution};
 use flexprr_scene::{OutputKind, Scene};
 
+use crate::column::Quantity as Q;
 use crate::error::{RunError, RunFailure};
 use crate::integrate::{Integration, integrate_model};
 use crate::outputs;
 use crate::samples::Samples;
 use crate::table::{RunResult, RunStats};
+use crate::variant::{self, OnFailure, SceneVariant, Uncontrolled, VariantRun, WithoutAxialForce};
 use crate::viewer;
 
 /// The integrator the scene names, with the scene's options.
@@ -46,10 +48,8 @@ pub fn integrate(
 struct Integrated {
     model: Box<dyn SceneModel>,
     solution: Solution,
-    without_axial: Option<(Box<dyn SceneModel>, Solution)>,
-    /// The same scene without its vibration control law, when it was run for the
-    /// comparison (or why it could not be).
-    uncontrolled: Option<crate::piezo::Uncontrolled>,
+    /// The variant runs the scene asked for, by the variant's name (see [`crate::variant`]).
+    variants: Vec<(&'static str, VariantRun)>,
     /// The model's [`MachineSnapshot`] at every output time reached, once an output needs
     /// them.
     snapshots: Option<Vec<MachineSnapshot>>,
@@ -66,6 +66,14 @@ impl Integrated {
         }
         Ok(self.snapshots.as_deref().unwrap_or(&[]))
     }
+}
+
+/// The run of the variant called `name` among `variants`, when it was made.
+fn variant_run<'a>(
+    variants: &'a [(&'static str, VariantRun)],
+    name: &str,
+) -> Option<&'a VariantRun> {
+    variants.iter().find(|(n, _)| *n == name).map(|(_, v)| v)
 }
 
 /// Runs a scene, computing only what it requests. `report` receives the progress of the
@@ -116,11 +124,10 @@ fn wants(scene: &Scene, kind: OutputKind) -> bool {
     scene.outputs.contains(&kind)
 }
 
-/// Integrates `model` (the scene's own when `None`) and, when the scene compares with a run
-/// without axial force and its model has that switch, that model too; when the scene's
-/// patches are under a vibration control law and the deflections or the piezo output are
-/// requested, the same scene without the law (the second half of the progress); on failure,
-/// the error with the partial states.
+/// Integrates `model` (the scene's own when `None`), then, when it reached the end, every
+/// built-in variant the scene asks for ([`crate::variant::built_in`]) in order; the main
+/// run and the variants that show progress share it equally. On failure, the error with the
+/// partial states.
 fn integrate_all(
     scene: &Scene,
     model: Option<Box<dyn SceneModel>>,
@@ -131,13 +138,17 @@ fn integrate_all(
         Some(model) => model,
         None => scene.build_model()?,
     };
-    let second = crate::piezo::needs_uncontrolled(scene);
-    let main_share = if second { 0.5 } else { 1.0 };
+    let wanted: Vec<&dyn SceneVariant> = variant::built_in()
+        .into_iter()
+        .filter(|v| v.wanted(scene))
+        .collect();
+    let shares = 1 + wanted.iter().filter(|v| v.shows_progress()).count();
+    let share = 1.0 / shares as f64;
     let main = integrate_model(
         scene,
         scene_integrator(scene).as_ref(),
         model.as_mut(),
-        &mut |f| report(main_share * f),
+        &mut |f| report(share * f),
     );
     stats.integrated = true;
     stats.integrator = Some(main.stats().clone());
@@ -148,51 +159,79 @@ fn integrate_all(
     let mut integrated = Integrated {
         model,
         solution,
-        without_axial: None,
-        uncontrolled: None,
+        variants: Vec::new(),
         snapshots: None,
     };
     if failure.is_some() {
         return Ok((integrated, failure));
     }
-    if scene.file.output.compare_without_axial_force {
-        if let Some(e) = integrate_without_axial(scene, stats, &mut integrated)? {
-            return Ok((integrated, Some(e)));
-        }
-    }
-    if second {
-        integrated.uncontrolled = Some(crate::piezo::integrate_uncontrolled(
-            scene,
-            &mut |f| report(0.5 + 0.5 * f),
-            stats,
-        ));
+    let mut done = 1;
+    for v in wanted {
+        let start = done as f64 * share;
+        let mut progress = |f: f64| report(start + share * f);
+        let quiet = &mut |_: f64| {};
+        let progress: &mut dyn FnMut(f64) = if v.shows_progress() {
+            done += 1;
+            &mut progress
+        } else {
+            quiet
+        };
+        let outcome = integrate_variant(scene, v, progress, stats);
+        let run = match (outcome, v.on_failure()) {
+            (Ok(Some(run)), _) => run,
+            (Ok(None), _) => continue,
+            (Err(e), OnFailure::Recorded) => VariantRun::Failed(e.to_string()),
+            (Err(VariantFailure::Start(e)), OnFailure::FailsRun) => return Err(e),
+            (Err(VariantFailure::Stopped(e)), OnFailure::FailsRun) => {
+                return Ok((integrated, Some(e)));
+            }
+        };
+        integrated.variants.push((v.name(), run));
     }
     Ok((integrated, None))
 }
 
-/// The scene's model without axial force, when it has that switch, into `integrated`; its
-/// failure, if it failed.
-fn integrate_without_axial(
-    scene: &Scene,
-    stats: &mut RunStats,
-    integrated: &mut Integrated,
-) -> Result<Option<RunError>, RunError> {
-    if let Some(mut plain) = scene.build_model_without_axial_force()? {
-        let integ = integrate_model(
-            scene,
-            scene_integrator(scene).as_ref(),
-            plain.as_mut(),
-            &mut |_| {},
-        );
-        let counters = plain.counters();
-        stats.rhs_evaluations += counters.rhs_evaluations;
-        stats.inverse_dynamics_solves += counters.inverse_dynamics_solves;
-        if let Some(e) = integ.failure {
-            return Ok(Some(e));
+/// Why a variant run has no states: it could not start, or it stopped.
+enum VariantFailure {
+    Start(RunError),
+    Stopped(RunError),
+}
+
+impl std::fmt::Display for VariantFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            VariantFailure::Start(e) | VariantFailure::Stopped(e) => e.fmt(f),
         }
-        integrated.without_axial = Some((plain, integ.solution));
     }
-    Ok(None)
+}
+
+/// Integrates `variant` of `scene` over its output times (progress to `report`), adding its
+/// work to `stats`; `None` when the scene has no such variant.
+fn integrate_variant(
+    scene: &Scene,
+    variant: &dyn SceneVariant,
+    report: &mut dyn FnMut(f64),
+    stats: &mut RunStats,
+) -> Result<Option<VariantRun>, VariantFailure> {
+    let Some(changed) = variant.transform(scene).map_err(VariantFailure::Start)? else {
+        return Ok(None);
+    };
+    let mut model = changed
+        .build_model()
+        .map_err(|e| VariantFailure::Start(e.into()))?;
+    let integration = integrate_model(
+        &changed,
+        scene_integrator(&changed).as_ref(),
+        model.as_mut(),
+        report,
+    );
+    let counters = model.counters();
+    stats.rhs_evaluations += counters.rhs_evaluations;
+    stats.inverse_dynamics_solves += counters.inverse_dynamics_solves;
+    match integration.failure {
+        Some(e) => Err(VariantFailure::Stopped(e)),
+        None => Ok(Some(VariantRun::Solved(model, integration.solution))),
+    }
 }
 
 /// The body of [`run`]: fills `result` as far as it gets.
@@ -245,6 +284,9 @@ fn run_into(
         {
             result.warnings.push(w);
         }
+    }
+    if let Some(law) = &scene.controller {
+        result.warnings.extend(law.warnings());
     }
     let c = ked.counters();
     result.stats.rhs_evaluations += c.rhs_evaluations;
@@ -311,7 +353,9 @@ fn produce(
             report,
         );
         result.tables.extend(out.table);
-        result.machine_frequencies = out.note;
+        if let Some(note) = out.note {
+            result.add_report(note);
+        }
         if let Some(e) = out.failure {
             return Err(e);
         }
@@ -364,31 +408,29 @@ fn produce_integrated(
     let tables = &mut result.tables;
     tables.extend(integrated.model.tables(&integrated.solution)?);
     let (model, solution) = (integrated.model.as_mut(), &integrated.solution);
+    let variants = &integrated.variants;
+    let solved = |name: &str| variant_run(variants, name).and_then(VariantRun::solved);
     if wants(scene, OutputKind::Modes) {
         tables.push(outputs::modes(model, solution));
     }
     if wants(scene, OutputKind::Deflections) {
-        let plain = integrated
-            .without_axial
-            .as_ref()
-            .map(|(m, s)| (m.as_ref(), s));
-        let uncontrolled = integrated
-            .uncontrolled
-            .as_ref()
-            .and_then(crate::piezo::Uncontrolled::solved);
-        tables.push(outputs::deflections(
-            scene,
-            model,
-            solution,
-            plain,
-            uncontrolled,
-        )?);
+        let variants = [
+            (
+                Q::DeflectionWithoutAxialForce,
+                solved(WithoutAxialForce.name()),
+            ),
+            (
+                crate::piezo::DEFLECTION_UNCONTROLLED,
+                solved(Uncontrolled.name()),
+            ),
+        ];
+        tables.push(outputs::deflections(scene, model, solution, &variants)?);
     }
     crate::piezo::produce(
         scene,
         model,
         solution,
-        integrated.uncontrolled.as_ref(),
+        variant_run(variants, Uncontrolled.name()),
         result,
     )?;
     let tables = &mut result.tables;

@@ -40,20 +40,36 @@ pub struct RunResult {
     /// What `viewer.html` and `snapshots.svg` draw, when either was requested: the run's
     /// frames mapped to [`flexprr_viewer::ViewerData`] (see docs/viewer.md).
     pub viewer: Option<flexprr_viewer::ViewerData>,
-    /// The feasibility of the commanded motion for the scene's motors and the servo summary
-    /// of an actuated run (docs/control.md).
-    pub control: crate::control::ControlReport,
-    /// What the `machine_frequencies` output did (instants, stride, modes, time), when
-    /// requested.
-    pub machine_frequencies: Option<crate::machine_frequencies::MachineFrequencyNote>,
-    /// The piezoelectric patches over the run and the reduction against the same scene
-    /// without vibration control, when the scene has patches (docs/piezo.md).
-    pub piezo: Option<crate::piezo::PiezoReport>,
+    /// What the features found over the run (control, vibration control, the machine's
+    /// frequencies, or reports added from outside), in the order they were added: see
+    /// [`crate::report`].
+    pub reports: Vec<crate::report::SharedReport>,
 }
 
 impl RunResult {
     /// The table called `name`.
     pub fn table(&self, name: &str) -> Option<&Table> {
         self.tables.iter().find(|t| t.name == name)
+    }
+
+    /// Adds `report`, and its warnings to [`RunResult::warnings`].
+    pub fn add_report(&mut self, report: impl crate::report::Report) {
+        self.warnings.extend(report.warnings());
+        self.reports.push(std::sync::Arc::new(report));
+    }
+
+    /// The report called `name`, if the run made one.
+    pub fn report_named(&self, name: &str) -> Option<&dyn crate::report::Report> {
+        self.reports
+            .iter()
+            .find(|r| r.name() == name)
+            .map(|r| r.as_ref())
+    }
+
+    /// The report of type `R`, if the run made one.
+    pub fn report<R: crate::report::Report>(&self) -> Option<&R> {
+        self.reports
+            .iter()
+            .find_map(|r| r.as_any().downcast_ref::<R>())
     }
 }

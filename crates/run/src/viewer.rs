@@ -25,7 +25,7 @@
 
 use flexprr_dynamics::{DynamicsError, FrequencyHistory, MachineSnapshot, ModalSystem, SceneModel};
 use flexprr_integrators::Solution;
-use flexprr_scene::{OutputKind, ScenarioError, Scene};
+use flexprr_scene::{OutputKind, Scene};
 use flexprr_viewer::{GuideView, LinkView, ViewerData, ViewerError, frame_indices};
 
 use crate::error::RunError;
@@ -42,7 +42,10 @@ const MACHINE_GRID: usize = 241;
 
 /// A viewer failure as a run error naming the output.
 fn figure_error(file: &str, e: ViewerError) -> RunError {
-    RunError::Scene(ScenarioError::Run(format!("{file}: {e}")))
+    RunError::Figure {
+        file: file.to_string(),
+        source: e,
+    }
 }
 
 /// The guides and platform joints of the scene's machine, as drawn.
@@ -185,9 +188,16 @@ pub(crate) fn viewer_data(
                 .collect(),
         });
     }
-    let links: [LinkView; 3] = links
-        .try_into()
-        .map_err(|_| RunError::Scene(ScenarioError::Run("a machine has three links".into())))?;
+    let links: [LinkView; 3] = links.try_into().map_err(|found: Vec<LinkView>| {
+        figure_error(
+            "viewer.html",
+            ViewerError::Length {
+                field: "links".into(),
+                found: found.len(),
+                expected: 3,
+            },
+        )
+    })?;
     let deviation = model
         .platform_follows_links()
         .then(|| snapshots[..n].iter().map(|p| p.pose_deviation()).collect());

@@ -133,7 +133,10 @@ fn tracking_is_the_commanded_ik_minus_the_integrated_sliders() {
         }
     }
     // The servo summary is the tracking table's peaks and RMS values.
-    let servo = result.control.servo.as_ref().expect("servo summary");
+    let servo = flexprr_run::control::report_of(&result)
+        .servo
+        .as_ref()
+        .expect("servo summary");
     let e1 = tracking.column("slider_error_1_m").expect("e1");
     let peak = e1.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let rms = (e1.iter().map(|x| x * x).sum::<f64>() / e1.len() as f64).sqrt();
@@ -151,7 +154,12 @@ fn tracking_is_the_commanded_ik_minus_the_integrated_sliders() {
             assert!((viewer.sliders[k][i] - solution.y(k)[n + i]).abs() <= 1e-15);
         }
     }
-    assert!(result.control.feasibility.is_none(), "no motor, no ratings");
+    assert!(
+        flexprr_run::control::report_of(&result)
+            .feasibility
+            .is_none(),
+        "no motor, no ratings"
+    );
 }
 
 #[test]
@@ -165,10 +173,18 @@ fn a_frequencies_only_ked_scene_with_a_motor_is_checked_without_integrating() {
     let ked = scene(&text);
     let result = run(&ked, &mut |_| {}).expect("runs");
     assert!(!result.stats.integrated);
-    let feasibility = result.control.feasibility.as_ref().expect("checked");
+    let feasibility = flexprr_run::control::report_of(&result)
+        .feasibility
+        .as_ref()
+        .expect("checked");
     let coupled = run(&scene(&config("servo_motor_f20.toml")), &mut |_| {}).expect("runs");
     // The requirement is the commanded rigid motion's, whatever the model.
-    assert_eq!(Some(feasibility), coupled.control.feasibility.as_ref());
+    assert_eq!(
+        Some(feasibility),
+        flexprr_run::control::report_of(&coupled)
+            .feasibility
+            .as_ref()
+    );
     assert!(result.warnings.iter().any(|w| w.contains("max_speed")));
 }
 
@@ -188,7 +204,10 @@ fn saturated_motors_on_the_20_hz_circle_let_the_mechanism_collapse() {
     let partial = &failure.partial;
     let rows = partial.table("actuators").expect("actuators").rows();
     assert!(rows > 1 && rows < scene.output_times.len());
-    let servo = partial.control.servo.as_ref().expect("servo summary");
+    let servo = flexprr_run::control::report_of(partial)
+        .servo
+        .as_ref()
+        .expect("servo summary");
     assert!(
         servo
             .sliders
@@ -196,7 +215,10 @@ fn saturated_motors_on_the_20_hz_circle_let_the_mechanism_collapse() {
             .all(|s| s.saturated_fraction.is_some_and(|f| f > 0.5)),
         "{servo:?}"
     );
-    let feasibility = partial.control.feasibility.as_ref().expect("checked");
+    let feasibility = flexprr_run::control::report_of(partial)
+        .feasibility
+        .as_ref()
+        .expect("checked");
     let last = scene.output_times[scene.output_times.len() - 1];
     assert!((feasibility.span.1 - last).abs() <= 0.0);
 }
@@ -341,7 +363,10 @@ fn the_speed_warning_names_when_the_commanded_slider_first_outruns_the_motor() {
     let kinematics = result.table("kinematics").expect("kinematics");
     let v1 = kinematics.column("rho_dot_1_m_s").expect("v1");
     assert!(v1[0].abs() > 100.0 * MOTOR.lead, "leg 1 starts too fast");
-    let feasibility = result.control.feasibility.as_ref().expect("checked");
+    let feasibility = flexprr_run::control::report_of(&result)
+        .feasibility
+        .as_ref()
+        .expect("checked");
     assert_eq!(feasibility.first_over_speed(), Some((0.0, 0)));
     assert!(
         result
@@ -368,8 +393,7 @@ fn the_speed_warning_names_when_the_commanded_slider_first_outruns_the_motor() {
         .min_by(|a, b| a.0.total_cmp(&b.0))
         .expect("7.5 m/s is passed");
     assert!(expected.0 > 0.0);
-    let (time, leg) = result
-        .control
+    let (time, leg) = flexprr_run::control::report_of(&result)
         .feasibility
         .as_ref()
         .and_then(|f| f.first_over_speed())
@@ -431,7 +455,10 @@ fn an_actuated_motor_reports_its_torque_speed_and_force_by_the_motor_formulas() 
             assert!(column("motor_saturated").abs() <= 0.0);
         }
     }
-    let servo = result.control.servo.as_ref().expect("servo summary");
+    let servo = flexprr_run::control::report_of(&result)
+        .servo
+        .as_ref()
+        .expect("servo summary");
     assert!(
         servo
             .sliders
@@ -439,7 +466,10 @@ fn an_actuated_motor_reports_its_torque_speed_and_force_by_the_motor_formulas() 
             .all(|s| s.saturated_fraction == Some(0.0))
     );
     assert!(servo.first_over_speed().is_none());
-    let feasibility = result.control.feasibility.as_ref().expect("checked");
+    let feasibility = flexprr_run::control::report_of(&result)
+        .feasibility
+        .as_ref()
+        .expect("checked");
     assert!(feasibility.feasible(), "{:?}", result.warnings);
     assert!(result.warnings.is_empty(), "{:?}", result.warnings);
 }

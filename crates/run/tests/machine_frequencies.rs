@@ -48,8 +48,7 @@ fn at_rest_locked_the_whole_machine_has_the_pinned_pinned_frequencies_at_every_i
     let elastic = run(&s, &mut |_| {}).expect("runs");
     assert_eq!(
         elastic
-            .machine_frequencies
-            .as_ref()
+            .report::<flexprr_run::machine_frequencies::MachineFrequencyNote>()
             .expect("the note")
             .modes,
         12,
@@ -60,7 +59,9 @@ fn at_rest_locked_the_whole_machine_has_the_pinned_pinned_frequencies_at_every_i
     let result = run(&s, &mut |f| fractions.push(f)).expect("runs");
     let table = result.table("machine_frequencies").expect("the table");
     // 501 output times: every 3rd (ceil(500 / 200)) and the last.
-    let note = result.machine_frequencies.as_ref().expect("the note");
+    let note = result
+        .report::<flexprr_run::machine_frequencies::MachineFrequencyNote>()
+        .expect("the note");
     assert_eq!(
         (note.output_times, note.stride, note.instants),
         (501, 3, 168)
@@ -128,7 +129,13 @@ fn along_a_servo_motion_twelve_modes_are_tabulated_with_their_damping() {
     );
     let result = run(&s, &mut |_| {}).expect("runs");
     let table = result.table("machine_frequencies").expect("the table");
-    assert_eq!(result.machine_frequencies.as_ref().unwrap().modes, 12);
+    assert_eq!(
+        result
+            .report::<flexprr_run::machine_frequencies::MachineFrequencyNote>()
+            .unwrap()
+            .modes,
+        12
+    );
     for k in 1..=12 {
         let f = table.column(&format!("f_machine_{k}_Hz")).unwrap();
         assert!(f.iter().all(|v| v.is_finite() && *v > 50.0));

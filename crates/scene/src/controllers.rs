@@ -64,7 +64,7 @@ pub trait ControllerFactory: Send + Sync {
 /// `feedforward`: the rigid inverse-dynamics force of the commanded motion, or none.
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
-enum Feedforward {
+pub(crate) enum Feedforward {
     /// The rigid-body driving force of the commanded motion (with the actuators' reflected
     /// inertia).
     #[default]

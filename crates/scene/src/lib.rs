@@ -19,6 +19,7 @@ pub mod link_file;
 mod locate;
 mod model;
 mod model_kind;
+mod npz;
 mod parse;
 mod piezo;
 mod plan;
@@ -26,6 +27,7 @@ mod registry;
 mod scene;
 mod schema;
 pub mod setting;
+mod statespace_law;
 
 pub use flexprr_integrators::DynIntegrator;
 

@@ -218,6 +218,12 @@ impl<'a> TableParams<'a> {
         })
     }
 
+    /// The file the table was read from, as named in messages (a law's own files, such as
+    /// a state-space law's `.npz`, are relative to its directory).
+    pub fn file(&self) -> &str {
+        self.file
+    }
+
     /// The dotted key of the part's table (`links.basis`, `control`).
     pub fn prefix(&self) -> &str {
         self.prefix
@@ -478,6 +484,10 @@ impl Default for Registry {
         );
         r.register_controller("pd", Arc::new(PdFactory));
         r.register_controller("pid", Arc::new(PidFactory));
+        r.register_controller(
+            "statespace",
+            Arc::new(crate::statespace_law::StateSpaceFactory),
+        );
         r.register_vibration_controller("strain_rate", Arc::new(StrainRateFactory));
         r.register_vibration_controller("modal_velocity", Arc::new(ModalVelocityFactory));
         for (name, preset, model) in [

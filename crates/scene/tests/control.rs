@@ -348,7 +348,10 @@ impl ControllerFactory for ProportionalFactory {
 fn a_registered_controller_is_named_by_scenes_and_reads_its_keys() {
     let mut registry = Registry::default();
     registry.register_controller("p", Arc::new(ProportionalFactory));
-    assert_eq!(registry.controller_names(), ["p", "pd", "pid"]);
+    assert_eq!(
+        registry.controller_names(),
+        ["p", "pd", "pid", "statespace"]
+    );
     let t = text("coupled", "[control]\nkind = \"p\"\nk = 5e4\n");
     let scene = Scene::from_text_with(&registry, "servo.toml", "servo", &t).expect("valid");
     assert_eq!(

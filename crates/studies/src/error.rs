@@ -89,9 +89,9 @@ pub enum StudyError {
         message: String,
     },
     /// The output directory is refused by the output-directory policy
-    /// ([`flexprr_run::output_dir`]), or cannot be written.
+    /// ([`flexprr_outdir`]), or cannot be written.
     #[error("{0}")]
-    Output(#[from] flexprr_run::OutputError),
+    Output(#[from] flexprr_outdir::OutputError),
 }
 
 impl StudyError {
@@ -105,7 +105,7 @@ impl StudyError {
                 | StudyError::InputFile { .. }
                 | StudyError::MergeInput { .. }
                 | StudyError::Option { .. }
-                | StudyError::Output(flexprr_run::OutputError::Refused { .. })
+                | StudyError::Output(flexprr_outdir::OutputError::Refused { .. })
         )
     }
 

@@ -15,7 +15,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use flexprr_kinematics::Pose;
-use flexprr_run::machine_modes::{RestFrequency, rest_frequency, sliders_description, start_pose};
+use flexprr_linear_tools::machine_modes::{
+    RestFrequency, rest_frequency, sliders_description, start_pose,
+};
 use flexprr_scene::Scene;
 use serde::{Deserialize, Serialize};
 
@@ -109,7 +111,10 @@ impl Map {
             }
             Ok(r.values())
         };
-        if let Some(Err(message)) = c.phi_deg.map(flexprr_run::linear::check_orientation_deg) {
+        if let Some(Err(message)) = c
+            .phi_deg
+            .map(flexprr_linear_tools::linear::check_orientation_deg)
+        {
             return Err(("map.phi_deg".into(), message));
         }
         Ok(Self {

@@ -9,7 +9,7 @@
 use std::fmt::Write as _;
 
 use flexprr_kinematics::Pose;
-use flexprr_run::machine_modes::{RestFrequency, sliders_description};
+use flexprr_linear_tools::machine_modes::{RestFrequency, sliders_description};
 use flexprr_run::plot::axes::{Area, Axes};
 use flexprr_run::plot::decimate::frame_indices;
 use flexprr_run::plot::svg::{

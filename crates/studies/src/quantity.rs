@@ -522,8 +522,7 @@ impl Quantity {
         match *self {
             Quantity::DeflectionReduction { .. } => {
                 let reduction = result
-                    .piezo
-                    .as_ref()
+                    .report::<flexprr_run::piezo::PiezoReport>()
                     .and_then(|p| p.reduction.as_ref())
                     .and_then(|r| r.get(i))
                     .ok_or_else(|| needs("deflections"))?;
@@ -543,8 +542,7 @@ impl Quantity {
             }
             Quantity::PatchVoltage => {
                 let piezo = result
-                    .piezo
-                    .as_ref()
+                    .report::<flexprr_run::piezo::PiezoReport>()
                     .ok_or_else(|| "quantity V_patch_max_V: the run has no patches".to_string())?;
                 let max = |f: fn(&flexprr_run::piezo::PatchSummary) -> f64| {
                     piezo.patches.iter().map(f).fold(0.0_f64, f64::max)
@@ -568,8 +566,8 @@ impl Quantity {
         &self,
         scene: &flexprr_scene::Scene,
     ) -> Option<Result<Vec<String>, String>> {
-        use flexprr_run::linear::OperatingPoint;
-        use flexprr_run::machine_modes::{lowest_frequency, start_pose};
+        use flexprr_linear_tools::linear::OperatingPoint;
+        use flexprr_linear_tools::machine_modes::{lowest_frequency, start_pose};
         match self {
             Quantity::LowestFrequency => Some(
                 lowest_frequency(scene, OperatingPoint::Rest(start_pose(scene)))

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use flexprr_run::output_dir::{Legacy, OutputDir, Products, write_file_atomic};
+use flexprr_outdir::{Legacy, OutputDir, Products, write_file_atomic};
 use flexprr_run::write_outputs;
 
 use crate::error::{StudyError, io_err};
@@ -56,7 +56,7 @@ impl std::fmt::Display for Shard {
 }
 
 /// The files of a study's output directory (`docs/studies.md`, "Output directory"), for the
-/// output-directory policy of [`flexprr_run::output_dir`]; the plots' own names are added
+/// output-directory policy of [`flexprr_outdir`]; the plots' own names are added
 /// per study.
 pub const STUDY_PRODUCTS: Products = Products {
     kind: "study",

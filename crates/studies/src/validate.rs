@@ -510,9 +510,9 @@ pub(crate) fn check_map(
     let poses = map.poses(phi);
     let (mut singular, mut example) = (0, None);
     for pose in &poses {
-        match flexprr_run::machine_modes::rest_pose(&scene, *pose) {
+        match flexprr_linear_tools::machine_modes::rest_pose(&scene, *pose) {
             Ok(_) => return Ok(()),
-            Err(flexprr_run::machine_modes::RestFrequency::Singular(reason)) => {
+            Err(flexprr_linear_tools::machine_modes::RestFrequency::Singular(reason)) => {
                 singular += 1;
                 example.get_or_insert((*pose, reason));
             }

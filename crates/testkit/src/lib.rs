@@ -13,6 +13,7 @@
 //! can take it as a dev-dependency without a cycle.
 
 pub mod alloc;
+pub mod csv;
 pub mod paper;
 pub mod tolerance;
 

@@ -2,7 +2,7 @@
 //!
 //! SYNTHETIC link series on the real machine and path (see `common/mod.rs`): they exercise
 //! what the real paper scene does not have (a buckling interval, a platform deviation).
-//! The viewer of the real paper run is tested in the workspace's `tests/viewer_browser.rs`.
+//! The viewer of the real paper run is tested in the workspace's `tests/cli/viewer_browser.rs`.
 //! Needs the `chromium` binary (see `chromium/mod.rs`): without it the tests skip with one
 //! line on stderr, unless `FLEXPRR_REQUIRE_BROWSER=1`.
 

@@ -26,7 +26,7 @@
 //! carry their exact kinetic energy (`m L^2 / 3` about an end) and, with the Hermite
 //! stiffness of the element, the bending frequencies converge at fourth order in the element
 //! length (the linear Hermite beam's consistent-mass result; whole-machine modes in
-//! `tests/modes_validation.rs`). Unlike the usual co-rotational consistent mass (the local
+//! `crates/linear/tests/modes_validation.rs`). Unlike the usual co-rotational consistent mass (the local
 //! mass rotated with the element, the rigid rotation's terms neglected: Crisfield, vol. 2,
 //! 1997; Felippa's notes on co-rotational dynamics) nothing is neglected: the curve itself
 //! defines the inertia. Like the ANCF cable element of the external model, the

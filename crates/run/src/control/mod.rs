@@ -14,6 +14,8 @@ mod servo;
 mod stats;
 mod tables;
 
+use crate::column::Quantity;
+use flexprr_dynamics::NamedQuantity;
 use flexprr_dynamics::{DynamicsError, MachineSnapshot};
 use flexprr_scene::{OutputKind, Scene};
 use serde_json::Value;
@@ -87,35 +89,98 @@ pub(crate) fn produce(
         };
         result.tables.push(table);
     }
+    let mut report = ControlReport::default();
     if let Some(motor) = motor {
         // The commanded motion is known over the whole span, between the samples and
         // beyond a failure: check all of it.
-        if let Some(f) = Feasibility::scan(scene, motor)? {
-            result.warnings.extend(f.warnings());
-            result.control.feasibility = Some(f);
-        }
+        report.feasibility = Feasibility::scan(scene, motor)?;
     }
     if let Some(snapshots) = actuated {
-        let summary = ServoSummary::of(scene, samples, snapshots);
-        result.warnings.extend(summary.warnings());
-        result.control.servo = Some(summary);
+        report.servo = Some(ServoSummary::of(scene, samples, snapshots));
+    }
+    if report.feasibility.is_some() || report.servo.is_some() {
+        result.add_report(report);
     }
     Ok(())
 }
 
-/// The `control` and `feasibility` sections of `summary.json` (`null` where the run has
-/// none).
-pub fn summary_sections(result: &RunResult) -> (Value, Value) {
-    (
-        result
-            .control
-            .servo
-            .as_ref()
-            .map_or(Value::Null, ServoSummary::to_json),
-        result
-            .control
+impl crate::report::Report for ControlReport {
+    fn name(&self) -> &'static str {
+        "control"
+    }
+
+    /// `control` (the servo summary) and `feasibility`, `null` where the run has none.
+    fn sections(&self) -> Vec<(&'static str, Value)> {
+        vec![
+            (
+                "control",
+                self.servo
+                    .as_ref()
+                    .map_or(Value::Null, ServoSummary::to_json),
+            ),
+            (
+                "feasibility",
+                self.feasibility
+                    .as_ref()
+                    .map_or(Value::Null, Feasibility::to_json),
+            ),
+        ]
+    }
+
+    /// The feasibility's warnings, then the servo's.
+    fn warnings(&self) -> Vec<String> {
+        let mut w = self
             .feasibility
             .as_ref()
-            .map_or(Value::Null, Feasibility::to_json),
-    )
+            .map(Feasibility::warnings)
+            .unwrap_or_default();
+        w.extend(
+            self.servo
+                .as_ref()
+                .map(ServoSummary::warnings)
+                .unwrap_or_default(),
+        );
+        w
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
+/// The control report of `result`: the empty one (no feasibility, no servo summary) when
+/// the run made none.
+pub fn report_of(result: &RunResult) -> &ControlReport {
+    static NONE: ControlReport = ControlReport {
+        feasibility: None,
+        servo: None,
+    };
+    result.report::<ControlReport>().unwrap_or(&NONE)
+}
+
+/// Motor torque after saturation (N m): `actuators.csv`, `motor_torque_<i>_N_m`.
+pub const MOTOR_TORQUE: Quantity =
+    Quantity::Named(NamedQuantity::new("motor_torque", "N_m", "τ", "N·m"));
+/// Motor speed (rev/s): `motor_speed_<i>_rev_s`.
+pub const MOTOR_SPEED: Quantity =
+    Quantity::Named(NamedQuantity::new("motor_speed", "rev_s", "n", "rev/s"));
+/// Whether the motor torque is saturated at its peak (1) or not (0):
+/// `motor_saturated_<i>_flag`.
+pub const MOTOR_SATURATED: Quantity =
+    Quantity::Named(NamedQuantity::new("motor_saturated", "flag", "sat", "1"));
+
+#[cfg(test)]
+mod tests {
+    use super::{MOTOR_SATURATED, MOTOR_SPEED, MOTOR_TORQUE};
+    use crate::column::Column;
+
+    #[test]
+    fn motor_headers_follow_the_documented_pattern() {
+        assert_eq!(Column::link(MOTOR_TORQUE, 2).header(), "motor_torque_3_N_m");
+        assert_eq!(Column::link(MOTOR_SPEED, 1).header(), "motor_speed_2_rev_s");
+        assert_eq!(
+            Column::link(MOTOR_SATURATED, 0).header(),
+            "motor_saturated_1_flag"
+        );
+    }
 }

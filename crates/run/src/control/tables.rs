@@ -72,12 +72,12 @@ pub(crate) fn actuators_of_model(snapshots: &[MachineSnapshot]) -> Table {
 
 /// The column quantity of an actuator's signal: its own name and units.
 fn signal_quantity(signal: &ActuatorSignal) -> Q {
-    Q::Named(NamedQuantity {
-        stem: signal.name,
-        header_unit: signal.header_unit,
-        symbol: signal.symbol,
-        unit: signal.unit,
-    })
+    Q::Named(NamedQuantity::new(
+        signal.name,
+        signal.header_unit,
+        signal.symbol,
+        signal.unit,
+    ))
 }
 
 /// `actuators.csv` of a model whose sliders are prescribed: what the actuators must deliver

@@ -45,7 +45,9 @@ pub(crate) fn figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)
         return Vec::new();
     };
     let mut voltage = per_patch(scene, t, "V_applied", "V", true);
-    let saturated = result.piezo.as_ref().is_some_and(|r| r.any_saturated());
+    let saturated = result
+        .report::<super::PiezoReport>()
+        .is_some_and(|r| r.any_saturated());
     if saturated {
         let commands = (0..scene.patches.len()).filter_map(|p| {
             let y = t.column(&header(scene, p, "V_command", "V"))?;

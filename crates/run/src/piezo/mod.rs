@@ -10,7 +10,7 @@
 mod figures;
 mod report;
 
-use flexprr_dynamics::{DynamicsError, PatchState, SceneModel};
+use flexprr_dynamics::{DynamicsError, NamedQuantity, PatchState, SceneModel};
 use flexprr_integrators::Solution;
 use flexprr_scene::{OutputKind, Scene};
 
@@ -18,67 +18,27 @@ pub(crate) use figures::figures;
 pub use report::{LinkReduction, PatchSummary, PiezoReport};
 
 use crate::column::{Column, Quantity as Q};
-use crate::integrate::integrate_model;
-use crate::run::scene_integrator;
-use crate::table::{RunResult, RunStats, Table};
+use crate::table::{RunResult, Table};
+use crate::variant::VariantRun;
+
+/// Transverse deflection w at xi of the same scene without its vibration control (m):
+/// `w_<i>_xi<xi>_uncontrolled_m`.
+pub const DEFLECTION_UNCONTROLLED: Q =
+    Q::Named(NamedQuantity::new("w", "m", "w", "m").with_suffix("uncontrolled"));
+/// A patch's sensor voltage `V_s` (V); link and the patch's index on it.
+pub const PATCH_SENSOR_VOLTAGE: Q = Q::Named(NamedQuantity::new("V_sensor", "V", "V_s", "V"));
+/// A patch's voltage command from the vibration control law (V).
+pub const PATCH_COMMAND_VOLTAGE: Q = Q::Named(NamedQuantity::new("V_command", "V", "V_c", "V"));
+/// A patch's applied voltage: the command clipped at its limit (V).
+pub const PATCH_VOLTAGE: Q = Q::Named(NamedQuantity::new("V_applied", "V", "V", "V"));
+/// Whether a patch's command was clipped at its limit (1) or not (0).
+pub const PATCH_SATURATED: Q = Q::Named(NamedQuantity::new("patch_saturated", "flag", "sat", "1"));
+/// Mechanical power a patch's actuator delivers to its link (W; negative when it removes
+/// energy).
+pub const PATCH_POWER: Q = Q::Named(NamedQuantity::new("P_patch", "W", "P", "W"));
 
 /// Where along the links the reduction is measured: the mid-point.
 pub const REDUCTION_XI: f64 = 0.5;
-
-/// Whether a run of `scene` also runs it without its vibration control law: the scene has
-/// patches under a law, and the deflections or the piezo output are requested.
-pub fn needs_uncontrolled(scene: &Scene) -> bool {
-    !scene.patches.is_empty()
-        && scene.vibration_controller.is_some()
-        && (scene.outputs.contains(&OutputKind::Deflections)
-            || scene.outputs.contains(&OutputKind::Piezo))
-}
-
-/// The run of the scene without its vibration control law: its model and states, or why it
-/// stopped (the controlled run keeps its outputs; only the comparison is missing).
-pub(crate) enum Uncontrolled {
-    /// Integrated over the whole span.
-    Solved(Box<dyn SceneModel>, Solution),
-    /// Stopped or could not start: the reason.
-    Failed(String),
-}
-
-impl Uncontrolled {
-    /// The model and its states, when the run reached the end.
-    pub(crate) fn solved(&self) -> Option<(&dyn SceneModel, &Solution)> {
-        match self {
-            Uncontrolled::Solved(model, solution) => Some((model.as_ref(), solution)),
-            Uncontrolled::Failed(_) => None,
-        }
-    }
-}
-
-/// Integrates [`Scene::without_vibration_control`] (progress to `report`), adding its work
-/// to `stats`.
-pub(crate) fn integrate_uncontrolled(
-    scene: &Scene,
-    report: &mut dyn FnMut(f64),
-    stats: &mut RunStats,
-) -> Uncontrolled {
-    let free = scene.without_vibration_control();
-    let mut model = match free.build_model() {
-        Ok(model) => model,
-        Err(e) => return Uncontrolled::Failed(e.to_string()),
-    };
-    let integration = integrate_model(
-        &free,
-        scene_integrator(&free).as_ref(),
-        model.as_mut(),
-        report,
-    );
-    let counters = model.counters();
-    stats.rhs_evaluations += counters.rhs_evaluations;
-    stats.inverse_dynamics_solves += counters.inverse_dynamics_solves;
-    match integration.failure {
-        Some(e) => Uncontrolled::Failed(e.to_string()),
-        None => Uncontrolled::Solved(model, integration.solution),
-    }
-}
 
 /// The patch outputs of an integrated run into `result`: the `piezo` table when requested,
 /// the [`PiezoReport`] (and its warnings) whenever the scene has patches.
@@ -89,7 +49,7 @@ pub(crate) fn produce(
     scene: &Scene,
     model: &mut dyn SceneModel,
     solution: &Solution,
-    uncontrolled: Option<&Uncontrolled>,
+    uncontrolled: Option<&VariantRun>,
     result: &mut RunResult,
 ) -> Result<(), DynamicsError> {
     if scene.patches.is_empty() || solution.is_empty() {
@@ -113,18 +73,17 @@ pub(crate) fn produce(
     }
     let mut report = PiezoReport::of(scene, &solution.t, &states);
     match uncontrolled {
-        Some(Uncontrolled::Solved(free, free_solution)) => {
+        Some(VariantRun::Solved(free, free_solution)) => {
             report.uncontrolled_run = true;
             report.reduction = Some(reductions(model, solution, free.as_ref(), free_solution)?);
         }
-        Some(Uncontrolled::Failed(why)) => {
+        Some(VariantRun::Failed(why)) => {
             report.uncontrolled_run = true;
             report.uncontrolled_failure = Some(why.clone());
         }
         None => {}
     }
-    result.warnings.extend(report.warnings());
-    result.piezo = Some(report);
+    result.add_report(report);
     Ok(())
 }
 
@@ -141,11 +100,11 @@ fn table(scene: &Scene, t: &[f64], states: &[Vec<PatchState>]) -> Table {
     let mut table = Table::new("piezo", t);
     type Part = fn(&PatchState) -> f64;
     let parts: [(Q, Part); 5] = [
-        (Q::PatchSensorVoltage, |s| s.sensor),
-        (Q::PatchCommandVoltage, |s| s.command),
-        (Q::PatchVoltage, |s| s.voltage),
-        (Q::PatchSaturated, |s| f64::from(u8::from(s.saturated))),
-        (Q::PatchPower, |s| s.power),
+        (PATCH_SENSOR_VOLTAGE, |s| s.sensor),
+        (PATCH_COMMAND_VOLTAGE, |s| s.command),
+        (PATCH_VOLTAGE, |s| s.voltage),
+        (PATCH_SATURATED, |s| f64::from(u8::from(s.saturated))),
+        (PATCH_POWER, |s| s.power),
     ];
     for (p, patch) in scene.patches.iter().enumerate() {
         let index = index_on_link(scene, p);

@@ -247,3 +247,63 @@ impl PiezoReport {
         })
     }
 }
+
+impl crate::report::Report for PiezoReport {
+    fn name(&self) -> &'static str {
+        "piezo"
+    }
+
+    /// `vibration_control`.
+    fn sections(&self) -> Vec<(&'static str, Value)> {
+        vec![("vibration_control", self.to_json())]
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        PiezoReport::warnings(self)
+    }
+
+    /// Each patch's largest voltage and saturation, then each link's mid-point deflection
+    /// with and without the law.
+    fn print(&self) -> Vec<String> {
+        let mut lines: Vec<String> = self
+            .patches
+            .iter()
+            .map(|p| {
+                format!(
+                    "  patch {} of link {}: max |V| {:.1} V of {} V{}",
+                    p.index + 1,
+                    p.link + 1,
+                    p.max_abs_voltage,
+                    p.voltage_limit,
+                    if p.saturated_fraction > 0.0 {
+                        format!(
+                            ", saturated {:.1} % of the time",
+                            100.0 * p.saturated_fraction
+                        )
+                    } else {
+                        String::new()
+                    }
+                )
+            })
+            .collect();
+        for l in self.reduction.iter().flatten() {
+            let percent = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.1} %"));
+            lines.push(format!(
+                "  link {} mid-point deflection with/without {}: peak {:.3e}/{:.3e} m ({} lower), RMS {:.3e}/{:.3e} m ({} lower)",
+                l.link + 1,
+                self.law,
+                l.peak_controlled,
+                l.peak_uncontrolled,
+                percent(l.peak_reduction_percent()),
+                l.rms_controlled,
+                l.rms_uncontrolled,
+                percent(l.rms_reduction_percent()),
+            ));
+        }
+        lines
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}

@@ -30,7 +30,7 @@ const NEAR_FIRST_FAMILY: f64 = 2.5;
 pub(crate) fn machine_frequencies_figure(t: &Table, about: &str) -> Figure {
     let time = t.time();
     let modes: Vec<&[f64]> = (0..)
-        .map_while(|k| t.get(&machine(Q::MachineFrequency, k)))
+        .map_while(|k| t.get(&machine(crate::machine_frequencies::MACHINE_FREQUENCY, k)))
         .collect();
     let ked: Vec<&[f64]> = (0..3)
         .filter_map(|i| t.get(&Column::mode(Q::Frequency, i, 0)))
@@ -69,7 +69,12 @@ pub(crate) fn machine_frequencies_figure(t: &Table, about: &str) -> Figure {
         .panel(near)
         .panel(all);
     let damping: Vec<&[f64]> = (0..)
-        .map_while(|k| t.get(&machine(Q::MachineDampingRatio, k)))
+        .map_while(|k| {
+            t.get(&machine(
+                crate::machine_frequencies::MACHINE_DAMPING_RATIO,
+                k,
+            ))
+        })
         .collect();
     if damping
         .iter()

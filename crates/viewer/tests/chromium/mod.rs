@@ -1,5 +1,5 @@
 //! Driving headless Chromium for the viewer's browser tests (shared by
-//! `crates/viewer/tests/browser.rs` and the workspace's `tests/viewer_browser.rs`).
+//! `crates/viewer/tests/browser.rs` and the workspace's `tests/cli/viewer_browser.rs`).
 //!
 //! Needs the `chromium` binary (Debian: `apt-get install -y chromium`; `.ci/run` installs it
 //! and requires it). Without it the tests skip and say so in one line on the test run's
