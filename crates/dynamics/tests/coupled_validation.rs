@@ -23,23 +23,7 @@ struct External {
 impl External {
     fn load(frequency: u32) -> External {
         let path = format!("{}/validation/data/coupled_f{frequency}.csv", WORKSPACE);
-        let text = std::fs::read_to_string(&path)
-            .unwrap_or_else(|e| panic!("validation data {path} missing or unreadable: {e}"));
-        let mut lines = text.lines();
-        let names = lines
-            .next()
-            .expect("header")
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .collect();
-        let rows = lines
-            .filter(|l| !l.trim().is_empty())
-            .map(|l| {
-                l.split(',')
-                    .map(|v| v.trim().parse::<f64>().expect("number"))
-                    .collect()
-            })
-            .collect();
+        let (names, rows) = flexprr_testkit::csv::read_numeric(std::path::Path::new(&path));
         External { names, rows }
     }
     fn column(&self, name: &str) -> Vec<f64> {

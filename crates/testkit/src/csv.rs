@@ -2,7 +2,8 @@
 
 use std::path::Path;
 
-/// Reads a numeric CSV table: its header and its rows. Panics (this is a test helper) with the
+/// Reads a numeric CSV table: its header and its rows (cells trimmed, blank lines skipped,
+/// as external validation data may have them). Panics (this is a test helper) with the
 /// file, row and cell when the file cannot be read or a cell is not a number, so a failing
 /// test names what it could not read.
 pub fn read_numeric(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
@@ -13,14 +14,15 @@ pub fn read_numeric(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
         .next()
         .unwrap_or_else(|| panic!("{} is empty", path.display()))
         .split(',')
-        .map(str::to_string)
+        .map(|name| name.trim().to_string())
         .collect();
     let rows = lines
         .enumerate()
+        .filter(|(_, line)| !line.trim().is_empty())
         .map(|(row, line)| {
             line.split(',')
                 .map(|cell| {
-                    cell.parse().unwrap_or_else(|_| {
+                    cell.trim().parse().unwrap_or_else(|_| {
                         panic!(
                             "{} row {}: {cell:?} is not a number",
                             path.display(),
