@@ -35,9 +35,10 @@ pub struct PlanArgs {
 /// failed run or analysis of the flexible model is a run failure (1).
 fn plan_failure(e: PlanError) -> Failure {
     match e {
-        PlanError::NoPlan { .. } | PlanError::Path { .. } | PlanError::Planning { .. } => {
-            Failure::bad_input(e)
-        }
+        PlanError::NoPlan { .. }
+        | PlanError::Path { .. }
+        | PlanError::Planning { .. }
+        | PlanError::DeflectionLimit { .. } => Failure::bad_input(e),
         PlanError::Output(inner) => failure(inner),
         other => Failure::run(other),
     }
@@ -115,6 +116,7 @@ fn report(outcome: &PlanOutcome, files: usize, out: &std::path::Path) {
     };
     println!("  the scene's own timing: {:.6} s{use_of}", own.duration);
     if let (Some(unshaped), Some(design)) = (&outcome.unshaped, &outcome.shaping) {
+        let shaped = outcome.deflection.as_ref().map_or(plan, |d| &d.fastest);
         let modes: Vec<String> = design
             .modes
             .iter()
@@ -128,9 +130,26 @@ fn report(outcome: &PlanOutcome, files: usize, out: &std::path::Path) {
         println!(
             "  shaped for {}: {:.6} s longer than the unshaped {:.6} s",
             modes.join(", "),
-            plan.duration - unshaped.duration,
+            shaped.duration - unshaped.duration,
             unshaped.duration
         );
+    }
+    if let Some(search) = &outcome.deflection {
+        if search.binds() {
+            println!(
+                "  deflection limit {:.3e} m: slowed {:.4} times from {:.6} s ({} runs of the flexible model), peak {:.3e} m",
+                search.limit,
+                search.stretch,
+                search.fastest.duration,
+                search.probes.len(),
+                search.peak
+            );
+        } else {
+            println!(
+                "  deflection limit {:.3e} m: met by the time-optimal motion (peak {:.3e} m)",
+                search.limit, search.peak
+            );
+        }
     }
     if let Some(flexible) = &outcome.flexible {
         if let Some(residual) = flexible.planned.residual {

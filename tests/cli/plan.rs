@@ -122,6 +122,25 @@ fn plan_bad_input_exits_2_with_one_line_and_writes_nothing() {
         assert!(stderr.contains(key), "{stderr}");
         assert!(!out.exists());
     }
+    // A deflection limit needs the flexible model that --no-flexible-check turns off.
+    let scene = scene_file(
+        dir.path(),
+        "d.toml",
+        &format!("{text}\n[plan]\nslider_speed = 1.0\ndeflection_limit = 1e-4\n"),
+    );
+    let out = dir.path().join("out_d");
+    let output = flexprr()
+        .args(["plan", "--no-flexible-check", "--out"])
+        .arg(&out)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let stderr = stderr_of(&output);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("plan.deflection_limit"), "{stderr}");
+    assert!(stderr.contains("--no-flexible-check"), "{stderr}");
+    assert!(!out.exists());
     // `check` validates [plan] the same way.
     let scene = scene_file(
         dir.path(),

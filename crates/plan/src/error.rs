@@ -62,6 +62,16 @@ pub enum PlanError {
         /// The builder's error.
         source: Box<ScenarioError>,
     },
+    /// The deflection limit cannot be met or checked.
+    #[error("{scene}: plan.deflection_limit = {limit} m: {detail}")]
+    DeflectionLimit {
+        /// The scene's name.
+        scene: String,
+        /// The limit (m).
+        limit: f64,
+        /// Why, with the probes made.
+        detail: String,
+    },
     /// Writing the products.
     #[error("{0}")]
     Output(#[from] ScenarioError),

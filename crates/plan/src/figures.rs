@@ -57,7 +57,12 @@ fn phase_plane(outcome: &PlanOutcome) -> Option<Figure> {
     let machine = outcome.source.machine.as_ref();
     let path = &outcome.path;
     let timing = &outcome.plan.timing;
-    let top = timing.speeds().iter().fold(0.0f64, |m, v| m.max(*v));
+    // The fastest timing drawn: the time-optimal one when the deflection limit slowed it.
+    let fastest = outcome
+        .deflection
+        .as_ref()
+        .map_or(timing, |d| &d.fastest.timing);
+    let top = fastest.speeds().iter().fold(0.0f64, |m, v| m.max(*v));
     let unit = path.unit();
     let mut panel =
         Panel::new(Axis::new("path speed s'", format!("{unit}/s"))).series(Series::new(
@@ -70,6 +75,15 @@ fn phase_plane(outcome: &PlanOutcome) -> Option<Figure> {
             timing.speeds(),
             Style::nth(0),
         ));
+    if let Some(search) = outcome.deflection.as_ref().filter(|d| d.binds()) {
+        let fastest = &search.fastest.timing;
+        panel = panel.series(Series::new(
+            format!("time-optimal ({:.3}x faster)", search.stretch),
+            fastest.grid(),
+            fastest.speeds(),
+            Style::nth(0).dash(Dash::Dotted),
+        ));
+    }
     let constraints = outcome
         .spec
         .constraints(

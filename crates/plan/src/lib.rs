@@ -13,6 +13,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod deflection;
 mod error;
 mod figures;
 mod pipeline;
@@ -21,6 +22,7 @@ mod variant;
 mod vibration;
 mod write;
 
+pub use deflection::{DeflectionSearch, MAX_STRETCH, Probe, STRETCH_TOLERANCE, peak_deflection};
 pub use error::PlanError;
 pub use figures::plan_figures;
 pub use pipeline::{

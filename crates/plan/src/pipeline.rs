@@ -11,6 +11,7 @@ use flexprr_planning::{
 };
 use flexprr_scene::{ProfileChoice, Scene, SceneFile, TrajectoryConfig};
 
+use crate::deflection::{self, DeflectionSearch, Retiming};
 use crate::error::PlanError;
 use crate::variant::planned_scene_file;
 use crate::vibration::{self, FlexibleCheck, ShapingDesign};
@@ -93,6 +94,8 @@ pub struct PlanOutcome {
     /// The scene's flexible model on the planned motion, the unshaped one and the scene's
     /// own (with [`Options::flexible_check`]).
     pub flexible: Option<FlexibleCheck>,
+    /// The deflection limit's search, with `[plan] deflection_limit`.
+    pub deflection: Option<DeflectionSearch>,
     /// Wall time of the whole pipeline (s).
     pub wall_time_s: f64,
     /// The scene planned (its machine and axial-force model draw the limit curves).
@@ -230,6 +233,13 @@ pub fn plan_scene(
     let spec = scene.file.plan.clone().ok_or_else(|| PlanError::NoPlan {
         scene: name.clone(),
     })?;
+    if let (Some(limit), false) = (spec.deflection_limit, options.flexible_check) {
+        return Err(PlanError::DeflectionLimit {
+            scene: name,
+            limit,
+            detail: "the limit is checked on the scene's flexible model, which --no-flexible-check (flexible_check = False) turns off: drop one or the other".into(),
+        });
+    }
     let planning = |stage: &'static str| {
         let name = name.clone();
         move |source: PlanningError| PlanError::Planning {
@@ -329,11 +339,6 @@ pub fn plan_scene(
             .map_err(planning("the shaped motion"))?;
         (shaped, Some(optimal), Some(design))
     };
-    let trajectory: PlannedTrajectory<GeometricPath> = plan
-        .trajectory(path.clone(), start)
-        .map_err(planning("the planned trajectory"))?;
-    let data = PlannedData::from(&trajectory);
-
     // The scene's own timing against the same limits (on the scene's own path: the
     // orientation is the scene's there).
     let scene_check = check_schedule(&planner, &schedule, length);
@@ -349,34 +354,64 @@ pub fn plan_scene(
         _ => DEFAULT_SETTLE_TIME,
     };
     let settle_time = spec.settle_time.unwrap_or(own_settle);
-    let end = match spec.boundary {
-        Boundary::Periodic => {
-            let revolutions = ((span.1 - span.0) / schedule.duration()).round().max(1.0);
-            span.0 + revolutions * plan.duration
-        }
-        Boundary::RestToRest => start + plan.duration + settle_time,
+    let revolutions = ((span.1 - span.0) / schedule.duration()).round().max(1.0);
+    let boundary = spec.boundary;
+    // The outcome's motion, planned scene and span for a plan.
+    let apply = |outcome: &mut PlanOutcome, plan: Plan| -> Result<(), PlanError> {
+        let end = match boundary {
+            Boundary::Periodic => span.0 + revolutions * plan.duration,
+            Boundary::RestToRest => start + plan.duration + settle_time,
+        };
+        let trajectory: PlannedTrajectory<GeometricPath> = plan
+            .trajectory(outcome.path.clone(), start)
+            .map_err(planning("the planned trajectory"))?;
+        outcome.data = PlannedData::from(&trajectory);
+        outcome.planned_file = planned_scene_file(&scene.file, outcome.data.clone(), end);
+        outcome.plan = plan;
+        Ok(())
     };
-    let planned_file = planned_scene_file(&scene.file, data.clone(), end);
     let mut outcome = PlanOutcome {
-        scene: name,
+        scene: name.clone(),
         spec,
         base_path: base_path.clone(),
         path: path.clone(),
-        plan,
+        plan: plan.clone(),
         unshaped,
         shaping,
         start,
-        data,
-        planned_file,
+        planned_file: scene.file.clone(),
+        data: PlannedData::from(
+            &plan
+                .trajectory(path.clone(), start)
+                .map_err(planning("the planned trajectory"))?,
+        ),
         scene_timing,
         orientation,
         settle_time,
         flexible: None,
+        deflection: None,
         wall_time_s: 0.0,
         source: scene.clone(),
     };
+    apply(&mut outcome, plan)?;
     if options.flexible_check {
-        outcome.flexible = Some(vibration::flexible_check(scene, &outcome, progress)?);
+        let check = vibration::flexible_check(scene, &outcome, progress)?;
+        if let Some(limit) = outcome.spec.deflection_limit {
+            let peak = deflection::peak_deflection(&check.planned_run);
+            let retiming = Retiming {
+                planner: &oriented_planner,
+                apply: &apply,
+            };
+            let search = deflection::meet_limit(&mut outcome, limit, peak, &retiming, progress)?;
+            if search.binds() {
+                outcome.flexible = Some(vibration::flexible_check(scene, &outcome, progress)?);
+            } else {
+                outcome.flexible = Some(check);
+            }
+            outcome.deflection = Some(search);
+        } else {
+            outcome.flexible = Some(check);
+        }
     }
     outcome.wall_time_s = clock.elapsed().as_secs_f64();
     Ok(outcome)

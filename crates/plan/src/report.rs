@@ -1,11 +1,12 @@
 //! `plan.json`: what the plan is, what binds it, its margins, its grid convergence, how it
 //! compares with the scene's own timing, the orientation search, the shaper and the residual
-//! vibration.
+//! vibration, and what the deflection limit did.
 
 use flexprr_kinematics::{GeometricPath, Path, Pose};
 use flexprr_planning::{Boundary, Check, Plan, ScanPoint, Usage};
 use serde_json::{Value, json};
 
+use crate::deflection::{DeflectionSearch, STRETCH_TOLERANCE};
 use crate::pipeline::{OrientationSearch, PlanOutcome};
 use crate::vibration::{MotionVibration, ShapingDesign};
 
@@ -150,6 +151,26 @@ fn vibration_json(v: &MotionVibration) -> Value {
     })
 }
 
+fn deflection_json(search: &DeflectionSearch) -> Value {
+    json!({
+        "limit_m": search.limit,
+        "binds": search.binds(),
+        "stretch": search.stretch,
+        "stretch_tolerance": STRETCH_TOLERANCE,
+        "peak_deflection_m": search.peak,
+        "fastest_duration_s": search.fastest.duration,
+        "probes": search.probes.iter().map(|p| match &p.peak {
+            Ok(w) => json!({ "stretch": p.stretch, "duration_s": finite(p.duration), "peak_deflection_m": w }),
+            Err(why) => json!({ "stretch": p.stretch, "duration_s": finite(p.duration), "failed": why }),
+        }).collect::<Vec<_>>(),
+    })
+}
+
+/// A number, or `null` when not finite.
+fn finite(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
 /// The whole `plan.json`.
 pub fn plan_report(outcome: &PlanOutcome) -> Value {
     let spec = &outcome.spec;
@@ -202,7 +223,12 @@ pub fn plan_report(outcome: &PlanOutcome) -> Value {
         v["orientation"] = orientation_json(search, objective);
     }
     if let Some(design) = &outcome.shaping {
-        v["shaping"] = shaping_json(design, plan, outcome.unshaped.as_ref());
+        // The shaper's own extra time, before any slowing for the deflection limit.
+        let shaped = outcome.deflection.as_ref().map_or(plan, |d| &d.fastest);
+        v["shaping"] = shaping_json(design, shaped, outcome.unshaped.as_ref());
+    }
+    if let Some(search) = &outcome.deflection {
+        v["deflection_limit"] = deflection_json(search);
     }
     if let Some(flexible) = &outcome.flexible {
         let reduction = match (

@@ -226,7 +226,7 @@ pub struct FlexibleCheck {
 }
 
 /// The file with the deflections (and the viewer, when `viewer`) among its requests.
-fn with_deflections(file: &SceneFile, viewer: bool) -> SceneFile {
+pub(crate) fn with_deflections(file: &SceneFile, viewer: bool) -> SceneFile {
     let mut file = file.clone();
     let requests = &mut file.output.requests;
     let mut wanted = vec![OutputKind::Deflections];
@@ -246,7 +246,7 @@ fn with_deflections(file: &SceneFile, viewer: bool) -> SceneFile {
 }
 
 /// Runs `scene`; the error names the motion.
-fn run(scene: &Scene, motion: &'static str) -> Result<RunResult, PlanError> {
+pub(crate) fn run(scene: &Scene, motion: &'static str) -> Result<RunResult, PlanError> {
     flexprr_run::run(scene, &mut |_| {}).map_err(|f| PlanError::Run {
         scene: scene.name.clone(),
         motion,

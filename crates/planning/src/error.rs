@@ -109,6 +109,14 @@ pub enum PlanningError {
         /// What was left.
         detail: String,
     },
+    /// A plan slowed uniformly ([`crate::Planner::stretched`]) breaks a limit.
+    #[error("the motion slowed {factor:.4} times breaks a limit: {detail}")]
+    Slowed {
+        /// The factor on every time.
+        factor: f64,
+        /// Which limit, by how much.
+        detail: String,
+    },
     /// No orientation in the search's bounds gives a feasible motion (every candidate left
     /// the workspace or met a limit no timing can meet).
     #[error(

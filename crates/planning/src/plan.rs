@@ -1050,14 +1050,27 @@ impl<'a> Planner<'a> {
         motor: &MotorTorque,
         dwell: f64,
     ) -> Result<[f64; 3], PlanningError> {
+        self.rms_along(&grid.s, &profile.x, &profile.u, motor, dwell)
+    }
+
+    /// [`Planner::rms_of`] for the squared path speeds `x` and path accelerations `u` on the
+    /// grid `s`.
+    fn rms_along(
+        &self,
+        grid: &[f64],
+        x: &[f64],
+        u: &[f64],
+        motor: &MotorTorque,
+        dwell: f64,
+    ) -> Result<[f64; 3], PlanningError> {
         let sampler = self.sampler();
         let factor = self.settings.check_factor;
         let mut sum = [0.0; 3];
         let mut total = 0.0;
-        for k in 0..grid.s.len() - 1 {
-            let (s0, x0, u) = (grid.s[k], profile.x[k], profile.u[k]);
+        for k in 0..grid.len() - 1 {
+            let (s0, x0, u) = (grid[k], x[k], u[k]);
             let v0 = x0.max(0.0).sqrt();
-            let h = 2.0 * (grid.s[k + 1] - s0) / (v0 + profile.x[k + 1].max(0.0).sqrt());
+            let h = 2.0 * (grid[k + 1] - s0) / (v0 + x[k + 1].max(0.0).sqrt());
             for j in 0..factor {
                 let tau = h * (j as f64 + 0.5) / factor as f64;
                 let s = s0 + v0 * tau + 0.5 * u * tau * tau;
@@ -1072,6 +1085,92 @@ impl<'a> Planner<'a> {
         }
         let cycle = total + dwell;
         Ok(sum.map(|q| (q / cycle).sqrt()))
+    }
+
+    /// `plan` slowed uniformly by `factor` (>= 1): every instant of its timing `factor` times
+    /// later, path speeds divided by `factor` and path accelerations by its square, its shaper
+    /// and smoothing window kept, and its dense check and RMS torque made again; no limit
+    /// binds it (its [`Plan::binding`] is `none` over the whole path). Without
+    /// friction a slower motion of the horizontal machine needs less of every limit (slider
+    /// speeds go with `1/factor`, rigid forces with `1/factor^2`); with friction and an RMS
+    /// average over a dwell that is not so in general, so the limits are checked, not assumed.
+    ///
+    /// # Errors
+    /// A `factor` below one or not finite ([`PlanningError::InvalidSpec`], key `stretch`); a
+    /// limit the slower motion breaks ([`PlanningError::Slowed`]: which, by how much); the
+    /// dense check's own errors.
+    pub fn stretched(&self, plan: &Plan, factor: f64) -> Result<Plan, PlanningError> {
+        if !(factor.is_finite() && factor >= 1.0) {
+            return Err(PlanningError::InvalidSpec {
+                key: "stretch",
+                value: factor.to_string(),
+                rule: "must be finite and >= 1 (a slower motion)".into(),
+            });
+        }
+        let speeds: Vec<f64> = plan.timing.speeds().iter().map(|v| v / factor).collect();
+        let timing = Timing::new(
+            plan.timing.grid().to_vec(),
+            speeds,
+            plan.timing.is_periodic(),
+        )?;
+        let trajectory = PlannedTrajectory::new(self.path, timing.clone(), 0.0)?
+            .with_shaper(plan.impulses.clone())?
+            .with_smoothing(plan.smoothing)?;
+        let check = self.check_trajectory(&trajectory, self.settings.check_factor, self.jerk)?;
+        if check.max_usage > 1.0 + CHECK_TOLERANCE {
+            let worst = check.worst().map_or_else(String::new, |u| {
+                format!(
+                    "{} ({}) at {:.4} of its limit",
+                    u.constraint, u.label, u.usage
+                )
+            });
+            return Err(PlanningError::Slowed {
+                factor,
+                detail: worst,
+            });
+        }
+        let rms_torque = match &self.rms {
+            Some(limit) => {
+                let x: Vec<f64> = timing.speeds().iter().map(|v| v * v).collect();
+                let rms = self.rms_along(
+                    timing.grid(),
+                    &x,
+                    timing.accelerations(),
+                    &limit.motor,
+                    limit.dwell,
+                )?;
+                let worst = rms.iter().fold(0.0f64, |a, b| a.max(*b));
+                if worst > limit.continuous_torque * (1.0 + CHECK_TOLERANCE) {
+                    return Err(PlanningError::Slowed {
+                        factor,
+                        detail: format!(
+                            "the RMS motor torque {worst:.4} N m exceeds the continuous torque {} N m (friction and the dwell weigh more in a longer cycle)",
+                            limit.continuous_torque
+                        ),
+                    });
+                }
+                Some(rms)
+            }
+            None => plan.rms_torque,
+        };
+        // Slower than the optimum everywhere, so no limit binds (the caller names what
+        // slowed it).
+        let whole = (
+            plan.timing.grid()[0],
+            plan.timing.grid()[plan.timing.grid().len() - 1],
+        );
+        Ok(Plan {
+            duration: timing.duration() + trajectory.extra_time(),
+            timing,
+            check,
+            rms_torque,
+            binding: vec![Binding {
+                from: whole.0,
+                to: whole.1,
+                constraint: "none".into(),
+            }],
+            ..plan.clone()
+        })
     }
 
     /// The checked time-optimal motion (module documentation).

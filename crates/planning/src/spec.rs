@@ -149,6 +149,10 @@ pub struct PlanSpec {
     /// Axial compression of each link at most this fraction of its critical load, (0, 1].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub buckling_margin: Option<f64>,
+    /// Largest deflection `|w|` of any link at any time of the planned motion's run on the
+    /// scene's flexible model (m): the motion is slowed uniformly until it holds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deflection_limit: Option<f64>,
     /// With a `motor_ballscrew` actuator: its peak torque and speed limit the motion.
     #[serde(default = "yes")]
     pub motor: bool,
@@ -236,6 +240,7 @@ impl Default for PlanSpec {
             slider_force: None,
             platform_speed: None,
             buckling_margin: None,
+            deflection_limit: None,
             motor: true,
             motor_rms: true,
             dwell: 0.0,
@@ -287,6 +292,7 @@ impl PlanSpec {
         positive("slider_force", self.slider_force)?;
         positive("platform_speed", self.platform_speed)?;
         positive("settle_time", self.settle_time)?;
+        positive("deflection_limit", self.deflection_limit)?;
         if let Some(m) = self.buckling_margin
             && !(m.is_finite() && m > 0.0 && m <= 1.0)
         {
