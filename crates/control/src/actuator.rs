@@ -7,10 +7,14 @@
 //! motor speed        omega = g rho'                                   (rad/s; rev/s = rho' / p)
 //! reflected mass     m_r = J g^2                                      (added to the slider)
 //! torque command     tau_c = F_c / (g eta)                            (eta: screw efficiency)
-//! torque             tau = clamp(tau_c, -tau_peak, tau_peak)          (saturation at the peak)
+//! torque             tau = clamp(tau_c, tau_lo(omega), tau_hi(omega)) (the envelope)
 //! friction torque    tau_f = b omega + tau_C tanh(omega / omega_s)    (viscous + smoothed Coulomb)
 //! force on slider    F = g eta (tau - tau_f)
 //! ```
+//!
+//! The envelope `[tau_lo, tau_hi]` is `[-tau_peak, tau_peak]`, narrowed with a [`Drive`] by
+//! its current limit and by the bus voltage at the motor speed (the torque-speed envelope,
+//! [`crate::drive`]).
 //!
 //! The rotor's inertia torque `J omega'` seen at the slider is `g J omega' = m_r rho''`: the
 //! model adds `m_r` to the slider's mass. The smoothing speed `omega_s` replaces the sign of
@@ -21,6 +25,7 @@
 //! motor speed exceeds it.
 
 use crate::ControlError;
+use crate::drive::Drive;
 use crate::error::check;
 
 /// A named signal an actuator reports beside its force (a motor's torque and speed, a
@@ -47,6 +52,10 @@ pub const MAX_ACTUATOR_SIGNALS: usize = 6;
 pub const MOTOR_TORQUE: &str = "motor_torque";
 /// Name of the motor speed signal of [`MotorBallScrew`] (rev/s).
 pub const MOTOR_SPEED: &str = "motor_speed";
+/// Name of the winding current signal of a [`MotorBallScrew`] with a [`Drive`] (A).
+pub const MOTOR_CURRENT: &str = "motor_current";
+/// Name of the winding voltage signal of a [`MotorBallScrew`] with a [`Drive`] (V).
+pub const MOTOR_VOLTAGE: &str = "motor_voltage";
 
 /// The signals of [`MotorBallScrew`]: torque after saturation, speed, and whether the
 /// torque command was clipped at the peak (1) or not (0).
@@ -68,6 +77,26 @@ pub const MOTOR_SIGNALS: [ActuatorSignal; 3] = [
         header_unit: "flag",
         symbol: "sat",
         unit: "1",
+    },
+];
+
+/// The signals of [`MotorBallScrew`] with a [`Drive`]: [`MOTOR_SIGNALS`], then the winding
+/// current and voltage.
+pub const MOTOR_DRIVE_SIGNALS: [ActuatorSignal; 5] = [
+    MOTOR_SIGNALS[0],
+    MOTOR_SIGNALS[1],
+    MOTOR_SIGNALS[2],
+    ActuatorSignal {
+        name: MOTOR_CURRENT,
+        header_unit: "A",
+        symbol: "i",
+        unit: "A",
+    },
+    ActuatorSignal {
+        name: MOTOR_VOLTAGE,
+        header_unit: "V",
+        symbol: "u",
+        unit: "V",
     },
 ];
 
@@ -248,6 +277,9 @@ pub struct MotorBallScrew {
     pub coulomb_friction: f64,
     /// Speed `omega_s` of the Coulomb friction's smoothing (rev/s).
     pub coulomb_smoothing: f64,
+    /// The drive's electrics (the torque-speed envelope), where modelled; `None`: the peak
+    /// torque at any speed.
+    pub drive: Option<Drive>,
 }
 
 impl MotorBallScrew {
@@ -402,6 +434,9 @@ impl MotorBallScrew {
                        divided by it",
             });
         }
+        if let Some(drive) = self.drive {
+            drive.validated()?;
+        }
         Ok(self)
     }
 
@@ -414,6 +449,33 @@ impl MotorBallScrew {
     pub fn friction_torque(&self, omega: f64) -> f64 {
         let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
         self.viscous_friction * omega + self.coulomb_friction * (omega / smoothing).tanh()
+    }
+
+    /// The largest torque the motor can hold at any speed (N m): the peak torque, or the
+    /// drive's current limit times its torque constant when lower.
+    pub fn torque_limit(&self) -> f64 {
+        let peak = self.ratings.peak_torque;
+        self.drive
+            .map_or(peak, |d| peak.min(d.current_limited_torque()))
+    }
+
+    /// The torque interval the motor can give at the motor speed `omega` (rad/s): within
+    /// [`MotorBallScrew::torque_limit`], and with a [`Drive`] within its bus voltage (the
+    /// torque-speed envelope). Beyond the no-load speed, where the voltage allows no torque
+    /// within the current limit, the drive brakes as hard as its current allows.
+    pub fn torque_range(&self, omega: f64) -> (f64, f64) {
+        let limit = self.torque_limit();
+        let Some(drive) = self.drive else {
+            return (-limit, limit);
+        };
+        let (lo, hi) = drive.voltage_limited_torque(omega);
+        let (lo, hi) = (lo.max(-limit), hi.min(limit));
+        if lo <= hi {
+            (lo, hi)
+        } else {
+            let brake = -limit * omega.signum();
+            (brake, brake)
+        }
     }
 }
 
@@ -431,18 +493,34 @@ impl Actuator for MotorBallScrew {
         let g = self.ratio();
         let omega = g * velocity;
         let wanted = command / (g * self.efficiency);
-        let peak = self.ratings.peak_torque;
-        let torque = wanted.clamp(-peak, peak);
+        let (lo, hi) = self.torque_range(omega);
+        let torque = wanted.clamp(lo, hi);
         let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
         let friction = self.viscous_friction * omega
             + self.coulomb_friction * (g * friction_velocity / smoothing).tanh();
-        let saturated = wanted.abs() > peak;
-        ActuatorOutput::with_signals(
-            g * self.efficiency * (torque - friction),
-            saturated,
-            &MOTOR_SIGNALS,
-            &[torque, velocity / self.lead, f64::from(u8::from(saturated))],
-        )
+        let saturated = wanted < lo || wanted > hi;
+        let force = g * self.efficiency * (torque - friction);
+        let flag = f64::from(u8::from(saturated));
+        match self.drive {
+            None => ActuatorOutput::with_signals(
+                force,
+                saturated,
+                &MOTOR_SIGNALS,
+                &[torque, velocity / self.lead, flag],
+            ),
+            Some(drive) => ActuatorOutput::with_signals(
+                force,
+                saturated,
+                &MOTOR_DRIVE_SIGNALS,
+                &[
+                    torque,
+                    velocity / self.lead,
+                    flag,
+                    drive.current(torque),
+                    drive.voltage(torque, omega),
+                ],
+            ),
+        }
     }
     /// Within four smoothing speeds of rest (`|rho'| / p < 4 omega_s`), where
     /// `tanh(omega / omega_s)` is still 0.1 % or more short of the full Coulomb torque and
@@ -454,14 +532,18 @@ impl Actuator for MotorBallScrew {
         "motor_ballscrew"
     }
     fn signals(&self) -> &'static [ActuatorSignal] {
-        &MOTOR_SIGNALS
+        if self.drive.is_some() {
+            &MOTOR_DRIVE_SIGNALS
+        } else {
+            &MOTOR_SIGNALS
+        }
     }
     fn reflected_mass(&self) -> f64 {
         let g = self.ratio();
         self.rotor_inertia * g * g
     }
     fn force_limit(&self) -> f64 {
-        self.ratio() * self.efficiency * self.ratings.peak_torque
+        self.ratio() * self.efficiency * self.torque_limit()
     }
     fn ratings(&self) -> Option<MotorRatings> {
         Some(self.ratings)
@@ -492,6 +574,7 @@ mod tests {
             viscous_friction: 1.0e-4,
             coulomb_friction: 0.02,
             coulomb_smoothing: 0.01,
+            drive: None,
         }
         .validated()
         .unwrap()
@@ -568,5 +651,53 @@ mod tests {
         bad.ratings.continuous_torque = 5.0;
         let e = bad.validated().unwrap_err();
         assert!(e.to_string().contains("peak_torque"), "{e}");
+    }
+
+    #[test]
+    fn a_drive_holds_the_torque_within_its_envelope() {
+        let drive = Drive {
+            torque_constant: 0.2,
+            resistance: 1.5,
+            bus_voltage: 100.0,
+            current_limit: 12.0,
+        };
+        let m = MotorBallScrew {
+            drive: Some(drive),
+            ..motor()
+        };
+        let m = m.validated().unwrap();
+        let g = m.ratio();
+        assert_eq!(m.signals().len(), 5);
+        // At rest the current limit holds the torque at K_t I_max = 2.4 N m (peak 3.5).
+        let out = m.apply(1e4, 0.0);
+        let torque = out.signal(MOTOR_TORQUE).unwrap();
+        assert!((torque - 2.4).abs() <= 1e-12, "{torque}");
+        assert!(out.saturated);
+        assert!((out.signal(MOTOR_CURRENT).unwrap() - 12.0).abs() <= 1e-12);
+        // At 75 rev/s motoring: K_t (V - K_e omega) / R, and the winding voltage is the bus.
+        let v = 75.0 * m.lead;
+        let omega = g * v;
+        let out = m.apply(1e4, v);
+        let expected = 0.2 * (100.0 - 0.2 * omega) / 1.5;
+        let torque = out.signal(MOTOR_TORQUE).unwrap();
+        assert!((torque - expected).abs() <= 1e-12, "{torque} vs {expected}");
+        assert!((out.signal(MOTOR_VOLTAGE).unwrap() - 100.0).abs() <= 1e-9);
+        // Braking at the same speed: the back-EMF helps, the current limit binds.
+        let out = m.apply(-1e4, v);
+        assert!((out.signal(MOTOR_TORQUE).unwrap() + 2.4).abs() <= 1e-12);
+        // Beyond the no-load speed V / K_e (79.6 rev/s) no motoring torque is left.
+        let v = 90.0 * m.lead;
+        let out = m.apply(1e4, v);
+        assert!(out.signal(MOTOR_TORQUE).unwrap() <= 0.0);
+        // Within the envelope the command arrives and the signals obey u = R i + K_e omega.
+        let out = m.apply(50.0, 10.0 * m.lead);
+        assert!(!out.saturated);
+        let (i, u) = (
+            out.signal(MOTOR_CURRENT).unwrap(),
+            out.signal(MOTOR_VOLTAGE).unwrap(),
+        );
+        assert!((u - (1.5 * i + 0.2 * g * 10.0 * m.lead)).abs() <= 1e-9);
+        // The anti-windup limit follows the current limit.
+        assert!((m.force_limit() - g * 0.9 * 2.4).abs() <= 1e-9);
     }
 }

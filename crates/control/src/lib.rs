@@ -11,23 +11,27 @@
 //!   rigid feedforward and anti-windup by conditional integration.
 //! * [`Actuator`]: [`IdealForce`] (`kind = "force"`) and [`MotorBallScrew`]
 //!   (`kind = "motor_ballscrew"`: reflected rotor inertia, efficiency, torque saturation,
-//!   viscous and smoothed Coulomb friction, speed limit reported).
+//!   viscous and smoothed Coulomb friction, speed limit reported), with a [`Drive`] its
+//!   torque-speed envelope from the bus voltage and current limit.
 //! * [`VibrationController`]: the voltages of piezoelectric patches on the links from their
 //!   sensors: [`StrainRate`] (`kind = "strain_rate"`) and [`ModalVelocity`]
 //!   (`kind = "modal_velocity"`).
 
 mod actuator;
 mod controller;
+pub mod drive;
 mod error;
 mod pid;
 mod statespace;
 mod vibration;
 
 pub use actuator::{
-    Actuator, ActuatorOutput, ActuatorSignal, IdealForce, MAX_ACTUATOR_SIGNALS, MOTOR_SIGNALS,
-    MOTOR_SPEED, MOTOR_TORQUE, MotorBallScrew, MotorRatings,
+    Actuator, ActuatorOutput, ActuatorSignal, IdealForce, MAX_ACTUATOR_SIGNALS, MOTOR_CURRENT,
+    MOTOR_DRIVE_SIGNALS, MOTOR_SIGNALS, MOTOR_SPEED, MOTOR_TORQUE, MOTOR_VOLTAGE, MotorBallScrew,
+    MotorRatings,
 };
 pub use controller::{ControlInput, Controller, SliderState};
+pub use drive::Drive;
 pub use error::ControlError;
 pub use pid::Pid;
 pub use statespace::{MAX_MEASUREMENTS, SliderSignal, StateSpaceLaw, StateSpaceMatrices};

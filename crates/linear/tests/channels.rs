@@ -161,6 +161,7 @@ fn the_motor_torque_is_the_command_through_the_screw() {
         viscous_friction: 1e-4,
         coulomb_friction: 0.02,
         coulomb_smoothing: 0.01,
+        drive: None,
     }
     .validated()
     .unwrap();

@@ -98,24 +98,60 @@ fn phase_plane(outcome: &PlanOutcome) -> Option<Figure> {
         .collect();
     let samples: Vec<_> = s.iter().map(|&s| sampler.sample(path, s).ok()).collect();
     let ceiling = (20.0 * top).powi(2).max(1e-12);
-    for (k, c) in constraints.iter().enumerate() {
-        let mut rows = vec![Row::INACTIVE; c.count()];
+    let cut = 3.0 * top;
+    // The maximum-velocity curve of `rows_at` along the path, cut at `cut`; `None` where it
+    // never bounds the speed below the cut.
+    let curve_of = |rows_at: &dyn Fn(&flexprr_planning::PathSample, &mut Vec<Row>)| {
+        let mut rows = Vec::new();
         let curve: Vec<f64> = samples
             .iter()
             .map(|sample| match sample {
                 Some(sample) => {
-                    c.rows(sample, &mut rows);
-                    max_speed(&rows, ceiling).min(3.0 * top)
+                    rows_at(sample, &mut rows);
+                    max_speed(&rows, ceiling).min(cut)
                 }
                 None => f64::NAN,
             })
             .collect();
-        panel = panel.series(Series::new(
-            format!("{} limit", c.name()),
-            &s,
-            &curve,
-            Style::nth(k + 1).dash(Dash::Dashed),
-        ));
+        curve
+            .iter()
+            .any(|v| *v < cut * (1.0 - 1e-9))
+            .then_some(curve)
+    };
+    for (k, c) in constraints.iter().enumerate() {
+        let alone = curve_of(&|sample, rows| {
+            rows.clear();
+            rows.resize(c.count(), Row::INACTIVE);
+            c.rows(sample, rows);
+        });
+        // A limit that bounds the speed only together with another (the bus voltage, which
+        // a large braking torque could meet at any speed) draws no curve of its own.
+        if let Some(curve) = alone {
+            panel = panel.series(Series::new(
+                format!("{} limit", c.name()),
+                &s,
+                &curve,
+                Style::nth(k + 1).dash(Dash::Dashed),
+            ));
+        }
+    }
+    if constraints.len() > 1 {
+        let together = curve_of(&|sample, rows| {
+            rows.clear();
+            for c in &constraints {
+                let start = rows.len();
+                rows.resize(start + c.count(), Row::INACTIVE);
+                c.rows(sample, &mut rows[start..]);
+            }
+        });
+        if let Some(curve) = together {
+            panel = panel.series(Series::new(
+                "all limits together",
+                &s,
+                &curve,
+                Style::nth(5).dash(Dash::Dotted),
+            ));
+        }
     }
     Some(
         Figure::new(Axis::new("path position s", unit))
@@ -123,7 +159,7 @@ fn phase_plane(outcome: &PlanOutcome) -> Option<Figure> {
             .description(
                 "The planned path speed against the path position, with the largest path speed \
                  each limit alone admits at some path acceleration (its maximum-velocity curve, \
-                 cut at three times the planned peak).",
+                 cut at three times the planned peak), and the curve of all limits together.",
             )
             .panel(panel),
     )

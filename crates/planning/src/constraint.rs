@@ -452,7 +452,7 @@ pub enum Efficiency {
 /// ```text
 /// F     = F_a_i + m_r rho_i''                  force on the slider, reflected rotor inertia m_r
 /// tau   = F / (g eta) + b g rho_i' + tau_C sign(rho_i')      (g = 2 pi / lead)
-/// |tau| <= scale * tau_peak
+/// |tau| <= scale * tau_max                     tau_max: the peak torque, or K_t I_max if lower
 /// ```
 ///
 /// The viscous term `b g rho_i'(s) sqrt(x)` is the `sqrt(x)` term of a row; Coulomb friction
@@ -550,7 +550,7 @@ impl Constraint for MotorTorque {
         let m = &self.motor;
         let g = m.ratio();
         let eta = m.efficiency;
-        let peak = self.scale * m.ratings.peak_torque;
+        let peak = self.scale * m.torque_limit();
         let reflected = m.reflected_mass();
         for i in 0..3 {
             let l = &sample.legs[i];
@@ -604,6 +604,80 @@ impl Constraint for MotorTorque {
                     };
                 }
             }
+        }
+    }
+}
+
+/// The drive's bus voltage on each leg's motor (docs/planning.md, "Motor"): the winding
+/// voltage of the steady-state drive ([`flexprr_control::Drive`]) within the bus voltage,
+///
+/// ```text
+/// -V_bus <= R tau / K_t + K_e g rho_i'(s) sqrt(x) <= V_bus
+/// ```
+///
+/// with `tau` the motor torque of [`MotorTorque`] (the same rows, so the same friction and
+/// efficiency branches: the voltage is increasing in the torque) and the back-EMF a `sqrt(x)`
+/// term. With the torque limit this is the motor's torque-speed envelope: the peak torque
+/// up to the corner speed, then a torque falling to zero at the no-load speed `V_bus / K_e`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotorVoltage {
+    torque: MotorTorque,
+    drive: flexprr_control::Drive,
+}
+
+impl MotorVoltage {
+    /// The voltage limit of `motor`'s drive; `None` for a motor without a drive.
+    ///
+    /// # Errors
+    /// The motor's own validation.
+    pub fn new(
+        motor: MotorBallScrew,
+        efficiency: Efficiency,
+    ) -> Result<Option<Self>, PlanningError> {
+        let torque = MotorTorque::new(motor, efficiency)?;
+        Ok(motor.drive.map(|drive| Self { torque, drive }))
+    }
+}
+
+impl Constraint for MotorVoltage {
+    fn name(&self) -> &str {
+        "motor_voltage"
+    }
+    fn unit(&self) -> &str {
+        "V"
+    }
+    fn count(&self) -> usize {
+        6
+    }
+    fn label(&self, row: usize) -> String {
+        leg_label(row)
+    }
+    fn rows(&self, sample: &PathSample, rows: &mut [Row]) {
+        self.torque.rows(sample, rows);
+        let d = &self.drive;
+        let r = d.resistance / d.torque_constant;
+        let emf = d.torque_constant * self.torque.motor.ratio();
+        let bus = d.bus_voltage;
+        for (k, row) in rows.iter_mut().enumerate() {
+            if row.lower == f64::NEG_INFINITY && row.upper == f64::INFINITY {
+                continue;
+            }
+            *row = Row {
+                u: r * row.u,
+                x: r * row.x,
+                sqrt_x: r * row.sqrt_x + emf * sample.legs[k % 3].d1,
+                offset: r * row.offset,
+                lower: if row.lower.is_finite() {
+                    -bus
+                } else {
+                    f64::NEG_INFINITY
+                },
+                upper: if row.upper.is_finite() {
+                    bus
+                } else {
+                    f64::INFINITY
+                },
+            };
         }
     }
 }

@@ -40,7 +40,7 @@ mod topp;
 
 pub use check::{Check, Usage};
 pub use constraint::{
-    Buckling, Constraint, Efficiency, MotorSpeed, MotorTorque, PlatformSpeed, Row,
+    Buckling, Constraint, Efficiency, MotorSpeed, MotorTorque, MotorVoltage, PlatformSpeed, Row,
     SliderAcceleration, SliderForce, SliderSpeed,
 };
 pub use error::{Infeasibility, PlanningError, Where};

@@ -7,8 +7,8 @@ use flexprr_dynamics::Machine;
 use serde::{Deserialize, Serialize};
 
 use crate::constraint::{
-    Buckling, Constraint, Efficiency, MotorSpeed, MotorTorque, PlatformSpeed, SliderAcceleration,
-    SliderForce, SliderSpeed,
+    Buckling, Constraint, Efficiency, MotorSpeed, MotorTorque, MotorVoltage, PlatformSpeed,
+    SliderAcceleration, SliderForce, SliderSpeed,
 };
 use crate::error::PlanningError;
 use crate::orientation::{PhiEnds, PhiObjective, PhiSearch, Schedule};
@@ -471,6 +471,9 @@ impl PlanSpec {
         if let (true, Some(motor)) = (self.motor, motor) {
             out.push(Box::new(MotorTorque::new(*motor, self.efficiency)?));
             out.push(Box::new(MotorSpeed::new(motor)));
+            if let Some(voltage) = MotorVoltage::new(*motor, self.efficiency)? {
+                out.push(Box::new(voltage));
+            }
         }
         if out.is_empty() {
             return Err(PlanningError::InvalidSpec {

@@ -31,6 +31,7 @@ fn sampling_and_rows_allocate_nothing() {
         viscous_friction: 1e-4,
         coulomb_friction: 0.01,
         coulomb_smoothing: 0.01,
+        drive: None,
     };
     let constraints: Vec<Box<dyn Constraint>> = vec![
         Box::new(SliderSpeed::new(1.0).unwrap()),

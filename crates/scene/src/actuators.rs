@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use flexprr_control::{Actuator, IdealForce, MotorBallScrew, MotorRatings};
+use flexprr_control::{Actuator, Drive, IdealForce, MotorBallScrew, MotorRatings};
 use serde::Deserialize;
 
 use crate::error::ScenarioError;
@@ -123,6 +123,43 @@ struct MotorKeys {
     /// Speed of the Coulomb friction's tanh smoothing (rev/s).
     #[serde(default = "default_coulomb_smoothing")]
     coulomb_smoothing: f64,
+    /// The drive's torque constant (N m/A): with `resistance` and `bus_voltage`, the
+    /// torque-speed envelope.
+    #[serde(default)]
+    torque_constant: Option<f64>,
+    /// Winding resistance (ohm).
+    #[serde(default)]
+    resistance: Option<f64>,
+    /// DC bus voltage (V).
+    #[serde(default)]
+    bus_voltage: Option<f64>,
+    /// The drive's current limit (A); none unless set.
+    #[serde(default)]
+    current_limit: Option<f64>,
+}
+
+/// The drive keys of a motor, all or none (`current_limit` optional with the others).
+const DRIVE_KEYS: [&str; 3] = ["torque_constant", "resistance", "bus_voltage"];
+
+impl MotorKeys {
+    /// The drive, when its keys are given; the first missing key of a partial drive.
+    fn drive(&self) -> Result<Option<Drive>, &'static str> {
+        let given = [self.torque_constant, self.resistance, self.bus_voltage];
+        match given {
+            [None, None, None] if self.current_limit.is_none() => Ok(None),
+            [Some(torque_constant), Some(resistance), Some(bus_voltage)] => Ok(Some(Drive {
+                torque_constant,
+                resistance,
+                bus_voltage,
+                current_limit: self.current_limit.unwrap_or(f64::INFINITY),
+            })),
+            _ => Err(DRIVE_KEYS
+                .iter()
+                .zip(given)
+                .find(|(_, v)| v.is_none())
+                .map_or("torque_constant", |(k, _)| *k)),
+        }
+    }
 }
 
 fn default_coulomb_smoothing() -> f64 {
@@ -131,6 +168,7 @@ fn default_coulomb_smoothing() -> f64 {
 
 impl From<MotorKeys> for MotorBallScrew {
     fn from(k: MotorKeys) -> Self {
+        let drive = k.drive().ok().flatten();
         MotorBallScrew {
             rotor_inertia: k.rotor_inertia,
             lead: k.lead,
@@ -143,6 +181,7 @@ impl From<MotorKeys> for MotorBallScrew {
             viscous_friction: k.viscous_friction,
             coulomb_friction: k.coulomb_friction,
             coulomb_smoothing: k.coulomb_smoothing,
+            drive,
         }
     }
 }
@@ -164,6 +203,14 @@ pub(crate) struct MotorBallScrewFactory;
 impl ActuatorFactory for MotorBallScrewFactory {
     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Actuator>, ScenarioError> {
         let keys: MotorKeys = params.parse()?;
+        if let Err(missing) = keys.drive() {
+            return Err(params.error(
+                "",
+                format!(
+                    "{missing} is missing: the drive needs torque_constant, resistance and bus_voltage together (current_limit is optional); set all three, or none for a motor without electrics"
+                ),
+            ));
+        }
         let motor = MotorBallScrew::from(keys)
             .validated()
             .map_err(|e| params.control_error(e))?;
@@ -188,6 +235,16 @@ impl ActuatorFactory for MotorBallScrewFactory {
             ("coulomb_smoothing", k.coulomb_smoothing),
         ]
         .into_iter()
+        .chain(
+            [
+                ("torque_constant", k.torque_constant),
+                ("resistance", k.resistance),
+                ("bus_voltage", k.bus_voltage),
+                ("current_limit", k.current_limit),
+            ]
+            .into_iter()
+            .filter_map(|(key, value)| value.map(|v| (key, v))),
+        )
         .map(|(key, value)| (key.to_string(), toml::Value::Float(value)))
         .collect()
     }

@@ -420,3 +420,40 @@ fn set_checks_control_and_actuator_keys_at_once() {
         assert_eq!(table, before, "{key}: a refused set changed the table");
     }
 }
+
+#[test]
+fn a_motor_drive_is_all_three_keys_or_none_and_each_is_checked_at_its_key() {
+    let drive = "torque_constant = 0.2\nresistance = 1.5\nbus_voltage = 100\ncurrent_limit = 12\n";
+    let scene = load(&text("coupled", &format!("{MOTOR}{drive}{PD}"))).expect("valid");
+    let actuator = scene.actuator.as_ref().expect("motor");
+    let names: Vec<&str> = actuator.signals().iter().map(|s| s.name).collect();
+    assert_eq!(
+        names,
+        [
+            "motor_torque",
+            "motor_speed",
+            "motor_saturated",
+            "motor_current",
+            "motor_voltage"
+        ]
+    );
+    // The drive is echoed with the motor's other keys (a planned scene keeps it).
+    let echoed = toml::to_string(&scene.file).expect("serializes");
+    assert!(echoed.contains("bus_voltage = 100"), "{echoed}");
+    // Without a drive the motor's signals are the three of before.
+    let plain = load(&text("coupled", &format!("{MOTOR}{PD}"))).expect("valid");
+    assert_eq!(plain.actuator.as_ref().unwrap().signals().len(), 3);
+
+    let (_, _, key, message) = refused(&text(
+        "coupled",
+        &format!("{MOTOR}torque_constant = 0.2\nbus_voltage = 100\n{PD}"),
+    ));
+    assert_eq!(key, "actuators", "{message}");
+    assert!(message.contains("resistance is missing"), "{message}");
+    let (_, _, key, message) = refused(&text(
+        "coupled",
+        &format!("{MOTOR}torque_constant = 0.2\nresistance = 0\nbus_voltage = 100\n{PD}"),
+    ));
+    assert_eq!(key, "actuators.resistance", "{message}");
+    assert!(message.contains("> 0"), "{message}");
+}

@@ -38,5 +38,6 @@ pub fn motor() -> MotorBallScrew {
         viscous_friction: 2e-4,
         coulomb_friction: 0.01,
         coulomb_smoothing: 0.01,
+        drive: None,
     }
 }
