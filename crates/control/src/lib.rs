@@ -12,14 +12,21 @@
 //! * [`Actuator`]: [`IdealForce`] (`kind = "force"`) and [`MotorBallScrew`]
 //!   (`kind = "motor_ballscrew"`: reflected rotor inertia, efficiency, torque saturation,
 //!   viscous and smoothed Coulomb friction, speed limit reported).
+//! * [`StateSpaceLaw`]: `kind = "statespace"`, a linear law designed elsewhere.
+//! * [`CallbackLaw`]: a sampled law whose commands a [`LawFunction`] computes
+//!   (`kind = "python"`: the Python bindings fill it).
+//! * [`SensedLaw`]: any law behind delaying, quantising sensors (`control.delay`,
+//!   `control.quantisation`).
 //! * [`VibrationController`]: the voltages of piezoelectric patches on the links from their
 //!   sensors: [`StrainRate`] (`kind = "strain_rate"`) and [`ModalVelocity`]
 //!   (`kind = "modal_velocity"`).
 
 mod actuator;
+mod callback;
 mod controller;
 mod error;
 mod pid;
+mod sensed;
 mod statespace;
 mod vibration;
 
@@ -27,8 +34,10 @@ pub use actuator::{
     Actuator, ActuatorOutput, ActuatorSignal, IdealForce, MAX_ACTUATOR_SIGNALS, MOTOR_SIGNALS,
     MOTOR_SPEED, MOTOR_TORQUE, MotorBallScrew, MotorRatings,
 };
+pub use callback::{CallbackLaw, LawFunction};
 pub use controller::{ControlInput, Controller, SliderState};
 pub use error::ControlError;
 pub use pid::Pid;
+pub use sensed::{MAX_DELAY_PERIODS, MAX_PADE_ORDER, SensedLaw, Sensors};
 pub use statespace::{MAX_MEASUREMENTS, SliderSignal, StateSpaceLaw, StateSpaceMatrices};
 pub use vibration::{ModalVelocity, StrainRate, VibrationController, VibrationInput};
