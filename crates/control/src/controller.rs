@@ -135,4 +135,9 @@ pub trait Controller: fmt::Debug + Send + Sync {
     fn linear_law(&self) -> Option<Arc<dyn Controller>> {
         None
     }
+    /// What a linear model of the loop should say about the law (how a delay is modelled,
+    /// what was left out), one line each. None by default.
+    fn linear_notes(&self) -> Vec<String> {
+        Vec::new()
+    }
 }

@@ -115,6 +115,8 @@ pub struct SensedLaw {
     line: DelayLine,
     /// The delayed signals: `(slider, 0 position / 1 velocity)`.
     signals: Vec<(usize, usize)>,
+    /// The quantisation this law (a [`Controller::linear_law`]) leaves out.
+    left_out: bool,
 }
 
 impl SensedLaw {
@@ -188,6 +190,7 @@ impl SensedLaw {
             sensors,
             line,
             signals,
+            left_out: false,
         })
     }
 
@@ -205,7 +208,7 @@ impl SensedLaw {
                 whole,
                 fraction: 0.0,
                 ..
-            } => format!("a shift of {whole} samples"),
+            } => format!("a shift of {whole} samples (exact in the discrete model)"),
             DelayLine::Shift {
                 whole, fraction, ..
             } => format!(
@@ -398,8 +401,28 @@ impl Controller for SensedLaw {
                 quantisation: [[0.0; 2]; 3],
                 ..self.sensors
             },
+            left_out: quantised || self.left_out,
             ..self.clone()
         }))
+    }
+
+    fn linear_notes(&self) -> Vec<String> {
+        let mut notes = self.inner.linear_notes();
+        if self.sensors.delay > 0.0 {
+            notes.push(format!(
+                "the measurements' delay of {} s is {}",
+                self.sensors.delay,
+                self.delay_model()
+            ));
+        }
+        if self.left_out {
+            notes.push(
+                "quantisation left out: rounding to the encoders' steps is not linear, so the \
+                 linear model has the law without it (a run keeps it)"
+                    .to_string(),
+            );
+        }
+        notes
     }
 }
 

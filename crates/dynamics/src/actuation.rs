@@ -49,6 +49,8 @@ struct Sample {
     /// The law's states at the sample (advanced by `rate * period` to the next one).
     states: Vec<f64>,
     rates: Vec<f64>,
+    /// Why the law could not compute its command here (the run stops at this sample).
+    failure: Option<flexprr_control::ControlError>,
 }
 
 /// The actuation of a model with its running state.
@@ -249,15 +251,18 @@ impl Actuated {
         let mut rates = std::mem::take(&mut self.rates);
         rates.resize(states.len(), 0.0);
         let mut command = [0.0; 3];
-        self.spec
+        let failure = self
+            .spec
             .controller
-            .command(input, &states, &mut command, &mut rates);
+            .try_command(input, &states, &mut command, &mut rates)
+            .err();
         self.hold.push(
             t,
             Sample {
                 command,
                 states,
                 rates: rates.clone(),
+                failure,
             },
         );
         self.rates = rates;
@@ -279,6 +284,9 @@ impl Actuated {
         states: &[f64],
         rates: &mut [f64],
     ) -> Result<Commands, DynamicsError> {
+        if let Some(failure) = self.hold.held(t).and_then(|s| s.failure.clone()) {
+            return Err(DynamicsError::Control(failure));
+        }
         let reference = Reference::of(machine, self, rigid, t)?;
         let input = self.input(t, &reference, measured);
         let command = self.command(&input, states, rates);
