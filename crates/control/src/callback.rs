@@ -232,7 +232,11 @@ mod tests {
         let mut f = [0.0; 3];
         law.try_command(&input(0.0), &[], &mut f, &mut []).unwrap();
         // Slider 2: error 1, rate 1; slider 3 commanded 0, slider 1 feedforward only.
-        assert_eq!(f, [10.0, 20.0 + 100.0 + 2.0, 30.0]);
+        let expected = [10.0, 20.0 + 100.0 + 2.0, 30.0];
+        assert!(
+            f.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-12),
+            "{f:?}"
+        );
         let e = law
             .try_command(&input(0.75), &[], &mut f, &mut [])
             .unwrap_err();

@@ -167,6 +167,15 @@ impl Actuated {
         )
     }
 
+    /// The failure of the sampled law's sample held at `t` (a law that could not compute
+    /// its command there): the right-hand side stops the run with it.
+    pub(crate) fn failure_at(&self, t: f64) -> Option<DynamicsError> {
+        self.hold
+            .held(t)
+            .and_then(|s| s.failure.clone())
+            .map(DynamicsError::Control)
+    }
+
     /// Sample period (s), 0 for a continuous law.
     pub(crate) fn period(&self) -> f64 {
         self.spec.controller.period()
@@ -256,6 +265,10 @@ impl Actuated {
             .controller
             .try_command(input, &states, &mut command, &mut rates)
             .err();
+        if failure.is_some() {
+            // The outputs at the failed sample show the command held until then.
+            command = self.hold.held(t).map_or([0.0; 3], |s| s.command);
+        }
         self.hold.push(
             t,
             Sample {
@@ -284,9 +297,6 @@ impl Actuated {
         states: &[f64],
         rates: &mut [f64],
     ) -> Result<Commands, DynamicsError> {
-        if let Some(failure) = self.hold.held(t).and_then(|s| s.failure.clone()) {
-            return Err(DynamicsError::Control(failure));
-        }
         let reference = Reference::of(machine, self, rigid, t)?;
         let input = self.input(t, &reference, measured);
         let command = self.command(&input, states, rates);

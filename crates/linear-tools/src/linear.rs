@@ -69,7 +69,7 @@ impl std::fmt::Debug for AtOperatingPoint {
 }
 
 /// The scene as the linear tools see it: its control law replaced by the law's linear
-/// part where they differ ([`flexprr_control::Controller::linear_law`]: a law behind
+/// part where they differ (`flexprr_control::Controller::linear_law`: a law behind
 /// quantising encoders without the rounding, which is not linear; the model's notes say so).
 /// The motion up to a time is integrated with that law too.
 pub fn linear_scene(scene: &Scene) -> std::borrow::Cow<'_, Scene> {

@@ -150,7 +150,10 @@ fn quantisation(
         ));
     }
     let mut out = [[0.0; 2]; 3];
-    let listed = params.table().get("measurements").and_then(|m| m.as_array());
+    let listed = params
+        .table()
+        .get("measurements")
+        .and_then(|m| m.as_array());
     let Some(listed) = listed else {
         if steps.len() != 3 {
             return Err(keys.error(
