@@ -2,6 +2,9 @@
 //! what it gets back.
 
 use std::fmt;
+use std::sync::Arc;
+
+use crate::ControlError;
 
 /// Position and velocity of one slider along its guide (m, m/s), and its acceleration where
 /// it is known (the commanded motion's; 0 for a measured slider).
@@ -103,6 +106,38 @@ pub trait Controller: fmt::Debug + Send + Sync {
     /// Warnings about the law on its own (a state-space law unstable without the machine),
     /// reported with a run's.
     fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// [`Controller::command`] for a law whose computation can fail (one that calls out to
+    /// another language): the actuated models take a sampled law's samples through it and
+    /// stop the run with its error. By default `command`, which cannot fail.
+    ///
+    /// # Errors
+    /// The law's own failure at `input.t`.
+    fn try_command(
+        &self,
+        input: &ControlInput<'_>,
+        states: &[f64],
+        force: &mut [f64; 3],
+        rates: &mut [f64],
+    ) -> Result<(), ControlError> {
+        self.command(input, states, force, rates);
+        Ok(())
+    }
+    /// Which measured signals of each slider the law reads: `[position, velocity]` per
+    /// slider (a delay line keeps only those). All of them by default.
+    fn reads(&self) -> [[bool; 2]; 3] {
+        [[true; 2]; 3]
+    }
+    /// The law the linear models use in place of this one, when they differ: a law behind
+    /// quantising sensors ([`crate::SensedLaw`]) without its quantisation, which is not
+    /// linear. `None` (the default): this law.
+    fn linear_law(&self) -> Option<Arc<dyn Controller>> {
+        None
+    }
+    /// What a linear model of the loop should say about the law (how a delay is modelled,
+    /// what was left out), one line each. None by default.
+    fn linear_notes(&self) -> Vec<String> {
         Vec::new()
     }
 }

@@ -16,6 +16,15 @@ pub enum ControlError {
         /// What it must be.
         rule: &'static str,
     },
+    /// A law's computation failed at a sample (a law in another language raised, or
+    /// returned a command that is not a number).
+    #[error("at the sample t = {t} s the control law failed: {message}")]
+    LawFailed {
+        /// The sample time (s).
+        t: f64,
+        /// What went wrong (for a Python law, its traceback).
+        message: String,
+    },
 }
 
 /// `value` if it is finite and at least `min` (strictly above when `strict`), else the error.

@@ -13,15 +13,22 @@
 //!   (`kind = "motor_ballscrew"`: reflected rotor inertia, efficiency, torque saturation,
 //!   viscous and smoothed Coulomb friction, speed limit reported), with a [`Drive`] its
 //!   torque-speed envelope from the bus voltage and current limit.
+//! * [`StateSpaceLaw`]: `kind = "statespace"`, a linear law designed elsewhere.
+//! * [`CallbackLaw`]: a sampled law whose commands a [`LawFunction`] computes
+//!   (`kind = "python"`: the Python bindings fill it).
+//! * [`SensedLaw`]: any law behind delaying, quantising sensors (`control.delay`,
+//!   `control.quantisation`).
 //! * [`VibrationController`]: the voltages of piezoelectric patches on the links from their
 //!   sensors: [`StrainRate`] (`kind = "strain_rate"`) and [`ModalVelocity`]
 //!   (`kind = "modal_velocity"`).
 
 mod actuator;
+mod callback;
 mod controller;
 pub mod drive;
 mod error;
 mod pid;
+mod sensed;
 mod statespace;
 mod vibration;
 
@@ -30,9 +37,11 @@ pub use actuator::{
     MOTOR_DRIVE_SIGNALS, MOTOR_SIGNALS, MOTOR_SPEED, MOTOR_TORQUE, MOTOR_VOLTAGE, MotorBallScrew,
     MotorRatings,
 };
+pub use callback::{CallbackLaw, LawFunction};
 pub use controller::{ControlInput, Controller, SliderState};
 pub use drive::Drive;
 pub use error::ControlError;
 pub use pid::Pid;
+pub use sensed::{MAX_DELAY_PERIODS, MAX_PADE_ORDER, SensedLaw, Sensors};
 pub use statespace::{MAX_MEASUREMENTS, SliderSignal, StateSpaceLaw, StateSpaceMatrices};
 pub use vibration::{ModalVelocity, StrainRate, VibrationController, VibrationInput};

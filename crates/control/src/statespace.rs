@@ -42,6 +42,23 @@ impl SliderSignal {
         }
     }
 
+    /// Whether the signal is the slider's velocity (or its error's rate) rather than its
+    /// position (or its error).
+    pub fn is_rate(self) -> bool {
+        matches!(self, Self::Velocity(_) | Self::ErrorRate(_))
+    }
+
+    /// Which measured signals of each slider `signals` read (see [`Controller::reads`]).
+    pub fn reads(signals: &[Self]) -> [[bool; 2]; 3] {
+        let mut reads = [[false; 2]; 3];
+        for s in signals {
+            if let Some(slider) = reads.get_mut(s.slider()) {
+                slider[usize::from(s.is_rate())] = true;
+            }
+        }
+        reads
+    }
+
     /// The value of the signal in `input`.
     pub fn value(self, input: &ControlInput<'_>) -> f64 {
         let (r, m) = (&input.reference, &input.measured);
@@ -108,32 +125,8 @@ impl StateSpaceLaw {
         let invalid = |name: &'static str, value: f64, rule: &'static str| {
             Err(ControlError::InvalidParameter { name, value, rule })
         };
+        check_channels(&measurements, &commands)?;
         let (n, p, m) = (matrices.states, measurements.len(), commands.len());
-        if p > MAX_MEASUREMENTS {
-            return invalid(
-                "measurements",
-                p as f64,
-                "at most 12 measurements (each slider's four signals once)",
-            );
-        }
-        if measurements
-            .iter()
-            .enumerate()
-            .any(|(k, s)| measurements[..k].contains(s) || s.slider() > 2)
-        {
-            return invalid(
-                "measurements",
-                p as f64,
-                "each measurement once, sliders 1 to 3",
-            );
-        }
-        if commands
-            .iter()
-            .enumerate()
-            .any(|(k, s)| commands[..k].contains(s) || *s > 2)
-        {
-            return invalid("commands", m as f64, "each slider once, sliders 1 to 3");
-        }
         for (name, len, rows, cols) in [
             ("A", matrices.a.len(), n, n),
             ("B", matrices.b.len(), n, p),
@@ -235,6 +228,52 @@ impl Controller for StateSpaceLaw {
     fn warnings(&self) -> Vec<String> {
         self.warnings.clone()
     }
+    fn reads(&self) -> [[bool; 2]; 3] {
+        SliderSignal::reads(&self.measurements)
+    }
+}
+
+/// The measurements and commanded sliders of a law on named channels: at most
+/// [`MAX_MEASUREMENTS`] measurements, each once, and each slider commanded at most once,
+/// sliders 1 to 3.
+pub(crate) fn check_channels(
+    measurements: &[SliderSignal],
+    commands: &[usize],
+) -> Result<(), ControlError> {
+    let invalid = |name: &'static str, value: usize, rule: &'static str| {
+        Err(ControlError::InvalidParameter {
+            name,
+            value: value as f64,
+            rule,
+        })
+    };
+    let p = measurements.len();
+    if p > MAX_MEASUREMENTS {
+        return invalid(
+            "measurements",
+            p,
+            "at most 12 measurements (each slider's four signals once)",
+        );
+    }
+    if measurements
+        .iter()
+        .enumerate()
+        .any(|(k, s)| measurements[..k].contains(s) || s.slider() > 2)
+    {
+        return invalid("measurements", p, "each measurement once, sliders 1 to 3");
+    }
+    if commands
+        .iter()
+        .enumerate()
+        .any(|(k, s)| commands[..k].contains(s) || *s > 2)
+    {
+        return invalid(
+            "commands",
+            commands.len(),
+            "each slider once, sliders 1 to 3",
+        );
+    }
+    Ok(())
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

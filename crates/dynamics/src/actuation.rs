@@ -49,6 +49,8 @@ struct Sample {
     /// The law's states at the sample (advanced by `rate * period` to the next one).
     states: Vec<f64>,
     rates: Vec<f64>,
+    /// Why the law could not compute its command here (the run stops at this sample).
+    failure: Option<flexprr_control::ControlError>,
 }
 
 /// The actuation of a model with its running state.
@@ -165,6 +167,15 @@ impl Actuated {
         )
     }
 
+    /// The failure of the sampled law's sample held at `t` (a law that could not compute
+    /// its command there): the right-hand side stops the run with it.
+    pub(crate) fn failure_at(&self, t: f64) -> Option<DynamicsError> {
+        self.hold
+            .held(t)
+            .and_then(|s| s.failure.clone())
+            .map(DynamicsError::Control)
+    }
+
     /// Sample period (s), 0 for a continuous law.
     pub(crate) fn period(&self) -> f64 {
         self.spec.controller.period()
@@ -249,15 +260,22 @@ impl Actuated {
         let mut rates = std::mem::take(&mut self.rates);
         rates.resize(states.len(), 0.0);
         let mut command = [0.0; 3];
-        self.spec
+        let failure = self
+            .spec
             .controller
-            .command(input, &states, &mut command, &mut rates);
+            .try_command(input, &states, &mut command, &mut rates)
+            .err();
+        if failure.is_some() {
+            // The outputs at the failed sample show the command held until then.
+            command = self.hold.held(t).map_or([0.0; 3], |s| s.command);
+        }
         self.hold.push(
             t,
             Sample {
                 command,
                 states,
                 rates: rates.clone(),
+                failure,
             },
         );
         self.rates = rates;

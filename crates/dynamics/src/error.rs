@@ -62,6 +62,10 @@ pub enum DynamicsError {
         /// What is expected.
         reason: &'static str,
     },
+    /// A sampled control law failed to compute its command (a law in another language
+    /// raised): the run stops at that sample.
+    #[error(transparent)]
+    Control(#[from] flexprr_control::ControlError),
     /// Inconsistent model set-up (e.g. a damping list longer than the modes).
     #[error("{0}")]
     Inconsistent(String),

@@ -19,6 +19,7 @@ pub mod frf;
 pub mod frf_plan;
 pub mod linear;
 pub mod machine_modes;
+pub mod margins;
 pub mod modal_test;
 pub mod npz;
 pub mod statespace;

@@ -68,6 +68,21 @@ impl std::fmt::Debug for AtOperatingPoint {
     }
 }
 
+/// The scene as the linear tools see it: its control law replaced by the law's linear
+/// part where they differ (`flexprr_control::Controller::linear_law`: a law behind
+/// quantising encoders without the rounding, which is not linear; the model's notes say so).
+/// The motion up to a time is integrated with that law too.
+pub fn linear_scene(scene: &Scene) -> std::borrow::Cow<'_, Scene> {
+    match scene.controller.as_ref().and_then(|c| c.linear_law()) {
+        Some(law) => {
+            let mut linear = scene.clone();
+            linear.controller = Some(law);
+            std::borrow::Cow::Owned(linear)
+        }
+        None => std::borrow::Cow::Borrowed(scene),
+    }
+}
+
 /// The scene's model at `at`.
 ///
 /// # Errors
@@ -85,6 +100,8 @@ pub fn operating_point(scene: &Scene, at: OperatingPoint) -> Result<AtOperatingP
                 .into(),
         }));
     }
+    let scene = linear_scene(scene);
+    let scene = scene.as_ref();
     match at {
         OperatingPoint::Rest(pose) => {
             let rest = scene.at_rest(pose)?;
@@ -156,6 +173,8 @@ fn integrate_to(scene: &Scene, times: &[f64], key: &str) -> Result<MotionStates,
             times[k - 1]
         )));
     }
+    let scene = linear_scene(scene);
+    let scene = scene.as_ref();
     let mut model = scene.build_model()?;
     check_size(scene, model.as_ref())?;
     let mut span = scene.clone();

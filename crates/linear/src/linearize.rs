@@ -460,7 +460,9 @@ pub fn linearize_with_settings(
     for output in outputs {
         channel::check_output(model, t, y, output).map_err(|e| LinearError::Channel(e.0))?;
     }
-    let mut notes = Vec::new();
+    let mut notes = model
+        .actuation()
+        .map_or_else(Vec::new, |a| a.controller.linear_notes());
     let laws = model.sampled_laws(t);
     let period = crate::discrete::common_period(&laws)?;
     // The loads that hold the operating point: friction held, sampled loops opened at

@@ -3,8 +3,10 @@
 //! SISO loop gain `L = -H` of a model from the break's input to its output (`H` from
 //! `actuator_command:I` to `slider_command:I`: the law's command answering the actuator's).
 //!
-//! From the exact frequency response ([`crate::frequency_response`], at `z = e^(i w dt)` in
-//! discrete time) on a grid of 4000 log-spaced frequencies from 1 rad/s to ten times the
+//! From the exact frequency response (Laub's Hessenberg method,
+//! [`crate::frequency_response_direct`], at `z = e^(i w dt)` in discrete time: exact whatever
+//! the eigenvalues' multiplicity, so a delay's shift register, a nilpotent block, is no
+//! harm) on a grid of 4000 log-spaced frequencies from 1 rad/s to ten times the
 //! fastest mode (to the Nyquist frequency `pi / dt` in discrete time), with 41 more about each
 //! mode within a quarter of its half-power bandwidth; every crossing of `|L| = 1` and of the
 //! negative real axis is refined by bisection in `log w` on the response itself (the links'
@@ -14,7 +16,7 @@
 //! 2nd ed., 2021, section 10.3; the sensitivity peak `M_s = max |1 / (1 + L)|`, section
 //! 13.3).
 
-use crate::{Complex, LinearError, Linearization, frequency_response, modes};
+use crate::{Complex, LinearError, Linearization, frequency_response_direct, modes};
 
 /// The margins of one loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,7 +39,7 @@ pub struct LoopMargins {
 /// `L = -H` at the angular frequencies `w` (rad/s).
 fn loop_gain(lin: &Linearization, w: &[f64]) -> Result<Vec<Complex>, LinearError> {
     let hz: Vec<f64> = w.iter().map(|w| w / std::f64::consts::TAU).collect();
-    Ok(frequency_response(lin, &hz)?
+    Ok(frequency_response_direct(lin, &hz)?
         .into_iter()
         .map(|h| h[0][0].scale(-1.0))
         .collect())

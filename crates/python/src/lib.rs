@@ -13,6 +13,7 @@ mod beam;
 mod convert;
 mod errors;
 mod kinematics;
+mod law;
 mod linear;
 mod plan;
 mod progress;
@@ -40,6 +41,7 @@ fn flexprr_native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::run_study, m)?)?;
     m.add_function(wrap_pyfunction!(linear::linearize, m)?)?;
     m.add_function(wrap_pyfunction!(linear::frequency_response, m)?)?;
+    m.add_function(wrap_pyfunction!(linear::margins, m)?)?;
     m.add_class::<plan::PyPlan>()?;
     m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     m.add("SceneError", py.get_type::<errors::SceneError>())?;

@@ -82,6 +82,7 @@ pub fn linearize<'py>(
     realization: String,
 ) -> PyResult<Bound<'py, PyAny>> {
     let owned = PyScene::from_any(scene)?;
+    crate::law::refuse_python_law(&owned)?;
     let settings = Settings {
         coulomb: match coulomb.as_str() {
             "left-out" => Coulomb::LeftOut,
@@ -320,4 +321,66 @@ pub fn frequency_response<'py>(
         Complex64::new(h.re, h.im)
     });
     Ok(PyArray3::from_owned_array(py, out))
+}
+
+/// The margins of the three slider loops of `scene` (a `Scene` or a path) at rest at `pose
+/// = (x_m, y_m, phi_deg)` (default: the start pose of its motion): what `flexprr margins
+/// --json` prints, `{"loops": [...]}` with per slider `slider`, `dt_s`, `gain_margin`,
+/// `gain_margin_db`, `phase_margin_deg`, `gain_crossover_hz`, `phase_crossover_hz`,
+/// `sensitivity_peak`, `sensitivity_peak_hz` (`None` where there is no crossing). Raises
+/// `SceneError` for a scene without `[control]` or a bad pose, `RunError` for a failed
+/// linearisation.
+#[pyfunction]
+#[pyo3(signature = (scene, pose = None))]
+pub fn margins<'py>(
+    py: Python<'py>,
+    scene: &Bound<'py, PyAny>,
+    pose: Option<(f64, f64, f64)>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let owned = PyScene::from_any(scene)?;
+    crate::law::refuse_python_law(&owned)?;
+    let pose = match pose {
+        None => None,
+        Some((x, y, phi)) => {
+            if !(x.is_finite() && y.is_finite() && phi.is_finite()) {
+                return Err(key_error(
+                    "pose",
+                    format!("({x}, {y}, {phi}): expected three finite numbers (m, m, deg)"),
+                ));
+            }
+            flexprr_linear_tools::linear::check_orientation_deg(phi)
+                .map_err(|m| key_error("pose", format!("({x}, {y}, {phi}): {m}")))?;
+            Some(Pose::new(x, y, phi.to_radians()))
+        }
+    };
+    let outcome = detached(py, None, 1.0, move |_| {
+        let scene = owned.build().map_err(flexprr_run::RunError::Scene)?;
+        flexprr_linear_tools::margins::slider_loop_margins(&scene, pose)
+    })?;
+    let loops = match outcome {
+        Ok(loops) => loops,
+        Err(flexprr_run::RunError::Scene(e @ flexprr_scene::ScenarioError::Input { .. })) => {
+            return Err(scene_error(e));
+        }
+        Err(e) => return Err(RunError::new_err(e.to_string())),
+    };
+    let finite = |x: f64| x.is_finite().then_some(x);
+    let rows = PyList::empty(py);
+    for (i, l) in loops.iter().enumerate() {
+        let m = &l.margins;
+        let row = PyDict::new(py);
+        row.set_item("slider", i + 1)?;
+        row.set_item("dt_s", l.dt)?;
+        row.set_item("gain_margin", finite(m.gain_margin))?;
+        row.set_item("gain_margin_db", finite(20.0 * m.gain_margin.log10()))?;
+        row.set_item("phase_margin_deg", finite(m.phase_margin_deg))?;
+        row.set_item("gain_crossover_hz", finite(m.gain_crossover_hz))?;
+        row.set_item("phase_crossover_hz", finite(m.phase_crossover_hz))?;
+        row.set_item("sensitivity_peak", m.sensitivity_peak)?;
+        row.set_item("sensitivity_peak_hz", m.sensitivity_peak_hz)?;
+        rows.append(row)?;
+    }
+    let out = PyDict::new(py);
+    out.set_item("loops", rows)?;
+    Ok(out)
 }

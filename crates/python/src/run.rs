@@ -391,7 +391,16 @@ enum Outcome {
 
 /// Validates, builds and runs a scene; `report` receives the fraction of the time span done.
 fn run_one(scene: &PyScene, report: &mut dyn FnMut(f64)) -> Outcome {
-    let built = match scene.build() {
+    run_one_with(scene, &crate::law::unbound_registry(), report)
+}
+
+/// As [`run_one`], with the parts of `registry` (a Python control law's).
+fn run_one_with(
+    scene: &PyScene,
+    registry: &flexprr_scene::Registry,
+    report: &mut dyn FnMut(f64),
+) -> Outcome {
+    let built = match scene.build_with(registry) {
         Ok(s) => s,
         Err(e) => return Outcome::Invalid(e),
     };
@@ -444,19 +453,51 @@ fn outcome_to_py(
 /// invalid scene and `RunError` (with `.partial`) for a failed run. `progress`, when given,
 /// is called as `progress(fraction)` with the fraction of the time span done, in the
 /// calling thread, at most about once per percent, and with 1.0 when the run succeeded.
+/// `controller` is the law of a scene with `[control] kind = "python"`: `controller(t, y)`
+/// receives the measurements `y` (a float64 array in the order of `control.measurements`)
+/// at each sample time `t` and returns the commands (array-like, one per entry of
+/// `control.commands`, N); an exception stops the run at that sample with its traceback in
+/// the `RunError` (with `.partial`).
 #[pyfunction]
-#[pyo3(signature = (scene, progress = None))]
+#[pyo3(signature = (scene, progress = None, controller = None))]
 pub fn run(
     py: Python<'_>,
     scene: &Bound<'_, PyAny>,
     progress: Option<&Bound<'_, PyAny>>,
+    controller: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyRunResult>> {
     let owned = PyScene::from_any(scene)?;
     let name = owned.name_or_default();
+    let kind = owned.control_kind();
+    let registry = match (controller, kind.as_deref()) {
+        (Some(f), Some("python")) => crate::law::registry_with(f)?,
+        (Some(_), other) => {
+            return Err(crate::errors::key_error(
+                "control.kind",
+                format!(
+                    "controller= is the function of a control.kind = \"python\" law; this \
+                     scene's control law is {}",
+                    other.map_or_else(
+                        || "absent (no [control] table)".to_string(),
+                        |k| format!("{k:?}")
+                    )
+                ),
+            ));
+        }
+        (None, Some("python")) => {
+            return Err(crate::errors::key_error(
+                "control.kind",
+                "the scene's control law is a Python function (control.kind = \"python\"): \
+                 pass it as flexprr.run(scene, controller=f), f(t, y) returning the commands"
+                    .to_string(),
+            ));
+        }
+        (None, _) => crate::law::unbound_registry(),
+    };
     let outcome = detached(py, progress, 0.01, move |report| {
         // Only fractions the caller will use cross the channel (the run reports every step).
         let mut last = f64::NEG_INFINITY;
-        run_one(&owned, &mut |f| {
+        run_one_with(&owned, &registry, &mut |f| {
             if f >= last + 0.01 || (f >= 1.0 && last < 1.0) {
                 last = f;
                 report(f);

@@ -101,10 +101,19 @@ impl PyScene {
     }
 
     /// Validates and builds the Rust scene (no Python involved: callable without the GIL).
+    /// A `kind = "python"` law is accepted without its function (`crate::law`).
     pub(crate) fn build(&self) -> Result<RustScene, ScenarioError> {
+        self.build_with(&crate::law::unbound_registry())
+    }
+
+    /// As [`PyScene::build`], with the parts of `registry` (a Python control law's).
+    pub(crate) fn build_with(
+        &self,
+        registry: &flexprr_scene::Registry,
+    ) -> Result<RustScene, ScenarioError> {
         match &self.origin {
             Some(o) if self.set_keys.is_empty() => {
-                RustScene::from_text(&o.file, &self.default_name, &o.text)
+                RustScene::from_text_with(registry, &o.file, &self.default_name, &o.text)
             }
             _ => {
                 let text = toml::to_string(&self.table).map_err(|e| ScenarioError::Input {
@@ -116,9 +125,19 @@ impl PyScene {
                     .origin
                     .as_ref()
                     .map_or_else(|| format!("<{}>", self.default_name), |o| o.file.clone());
-                RustScene::from_text(&file, &self.default_name, &text).map_err(|e| self.relocate(e))
+                RustScene::from_text_with(registry, &file, &self.default_name, &text)
+                    .map_err(|e| self.relocate(e))
             }
         }
+    }
+
+    /// The scene's `control.kind`, if it has `[control]`.
+    pub(crate) fn control_kind(&self) -> Option<String> {
+        self.table
+            .get("control")
+            .and_then(|c| c.get("kind"))
+            .and_then(|k| k.as_str())
+            .map(str::to_string)
     }
 
     /// An error found in the written-out table, placed where the user can find it: at the

@@ -10,6 +10,7 @@
 //! ```
 
 mod actuators;
+mod callback_law;
 mod control;
 mod controllers;
 mod error;
@@ -32,6 +33,7 @@ mod statespace_law;
 pub use flexprr_integrators::DynIntegrator;
 
 pub use actuators::ActuatorFactory;
+pub use callback_law::{CallbackLawFactory, PYTHON_LAW_NEEDS_PYTHON};
 pub use controllers::{ControllerFactory, VibrationControllerFactory};
 pub use error::{Location, ScenarioError};
 pub use input::{

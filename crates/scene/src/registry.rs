@@ -488,6 +488,10 @@ impl Default for Registry {
             "statespace",
             Arc::new(crate::statespace_law::StateSpaceFactory),
         );
+        r.register_controller(
+            "python",
+            Arc::new(crate::callback_law::CallbackLawFactory::default()),
+        );
         r.register_vibration_controller("strain_rate", Arc::new(StrainRateFactory));
         r.register_vibration_controller("modal_velocity", Arc::new(ModalVelocityFactory));
         for (name, preset, model) in [

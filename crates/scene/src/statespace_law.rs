@@ -36,19 +36,7 @@ pub(crate) struct StateSpaceFactory;
 impl ControllerFactory for StateSpaceFactory {
     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError> {
         let keys: Keys = params.parse()?;
-        let measurements = keys
-            .measurements
-            .iter()
-            .map(|name| measurement(name).map_err(|e| params.error("measurements", e)))
-            .collect::<Result<Vec<_>, _>>()?;
-        let commands = keys
-            .commands
-            .iter()
-            .map(|name| command(name).map_err(|e| params.error("commands", e)))
-            .collect::<Result<Vec<_>, _>>()?;
-        if commands.is_empty() {
-            return Err(params.error("commands", "name at least one command (slider_force:I)"));
-        }
+        let (measurements, commands) = channels(params, &keys.measurements, &keys.commands)?;
         if !(keys.period.is_finite() && keys.period >= 0.0) {
             return Err(params.error(
                 "period",
@@ -206,8 +194,32 @@ fn shape_text(shape: &[usize]) -> String {
     }
 }
 
+/// The `measurements` and `commands` of a slider law as slider signals and commanded
+/// sliders (0-based), each name checked at its key; at least one command.
+///
+/// # Errors
+/// An unknown channel name, one a law cannot measure or command, or no command.
+pub(crate) fn channels(
+    params: &TableParams<'_>,
+    measurements: &[String],
+    commands: &[String],
+) -> Result<(Vec<SliderSignal>, Vec<usize>), ScenarioError> {
+    let measurements = measurements
+        .iter()
+        .map(|name| measurement(name).map_err(|e| params.error("measurements", e)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let commands = commands
+        .iter()
+        .map(|name| command(name).map_err(|e| params.error("commands", e)))
+        .collect::<Result<Vec<_>, _>>()?;
+    if commands.is_empty() {
+        return Err(params.error("commands", "name at least one command (slider_force:I)"));
+    }
+    Ok((measurements, commands))
+}
+
 /// A measurement's channel name as a slider signal.
-fn measurement(name: &str) -> Result<SliderSignal, String> {
+pub(crate) fn measurement(name: &str) -> Result<SliderSignal, String> {
     match name.parse::<Output>().map_err(|e| e.0)? {
         Output::SliderPosition(i) => Ok(SliderSignal::Position(i)),
         Output::SliderVelocity(i) => Ok(SliderSignal::Velocity(i)),

@@ -350,7 +350,7 @@ fn a_registered_controller_is_named_by_scenes_and_reads_its_keys() {
     registry.register_controller("p", Arc::new(ProportionalFactory));
     assert_eq!(
         registry.controller_names(),
-        ["p", "pd", "pid", "statespace"]
+        ["p", "pd", "pid", "python", "statespace"]
     );
     let t = text("coupled", "[control]\nkind = \"p\"\nk = 5e4\n");
     let scene = Scene::from_text_with(&registry, "servo.toml", "servo", &t).expect("valid");

@@ -750,6 +750,9 @@ impl OdeSystem for CoupledSystem {
             Ok(kin) => kin,
             Err(e) => return self.fail(e, y, dy),
         };
+        if let Some(e) = self.actuated.as_ref().and_then(|a| a.failure_at(t)) {
+            return self.fail(e, y, dy);
+        }
         let (n, coordinates) = (self.modes, self.coordinates());
         let forces = match self.actuator_forces(t, y, &kin.rigid, &mut dy[2 * coordinates..]) {
             Ok(forces) => forces.map(|(_, outputs)| outputs.map(|o| o.force)),

@@ -1168,6 +1168,9 @@ impl OdeSystem for NonlinearSystem {
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
         self.counters.rhs_evaluations += 1;
+        if let Some(e) = self.actuated.as_ref().and_then(|a| a.failure_at(t)) {
+            return self.fail(e, y, dy);
+        }
         let frame = match self.frame(t, y) {
             Ok(f) => f,
             Err(e) => return self.fail(e, y, dy),
