@@ -7,11 +7,8 @@
 //! which model ran. A snapshot with [`MachineSnapshot::actuators`] is an actuated model's; a
 //! snapshot without is a model whose sliders are prescribed.
 
-mod feasibility;
 mod figures;
-mod scan;
 mod servo;
-mod stats;
 mod tables;
 
 use crate::column::Quantity;
@@ -20,10 +17,10 @@ use flexprr_dynamics::{DynamicsError, MachineSnapshot};
 use flexprr_scene::{OutputKind, Scene};
 use serde_json::Value;
 
-pub use feasibility::{Feasibility, LegRequirement, SCAN_TOLERANCE};
 pub(crate) use figures::figures;
+pub use flexprr_requirement::Peak;
+pub use flexprr_requirement::{Feasibility, LegRequirement, SCAN_TOLERANCE};
 pub use servo::{PlatformSummary, ServoSummary, SliderSummary};
-pub use stats::Peak;
 
 use crate::samples::Samples;
 use crate::table::RunResult;
@@ -68,9 +65,10 @@ pub(crate) fn produce(
 ) -> Result<(), DynamicsError> {
     let actuated = snapshots.filter(|s| s.first().is_some_and(|p| p.actuators.is_some()));
     let motor = scene.actuator.as_deref().filter(|a| a.ratings().is_some());
-    let motor_required = motor
-        .map(|m| feasibility::required(m, samples, &scene.machine))
-        .transpose()?;
+    let motor_required = match motor {
+        Some(m) => Some(required(m, samples, scene)?),
+        None => None,
+    };
     if scene.outputs.contains(&OutputKind::Tracking) {
         if let Some(snapshots) = snapshots {
             result.tables.push(tables::tracking(samples, snapshots));
@@ -83,7 +81,7 @@ pub(crate) fn produce(
             (None, None) => {
                 let ideal = flexprr_control::IdealForce;
                 let actuator = scene.actuator.as_deref().unwrap_or(&ideal);
-                let required = feasibility::required(actuator, samples, &scene.machine)?;
+                let required = required(actuator, samples, scene)?;
                 tables::actuators_required(samples, &required)
             }
         };
@@ -102,6 +100,23 @@ pub(crate) fn produce(
         result.add_report(report);
     }
     Ok(())
+}
+
+/// What `actuator` must deliver along the commanded motion at the samples' times.
+///
+/// # Errors
+/// A singular rigid inverse dynamics at an output time.
+fn required(
+    actuator: &dyn flexprr_control::Actuator,
+    samples: &mut Samples,
+    scene: &Scene,
+) -> Result<flexprr_requirement::Required, DynamicsError> {
+    let reactions = samples.with_reactions(&scene.machine)?.to_vec();
+    Ok(flexprr_requirement::required(
+        actuator,
+        &samples.states,
+        &reactions,
+    ))
 }
 
 impl crate::report::Report for ControlReport {
