@@ -7,17 +7,13 @@
 //! which model ran. A snapshot with [`MachineSnapshot::actuators`] is an actuated model's; a
 //! snapshot without is a model whose sliders are prescribed.
 
-mod figures;
 mod servo;
 mod tables;
 
-use crate::column::Quantity;
-use flexprr_dynamics::NamedQuantity;
 use flexprr_dynamics::{DynamicsError, MachineSnapshot};
 use flexprr_scene::{OutputKind, Scene};
 use serde_json::Value;
 
-pub(crate) use figures::figures;
 pub use flexprr_requirement::Peak;
 pub use flexprr_requirement::{Feasibility, LegRequirement, SCAN_TOLERANCE};
 pub use servo::{PlatformSummary, ServoSummary, SliderSummary};
@@ -173,16 +169,7 @@ pub fn report_of(result: &RunResult) -> &ControlReport {
     result.report::<ControlReport>().unwrap_or(&NONE)
 }
 
-/// Motor torque after saturation (N m): `actuators.csv`, `motor_torque_<i>_N_m`.
-pub const MOTOR_TORQUE: Quantity =
-    Quantity::Named(NamedQuantity::new("motor_torque", "N_m", "τ", "N·m"));
-/// Motor speed (rev/s): `motor_speed_<i>_rev_s`.
-pub const MOTOR_SPEED: Quantity =
-    Quantity::Named(NamedQuantity::new("motor_speed", "rev_s", "n", "rev/s"));
-/// Whether the motor torque is saturated at its peak (1) or not (0):
-/// `motor_saturated_<i>_flag`.
-pub const MOTOR_SATURATED: Quantity =
-    Quantity::Named(NamedQuantity::new("motor_saturated", "flag", "sat", "1"));
+pub use flexprr_figures::columns::{MOTOR_SATURATED, MOTOR_SPEED, MOTOR_TORQUE};
 
 #[cfg(test)]
 mod tests {
