@@ -130,7 +130,7 @@ pub fn run(args: RunArgs) -> Result<(), Failure> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     // The directory is checked before the run, so that a refusal costs nothing.
-    let target = OutputDir::check(&out, RUN_PRODUCTS, args.force, &[&args.scene], &[])
+    let target = OutputDir::check(&out, RUN_PRODUCTS.clone(), args.force, &[&args.scene], &[])
         .map_err(|e| failure(e.into()))?;
     target.check_writable().map_err(|e| failure(e.into()))?;
     if flexprr_run::SceneVariant::wanted(&flexprr_run::variant::Uncontrolled, &scene) && !args.quiet

@@ -23,12 +23,13 @@
 //! - `/` is refused, whatever the options.
 //!
 //! ```no_run
+//! use std::borrow::Cow;
 //! use flexprr_outdir::{OutputDir, Products};
 //! # fn main() -> Result<(), flexprr_outdir::OutputError> {
 //! const PRODUCTS: Products = Products {
 //!     kind: "example",
-//!     names: &["table.csv"],
-//!     patterns: &[],
+//!     names: Cow::Borrowed(&["table.csv"]),
+//!     patterns: Cow::Borrowed(&[]),
 //!     legacy: None,
 //! };
 //! let input = std::path::Path::new("scene.toml");
@@ -41,6 +42,7 @@
 //! # }
 //! ```
 
+use std::borrow::Cow;
 use std::collections::BTreeSet;
 use std::io::Read as _;
 use std::path::{Component, Path, PathBuf};
@@ -140,15 +142,16 @@ pub enum Legacy {
 
 /// The files a kind of output consists of: what it may write, so that a foreign file with
 /// such a name is refused before any work, and how an old directory of its kind looks.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Products {
     /// Kind written to the marker (`run`, `study`, `work-precision`); a directory of another
     /// kind is refused.
     pub kind: &'static str,
-    /// Exact file (or directory) names.
-    pub names: &'static [&'static str],
+    /// Exact file (or directory) names (borrowed for a fixed list, owned for one made from
+    /// plug-ins).
+    pub names: Cow<'static, [&'static str]>,
     /// `(prefix, suffix)` patterns of names, e.g. `("deflections_xi", ".svg")`.
-    pub patterns: &'static [(&'static str, &'static str)],
+    pub patterns: Cow<'static, [(&'static str, &'static str)]>,
     /// How an output of this kind written before markers existed is recognised.
     pub legacy: Option<Legacy>,
 }
@@ -179,13 +182,13 @@ impl Products {
 /// The products of `flexprr work-precision` (written by `flexprr_bench`).
 pub const WORK_PRECISION: Products = Products {
     kind: "work-precision",
-    names: &[
+    names: Cow::Borrowed(&[
         "work_precision.csv",
         "work_precision.svg",
         "work_precision.md",
         "reference.csv",
-    ],
-    patterns: &[],
+    ]),
+    patterns: Cow::Borrowed(&[]),
     legacy: Some(Legacy::Prefix {
         file: "work_precision.md",
         text: "# Work-precision:",
@@ -195,22 +198,22 @@ pub const WORK_PRECISION: Products = Products {
 /// The products of `flexprr frf` (`flexprr_linear_tools::frf`; the mode shapes with `--identify`).
 pub const FRF: Products = Products {
     kind: "frf",
-    names: &[
+    names: Cow::Borrowed(&[
         "frf.csv",
         "frf.json",
         "bode.svg",
         "mode_shapes.csv",
         "mode_shapes.svg",
-    ],
-    patterns: &[],
+    ]),
+    patterns: Cow::Borrowed(&[]),
     legacy: None,
 };
 
 /// The products of `flexprr statespace` (`flexprr_linear_tools::statespace`).
 pub const STATESPACE: Products = Products {
     kind: "statespace",
-    names: &["statespace.npz", "statespace.json"],
-    patterns: &[],
+    names: Cow::Borrowed(&["statespace.npz", "statespace.json"]),
+    patterns: Cow::Borrowed(&[]),
     legacy: None,
 };
 

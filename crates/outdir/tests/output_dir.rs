@@ -2,6 +2,7 @@
 //! directory and run status"), checked on the file system: what is refused, what is kept,
 //! what is replaced, and that an input or a foreign file is never overwritten or deleted.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -11,8 +12,8 @@ use flexprr_outdir::{
 
 const PRODUCTS: Products = Products {
     kind: "test",
-    names: &["a.csv", "b.csv", "summary.json"],
-    patterns: &[("plot_", ".svg")],
+    names: Cow::Borrowed(&["a.csv", "b.csv", "summary.json"]),
+    patterns: Cow::Borrowed(&[("plot_", ".svg")]),
     legacy: Some(flexprr_outdir::Legacy::JsonKey {
         file: "summary.json",
         key: "flexprr_version",

@@ -1,6 +1,7 @@
 //! The products of `flexprr plan` in one output directory, under the run's output-directory
 //! policy (`flexprr_outdir`): staged, published at the end, nothing written outside.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use flexprr_outdir::{OutputDir, Products};
@@ -16,15 +17,15 @@ pub const PLANNED_RUN_DIR: &str = "planned";
 /// What `flexprr plan` writes.
 pub const PLAN_PRODUCTS: Products = Products {
     kind: "plan",
-    names: &[
+    names: Cow::Borrowed(&[
         "plan.json",
         "planned.toml",
         PLANNED_RUN_DIR,
         "phase_plane.svg",
         "sliders.svg",
         "deflections.svg",
-    ],
-    patterns: &[],
+    ]),
+    patterns: Cow::Borrowed(&[]),
     legacy: None,
 };
 
@@ -79,7 +80,10 @@ pub fn write_files(outcome: &PlanOutcome, dir: &Path) -> Result<Vec<String>, Sce
     names.push("planned.toml".to_string());
     for (name, figure) in crate::figures::plan_figures(outcome) {
         let path = dir.join(&name);
-        figure.write_svg(&path).map_err(ScenarioError::Run)?;
+        // A figure that cannot be drawn or written is that file's I/O error.
+        figure
+            .write_svg(&path)
+            .map_err(|e| io(&path)(std::io::Error::other(e)))?;
         names.push(name);
     }
     if let Some(flexible) = &outcome.flexible {

@@ -81,6 +81,16 @@ pub enum RunError {
         #[source]
         source: ViewerError,
     },
+    /// An output producer could not make its output: a scene requests an output no
+    /// producer of the run makes, or a producer lacks what it needs or fails for a reason of
+    /// its own.
+    #[error("output {output}: {reason}")]
+    Output {
+        /// The output's name.
+        output: String,
+        /// Why, in words.
+        reason: String,
+    },
     /// Reading or writing outputs, or bad input met while running.
     #[error(transparent)]
     Scene(#[from] ScenarioError),
@@ -90,7 +100,7 @@ impl RunError {
     /// A one-word kind for `summary.json` and study records: `collapse` (the mechanism
     /// collapsed: a physical outcome), `diverged`, `singular-pose`, `kinematics`,
     /// `step-size-collapse`, `too-many-steps`, `non-finite`, `integrator`, `model`,
-    /// `linearisation`, `figure`, `io`, `input`.
+    /// `linearisation`, `figure`, `output`, `io`, `input`.
     pub fn kind(&self) -> &'static str {
         match self {
             RunError::Model(DynamicsError::Collapse { .. }) => "collapse",
@@ -108,6 +118,7 @@ impl RunError {
             },
             RunError::Linear { .. } => "linearisation",
             RunError::Figure { .. } => "figure",
+            RunError::Output { .. } => "output",
             RunError::Scene(ScenarioError::Io { .. }) => "io",
             RunError::Scene(_) => "input",
         }

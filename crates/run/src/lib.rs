@@ -9,6 +9,7 @@
 //! write_outputs(&scene, &result, std::path::Path::new("out/paper_f20")).unwrap();
 //! ```
 
+mod built_in;
 pub mod column;
 pub mod control;
 mod error;
@@ -19,6 +20,7 @@ mod output;
 mod outputs;
 pub mod piezo;
 pub mod plot;
+pub mod producer;
 pub mod report;
 mod run;
 mod samples;
@@ -34,7 +36,8 @@ pub use output::{
     RUN_PRODUCTS, WriteOptions, is_rigid, summary_json, table_one_markdown, write_outputs,
     write_outputs_into, write_outputs_with,
 };
+pub use producer::{OutputContext, OutputProducer, OutputRegistry, SharedProducer};
 pub use report::{Report, SharedReport};
-pub use run::{integrate, run, run_model, scene_integrator};
+pub use run::{integrate, run, run_model, run_registered, scene_integrator};
 pub use table::{RunResult, RunStats, Table};
 pub use variant::{OnFailure, SceneVariant, VariantRun};

@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use flexprr_dynamics::{FrequencyHistory, ModalSystem, NamedQuantity, SceneModel};
+use flexprr_dynamics::{FrequencyHistory, ModalSystem, SceneModel};
 use flexprr_integrators::Solution;
 use flexprr_linear::{LinearError, Mode, linearize, modes};
 use flexprr_plot::decimate::frame_indices;
@@ -23,13 +23,7 @@ use crate::column::{Column, Quantity as Q};
 use crate::error::RunError;
 use crate::table::Table;
 
-/// A whole-machine natural frequency `|lambda| / 2 pi` of the linearised model (Hz):
-/// `f_machine_<k>_Hz`.
-pub const MACHINE_FREQUENCY: Q = Q::Named(NamedQuantity::new("f_machine", "Hz", "f", "Hz"));
-/// A whole-machine damping ratio `-Re(lambda) / |lambda|` (dimensionless):
-/// `zeta_machine_<k>_ratio`.
-pub const MACHINE_DAMPING_RATIO: Q =
-    Q::Named(NamedQuantity::new("zeta_machine", "ratio", "ζ", "1"));
+pub use flexprr_figures::columns::{MACHINE_DAMPING_RATIO, MACHINE_FREQUENCY};
 
 /// Most instants linearised: every `ceil((n - 1) / 200)`-th output time, with the first
 /// and the last (201 of 2001 output times, for instance).

@@ -13,7 +13,10 @@ use serde_json::{Value, json};
 
 use crate::error::RunError;
 use crate::table::{RunResult, Table};
-use flexprr_outdir::{Legacy, OutputDir, Products};
+use std::sync::LazyLock;
+
+use crate::producer::OutputRegistry;
+use flexprr_outdir::{OutputDir, Products};
 use flexprr_scene::ScenarioError;
 use flexprr_scene::Scene;
 
@@ -216,51 +219,13 @@ pub struct WriteOptions {
     pub force: bool,
 }
 
-/// The files of a run (`docs/scenes.md`, "Outputs and their CSV columns" and "Plots"): what
+/// The files of a run with the built-in outputs (`docs/scenes.md`, "Outputs and their CSV
+/// columns" and "Plots"), from the built-in producers ([`OutputRegistry::products`]): what
 /// [`flexprr_outdir`] refuses to write over when it finds them in a directory flexprr did
-/// not write, and what it recognises an earlier run's directory by.
-pub const RUN_PRODUCTS: Products = Products {
-    kind: "run",
-    names: &[
-        "summary.json",
-        "table1.md",
-        "table1.csv",
-        "viewer.html",
-        "snapshots.svg",
-        "machine.svg",
-        "kinematics.csv",
-        "driving_forces.csv",
-        "joint_reactions.csv",
-        "axial_forces.csv",
-        "frequencies.csv",
-        "modes.csv",
-        "modal_forces.csv",
-        "deflections.csv",
-        "energies.csv",
-        "platform_deviation.csv",
-        "coupled_forces.csv",
-        "nonlinear_forces.csv",
-        "modes.svg",
-        "modal_forces.svg",
-        "driving_forces.svg",
-        "axial_forces.svg",
-        "platform_deviation.svg",
-        "kinematics.svg",
-        "energies.svg",
-        "machine_frequencies.csv",
-        "machine_frequencies.svg",
-        "piezo.csv",
-        "piezo.svg",
-    ],
-    patterns: &[
-        ("deflections_xi", ".svg"),
-        ("axial_force_frequency_mode", ".svg"),
-    ],
-    legacy: Some(Legacy::JsonKey {
-        file: "summary.json",
-        key: "flexprr_version",
-    }),
-};
+/// not write, and what it recognises an earlier run's directory by. A program with outputs of
+/// its own checks its directory with the products of its registry.
+pub static RUN_PRODUCTS: LazyLock<Products> =
+    LazyLock::new(|| OutputRegistry::built_in().products());
 
 /// Writes every output of a successful run into `dir` (see [`write_outputs_with`]).
 ///
@@ -291,7 +256,8 @@ pub fn write_outputs_with(
     dir: &Path,
     options: WriteOptions,
 ) -> Result<Vec<String>, ScenarioError> {
-    let target = OutputDir::check(dir, RUN_PRODUCTS, options.force, &[], &[])?;
+    let products = products_of(result);
+    let target = OutputDir::check(dir, products, options.force, &[], &[])?;
     write_outputs_into(scene, result, failure, &target)
 }
 
@@ -314,6 +280,16 @@ pub fn write_outputs_into(
         .iter()
         .map(|n| target.path().join(n).display().to_string())
         .collect())
+}
+
+/// The files a run that made `result` may write: the built-in ones and those of its
+/// producers.
+fn products_of(result: &RunResult) -> Products {
+    let mut products = RUN_PRODUCTS.clone();
+    for p in &result.producers {
+        crate::producer::add_files(&mut products, p.as_ref());
+    }
+    products
 }
 
 /// Writes the files of a run into `dir`; returns their names.
@@ -358,7 +334,11 @@ fn write_files(
         }
     }
     if scene.file.output.plots {
-        for (file, figure) in crate::plot::run_figures(scene, result) {
+        let mut figures: Vec<_> = (result.producers.iter())
+            .flat_map(|p| p.figures(scene, result))
+            .collect();
+        figures.retain(|(_, f)| f.panels.iter().any(|p| !p.series.is_empty()));
+        for (file, figure) in figures {
             let svg = figure.to_svg().map_err(|e| unwritable(dir, &file, e))?;
             write(&mut written, file, svg.as_bytes())?;
         }

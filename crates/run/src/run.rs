@@ -7,18 +7,16 @@
 
 use std::time::Instant as Clock;
 
-use flexprr_dynamics::{DynamicsError, MachineSnapshot, ModalSystem, SceneModel};
+use flexprr_dynamics::{DynamicsError, MachineSnapshot, SceneModel};
 use flexprr_integrators::{DynIntegrator, Solution};
 use flexprr_scene::{OutputKind, Scene};
 
-use crate::column::Quantity as Q;
 use crate::error::{RunError, RunFailure};
 use crate::integrate::{Integration, integrate_model};
-use crate::outputs;
+use crate::producer::{OutputContext, OutputRegistry};
 use crate::samples::Samples;
 use crate::table::{RunResult, RunStats};
-use crate::variant::{self, OnFailure, SceneVariant, Uncontrolled, VariantRun, WithoutAxialForce};
-use crate::viewer;
+use crate::variant::{self, OnFailure, SceneVariant, VariantRun};
 
 /// The integrator the scene names, with the scene's options.
 pub fn scene_integrator(scene: &Scene) -> Box<dyn DynIntegrator> {
@@ -45,11 +43,11 @@ pub fn integrate(
 }
 
 /// The integrated models of a run.
-struct Integrated {
-    model: Box<dyn SceneModel>,
-    solution: Solution,
+pub(crate) struct Integrated {
+    pub(crate) model: Box<dyn SceneModel>,
+    pub(crate) solution: Solution,
     /// The variant runs the scene asked for, by the variant's name (see [`crate::variant`]).
-    variants: Vec<(&'static str, VariantRun)>,
+    pub(crate) variants: Vec<(&'static str, VariantRun)>,
     /// The model's [`MachineSnapshot`] at every output time reached, once an output needs
     /// them.
     snapshots: Option<Vec<MachineSnapshot>>,
@@ -57,7 +55,7 @@ struct Integrated {
 
 impl Integrated {
     /// The model's snapshots at the solution's output times (computed once).
-    fn snapshots(&mut self) -> Result<&[MachineSnapshot], DynamicsError> {
+    pub(crate) fn snapshots(&mut self) -> Result<&[MachineSnapshot], DynamicsError> {
         if self.snapshots.is_none() {
             let all = (0..self.solution.len())
                 .map(|k| self.model.snapshot(self.solution.t[k], self.solution.y(k)))
@@ -68,14 +66,6 @@ impl Integrated {
     }
 }
 
-/// The run of the variant called `name` among `variants`, when it was made.
-fn variant_run<'a>(
-    variants: &'a [(&'static str, VariantRun)],
-    name: &str,
-) -> Option<&'a VariantRun> {
-    variants.iter().find(|(n, _)| *n == name).map(|(_, v)| v)
-}
-
 /// Runs a scene, computing only what it requests. `report` receives the progress of the
 /// integration (fraction of the time span).
 ///
@@ -83,7 +73,21 @@ fn variant_run<'a>(
 /// A [`RunFailure`]: why the run stopped, with every requested output computed up to the
 /// last accepted time.
 pub fn run(scene: &Scene, report: &mut dyn FnMut(f64)) -> Result<RunResult, RunFailure> {
-    run_with(scene, None, report)
+    run_with(scene, &OutputRegistry::built_in(), None, report)
+}
+
+/// [`run`] with the producers of `outputs` (the built-in ones and a program's own, see
+/// [`crate::producer`]): every producer the scene wants is asked, in the registry's order.
+///
+/// # Errors
+/// As [`run`]; a scene requesting an output (`output.custom`) no producer of `outputs`
+/// makes fails with [`RunError::Output`] before any work.
+pub fn run_registered(
+    scene: &Scene,
+    outputs: &OutputRegistry,
+    report: &mut dyn FnMut(f64),
+) -> Result<RunResult, RunFailure> {
+    run_with(scene, outputs, None, report)
 }
 
 /// [`run`] with a model built outside the scene's builder: any [`SceneModel`] runs through
@@ -98,18 +102,19 @@ pub fn run_model(
     model: Box<dyn SceneModel>,
     report: &mut dyn FnMut(f64),
 ) -> Result<RunResult, RunFailure> {
-    run_with(scene, Some(model), report)
+    run_with(scene, &OutputRegistry::built_in(), Some(model), report)
 }
 
 /// [`run`] or [`run_model`]: `model` is the scene's own when `None`.
 fn run_with(
     scene: &Scene,
+    outputs: &OutputRegistry,
     model: Option<Box<dyn SceneModel>>,
     report: &mut dyn FnMut(f64),
 ) -> Result<RunResult, RunFailure> {
     let clock = Clock::now();
     let mut result = RunResult::default();
-    let outcome = run_into(scene, model, report, &mut result);
+    let outcome = run_into(scene, outputs, model, report, &mut result);
     result.stats.wall_time_s = clock.elapsed().as_secs_f64();
     match outcome {
         Ok(()) => Ok(result),
@@ -118,10 +123,6 @@ fn run_with(
             partial: Box::new(result),
         }),
     }
-}
-
-fn wants(scene: &Scene, kind: OutputKind) -> bool {
-    scene.outputs.contains(&kind)
 }
 
 /// Integrates `model` (the scene's own when `None`), then, when it reached the end, every
@@ -237,10 +238,23 @@ fn integrate_variant(
 /// The body of [`run`]: fills `result` as far as it gets.
 fn run_into(
     scene: &Scene,
+    outputs: &OutputRegistry,
     model: Option<Box<dyn SceneModel>>,
     report: &mut dyn FnMut(f64),
     result: &mut RunResult,
 ) -> Result<(), RunError> {
+    if let Some(missing) = scene
+        .custom_outputs
+        .iter()
+        .find(|o| outputs.get(&o.name).is_none())
+    {
+        return Err(RunError::Output {
+            output: missing.name.clone(),
+            reason: "the scene requests it and no producer of the run makes it (give the \
+                     run its producer: flexprr_run::run_registered)"
+                .into(),
+        });
+    }
     let mut ked = scene.build_ked(false)?;
     let model = match model {
         None if scene.integrates_model() => Some(scene.build_model()?),
@@ -248,7 +262,7 @@ fn run_into(
     };
     // Linearising along the motion takes the last part of the progress.
     let share = match &model {
-        Some(m) if wants(scene, OutputKind::MachineFrequencies) => {
+        Some(m) if scene.outputs.contains(&OutputKind::MachineFrequencies) => {
             crate::machine_frequencies::integration_share(m.dim())
         }
         _ => 1.0,
@@ -266,12 +280,16 @@ fn run_into(
     };
     let mut later = |f: f64| report(share + (1.0 - share) * f);
     let outcome = produce(
-        scene,
-        &times,
-        &mut ked,
-        integrated.as_mut(),
+        outputs,
+        OutputContext {
+            scene,
+            times: &times,
+            samples: None,
+            ked: &mut ked,
+            integrated: integrated.as_mut(),
+            progress: &mut later,
+        },
         result,
-        &mut later,
     );
     if let Some(i) = &integrated {
         let c = i.model.counters();
@@ -298,164 +316,28 @@ fn run_into(
     }
 }
 
-/// Produces every requested output at `times` into `result`; `report` sees the progress of
-/// the outputs that take long (the linearisations along the motion).
+/// Asks every producer of `outputs` the scene wants, in order, into `result`; the shared
+/// samples first, when one of them needs them. A producer that needs the integrated model is
+/// skipped when the run did not integrate.
 fn produce(
-    scene: &Scene,
-    times: &[f64],
-    ked: &mut ModalSystem,
-    mut integrated: Option<&mut Integrated>,
+    outputs: &OutputRegistry,
+    mut ctx: OutputContext<'_>,
     result: &mut RunResult,
-    report: &mut dyn FnMut(f64),
 ) -> Result<(), RunError> {
-    let rigid_outputs = [
-        OutputKind::Kinematics,
-        OutputKind::DrivingForces,
-        OutputKind::JointReactions,
-        OutputKind::AxialForces,
-        OutputKind::ModalForces,
-        OutputKind::Energies,
-        OutputKind::Viewer,
-        OutputKind::Snapshots,
-        OutputKind::Machine,
-    ];
-    let mut samples =
-        if rigid_outputs.iter().any(|k| wants(scene, *k)) || crate::control::needs_samples(scene) {
-            Some(Samples::new(scene, times)?)
-        } else {
-            None
-        };
-    if let Some(s) = samples.as_mut() {
-        produce_rigid(scene, s, integrated.as_deref_mut(), result)?;
+    let wanted: Vec<_> = outputs
+        .producers()
+        .iter()
+        .filter(|p| p.wanted(ctx.scene))
+        .collect();
+    if wanted.iter().any(|p| p.needs().samples) {
+        ctx.samples = Some(Samples::new(ctx.scene, ctx.times)?);
     }
-    if wants(scene, OutputKind::Frequencies) {
-        let (table, hist) = outputs::frequencies(ked, times)?;
-        result.tables.push(table);
-        result.frequencies = Some(hist);
-    }
-    if let Some(s) = samples.as_mut() {
-        let snapshots = match integrated.as_deref_mut() {
-            Some(i) if crate::control::needs_snapshots(scene) => Some(i.snapshots()?),
-            _ => None,
-        };
-        crate::control::produce(scene, s, snapshots, result)?;
-    }
-    let Some(integrated) = integrated else {
-        return Ok(());
-    };
-    produce_integrated(scene, samples.as_ref(), ked, integrated, result)?;
-    if wants(scene, OutputKind::MachineFrequencies) {
-        // Last: the linearisations evaluate the model away from its solution.
-        let out = crate::machine_frequencies::machine_frequencies(
-            integrated.model.as_mut(),
-            &integrated.solution,
-            ked,
-            report,
-        );
-        result.tables.extend(out.table);
-        if let Some(note) = out.note {
-            result.add_report(note);
+    for producer in wanted {
+        if producer.needs().integration && ctx.integrated.is_none() {
+            continue;
         }
-        if let Some(e) = out.failure {
-            return Err(e);
-        }
-    }
-    Ok(())
-}
-
-/// The outputs of the commanded rigid motion: kinematics, driving forces (with the model's
-/// own where it was integrated), joint reactions, axial forces, the machine figure.
-fn produce_rigid(
-    scene: &Scene,
-    s: &mut Samples,
-    integrated: Option<&mut Integrated>,
-    result: &mut RunResult,
-) -> Result<(), RunError> {
-    let tables = &mut result.tables;
-    if wants(scene, OutputKind::Kinematics) {
-        tables.push(outputs::kinematics(s));
-    }
-    if wants(scene, OutputKind::DrivingForces) {
-        let model_forces = match integrated {
-            Some(i) => Some(i.snapshots()?),
-            None => None,
-        };
-        let (table, solves) = outputs::driving_forces(scene, s, model_forces)?;
-        result.stats.inverse_dynamics_solves += solves;
-        tables.push(table);
-    }
-    if wants(scene, OutputKind::JointReactions) {
-        tables.push(outputs::joint_reactions(scene, s)?);
-    }
-    if wants(scene, OutputKind::AxialForces) {
-        tables.push(outputs::axial_forces(scene, s)?);
-    }
-    if wants(scene, OutputKind::Machine) {
-        result.documents.push(viewer::machine_file(scene, s)?);
-    }
-    Ok(())
-}
-
-/// The outputs of the integrated model: its own tables, coordinates, deflections, modal
-/// forces, energies and the viewer.
-fn produce_integrated(
-    scene: &Scene,
-    samples: Option<&Samples>,
-    ked: &mut ModalSystem,
-    integrated: &mut Integrated,
-    result: &mut RunResult,
-) -> Result<(), RunError> {
-    let tables = &mut result.tables;
-    tables.extend(integrated.model.tables(&integrated.solution)?);
-    let (model, solution) = (integrated.model.as_mut(), &integrated.solution);
-    let variants = &integrated.variants;
-    let solved = |name: &str| variant_run(variants, name).and_then(VariantRun::solved);
-    if wants(scene, OutputKind::Modes) {
-        tables.push(outputs::modes(model, solution));
-    }
-    if wants(scene, OutputKind::Deflections) {
-        let variants = [
-            (
-                Q::DeflectionWithoutAxialForce,
-                solved(WithoutAxialForce.name()),
-            ),
-            (
-                crate::piezo::DEFLECTION_UNCONTROLLED,
-                solved(Uncontrolled.name()),
-            ),
-        ];
-        tables.push(outputs::deflections(scene, model, solution, &variants)?);
-    }
-    crate::piezo::produce(
-        scene,
-        model,
-        solution,
-        variant_run(variants, Uncontrolled.name()),
-        result,
-    )?;
-    let tables = &mut result.tables;
-    let Some(s) = samples else {
-        return Ok(());
-    };
-    if wants(scene, OutputKind::ModalForces) {
-        tables.push(outputs::modal_forces(scene, s));
-    }
-    if wants(scene, OutputKind::Energies) {
-        tables.push(outputs::energies(model, s, solution)?);
-    }
-    if wants(scene, OutputKind::Viewer) || wants(scene, OutputKind::Snapshots) {
-        let snapshots = integrated.snapshots()?.to_vec();
-        let data = viewer::viewer_data(
-            scene,
-            s,
-            integrated.model.as_ref(),
-            &integrated.solution,
-            &snapshots,
-            ked,
-            result.frequencies.as_ref(),
-        )?;
-        result.documents.extend(viewer::viewer_files(scene, &data)?);
-        result.viewer = Some(data);
+        result.producers.push(producer.clone());
+        producer.produce(&mut ctx, result)?;
     }
     Ok(())
 }

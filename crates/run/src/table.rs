@@ -44,6 +44,9 @@ pub struct RunResult {
     /// frequencies, or reports added from outside), in the order they were added: see
     /// [`crate::report`].
     pub reports: Vec<crate::report::SharedReport>,
+    /// The output producers the run asked, in order (see [`crate::producer`]): the writer
+    /// draws their figures, studies ask them for quantities by name.
+    pub producers: Vec<crate::producer::SharedProducer>,
 }
 
 impl RunResult {
@@ -64,6 +67,15 @@ impl RunResult {
             .iter()
             .find(|r| r.name() == name)
             .map(|r| r.as_ref())
+    }
+
+    /// The scalar quantity called `name`: from the reports, then from the producers that
+    /// made the run's outputs; `None` when none offers it.
+    pub fn quantity(&self, name: &str) -> Option<Result<f64, String>> {
+        self.reports
+            .iter()
+            .find_map(|r| r.quantity(name).map(Ok))
+            .or_else(|| self.producers.iter().find_map(|p| p.quantity(self, name)))
     }
 
     /// The report of type `R`, if the run made one.

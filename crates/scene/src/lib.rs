@@ -51,7 +51,8 @@ pub use registry::{
     Registry, TableParams, mechanical_model,
 };
 pub use scene::{
-    DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, MAX_ANGLE_DEG, Scene,
+    CustomOutput, DEFAULT_COLLAPSE_DEFLECTION, DEFAULT_ELEMENTS, LargeDeflection, MAX_ANGLE_DEG,
+    Scene,
 };
 pub use schema::{
     ActuatorsTable, BasisTable, BranchChoice, ControlTable, DEFAULT_COULOMB_SMOOTHING,

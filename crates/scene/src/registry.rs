@@ -425,6 +425,7 @@ pub struct Registry {
     vibration_controllers: BTreeMap<String, Arc<dyn VibrationControllerFactory>>,
     model_kinds: BTreeMap<String, Arc<dyn crate::ModelKind>>,
     actuators: BTreeMap<String, Arc<dyn crate::ActuatorFactory>>,
+    outputs: BTreeMap<String, crate::CustomOutput>,
 }
 
 impl fmt::Debug for Registry {
@@ -437,6 +438,7 @@ impl fmt::Debug for Registry {
             .field("vibration_controllers", &self.vibration_controller_names())
             .field("model_kinds", &self.model_kind_names())
             .field("actuators", &self.actuator_names())
+            .field("outputs", &self.output_names())
             .finish()
     }
 }
@@ -531,7 +533,30 @@ impl Registry {
             vibration_controllers: BTreeMap::new(),
             model_kinds: BTreeMap::new(),
             actuators: BTreeMap::new(),
+            outputs: BTreeMap::new(),
         }
+    }
+
+    /// Declares (or replaces) the output `name` a scene may request in `output.custom`: an
+    /// output produced by a program's own producer (`flexprr_run::OutputRegistry::register`
+    /// declares it here and gives the run its producer). `needs_integration`: whether it
+    /// reads the integrated model, so that a scene requesting it is integrated.
+    pub fn register_output(&mut self, name: &str, needs_integration: bool) {
+        let output = crate::CustomOutput {
+            name: name.to_string(),
+            needs_integration,
+        };
+        self.outputs.insert(name.to_string(), output);
+    }
+
+    /// The declared outputs, sorted.
+    pub fn output_names(&self) -> Vec<&str> {
+        self.outputs.keys().map(String::as_str).collect()
+    }
+
+    /// The declared output `name`.
+    pub fn output(&self, name: &str) -> Option<&crate::CustomOutput> {
+        self.outputs.get(name)
     }
 
     /// Registers (or replaces) the model kind `name` for `model.coupling`.

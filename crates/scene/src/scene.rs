@@ -60,6 +60,8 @@ pub struct Scene {
     pub stop_times: Vec<f64>,
     /// Requested outputs.
     pub outputs: BTreeSet<OutputKind>,
+    /// Requested outputs declared by the program (`output.custom`), in the scene's order.
+    pub custom_outputs: Vec<CustomOutput>,
     /// The registered model kind `model.coupling` names (KED, coupled, nonlinear or a
     /// program's own), with its capabilities.
     pub coupling: crate::ModelKindHandle,
@@ -359,6 +361,7 @@ impl Scene {
             .map_err(|m| c.value_error("integrator.method", m))?;
         let options = spectral_radius(&c, registry, &raw.integrator, method.name(), options)?;
         let outputs = build_outputs(&c, &raw, caps)?;
+        let custom_outputs = custom_outputs(&c, registry, &raw)?;
         crate::plan::check_plan(&c, &raw, &machine, span)?;
         Ok(Scene {
             name,
@@ -373,6 +376,7 @@ impl Scene {
             output_times,
             stop_times,
             outputs,
+            custom_outputs,
             coupling: model.coupling,
             axial_stiffness,
             rigid_chords,
@@ -387,7 +391,57 @@ impl Scene {
     /// Whether the scene needs the modal ODE integrated.
     pub fn needs_integration(&self) -> bool {
         self.outputs.iter().any(|k| k.needs_integration())
+            || self.custom_outputs.iter().any(|o| o.needs_integration)
     }
+
+    /// Whether the scene requests the output called `name` (built in or declared).
+    pub fn requests(&self, name: &str) -> bool {
+        self.outputs.iter().any(|k| k.name() == name)
+            || self.custom_outputs.iter().any(|o| o.name == name)
+    }
+}
+
+/// An output a program declared ([`Registry::register_output`]) and a scene requests in
+/// `output.custom`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CustomOutput {
+    /// Its name (`output.custom`).
+    pub name: String,
+    /// Whether it reads the integrated model.
+    pub needs_integration: bool,
+}
+
+/// `output.custom`: each name declared in `registry`, not a built-in output, once.
+fn custom_outputs(
+    c: &Checker<'_>,
+    registry: &Registry,
+    raw: &SceneFile,
+) -> Result<Vec<CustomOutput>, ScenarioError> {
+    let mut out: Vec<CustomOutput> = Vec::new();
+    for (k, name) in raw.output.custom.iter().enumerate() {
+        let key = format!("output.custom.{k}");
+        if OutputKind::ALL.iter().any(|(_, n)| n == name) {
+            return Err(c.value_error(
+                &key,
+                format!("\"{name}\" is a built-in output: request it in output.requests"),
+            ));
+        }
+        let Some(output) = registry.output(name) else {
+            let names = registry.output_names();
+            let known = if names.is_empty() {
+                "none is declared (a program declares its own with Registry::register_output)"
+                    .to_string()
+            } else {
+                format!("expected one of {}", quoted_list(&names))
+            };
+            return Err(c.value_error(&key, format!("unknown output \"{name}\": {known}")));
+        };
+        if out.iter().any(|o| o.name == *name) {
+            return Err(c.value_error(&key, format!("\"{name}\" is requested twice")));
+        }
+        out.push(output.clone());
+    }
+    Ok(out)
 }
 
 /// The scene's name: `name` if given (it must be safe, it names `out/<name>`), else the file

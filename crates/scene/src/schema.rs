@@ -564,6 +564,10 @@ pub struct OutputConfig {
     /// `frequencies`, `modes`, `modal_forces`, `deflections`, `energies`.
     #[serde(default = "default_requests")]
     pub requests: Vec<OutputKind>,
+    /// Outputs declared by the program that loads the scene (`Registry::register_output`),
+    /// by name; none by default.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub custom: Vec<String>,
     /// Positions `xi` along the links for `deflections` (default mid-point).
     #[serde(default = "default_xi")]
     pub deflection_xi: Vec<f64>,
@@ -589,6 +593,7 @@ impl Default for OutputConfig {
     fn default() -> Self {
         Self {
             requests: default_requests(),
+            custom: Vec::new(),
             deflection_xi: default_xi(),
             compare_without_axial_force: false,
             plots: true,

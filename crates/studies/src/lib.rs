@@ -19,6 +19,6 @@ pub mod study;
 mod validate;
 
 pub use study::{
-    Study, StudyError, StudyOptions, merge_studies, merge_studies_with, run_map_study,
+    Plugins, Study, StudyError, StudyOptions, merge_studies, merge_studies_with, run_map_study,
     run_search_study, run_study,
 };

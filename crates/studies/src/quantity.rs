@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::record::format_value;
 
 /// A derived quantity of one case (links and modes are 1-based, as in the output tables).
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Quantity {
     /// Lowest and highest frequency of a mode over the motion (output `frequencies`):
@@ -70,6 +70,28 @@ pub enum Quantity {
     /// spent saturated (docs/piezo.md): columns `V_patch_max_V`, `patch_saturated`
     /// (`yes`/`no`), `patch_saturated_fraction`. Scenes with patches.
     PatchVoltage,
+    /// A scalar an output producer offers by name (`flexprr_run::OutputProducer::quantities`,
+    /// the built-in ones or a program's own): column `<name>`. The scenes must request the
+    /// output that offers it.
+    Output {
+        /// The quantity's name, e.g. `slider_power_peak_W`.
+        name: String,
+        /// What the registry says of it (filled in when the study is checked).
+        #[serde(skip)]
+        about: OutputQuantity,
+    },
+}
+
+/// What the output registry says of a named quantity: the output offering it, its unit and
+/// label (empty until the study is checked against its registry).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OutputQuantity {
+    /// The output (producer) that offers it.
+    pub output: &'static str,
+    /// SI unit.
+    pub unit: &'static str,
+    /// Words for an axis label.
+    pub label: &'static str,
 }
 
 /// What a quantity column holds.
@@ -231,6 +253,16 @@ impl Quantity {
             Quantity::LowestFrequency
             | Quantity::DeflectionReduction { .. }
             | Quantity::PatchVoltage => self.analysis_column_specs(),
+            Quantity::Output { ref name, about } => vec![Column::new(
+                name.clone(),
+                if about.label.is_empty() {
+                    name.clone()
+                } else {
+                    about.label.to_string()
+                },
+                about.unit,
+                Number,
+            )],
             Quantity::Buckling { link } => vec![
                 Column::new(
                     format!("buckles_{link}"),
@@ -313,7 +345,10 @@ impl Quantity {
             | Quantity::PeakDeflection { link }
             | Quantity::DeflectionReduction { link }
             | Quantity::Buckling { link } => Some(link),
-            Quantity::Collapse | Quantity::LowestFrequency | Quantity::PatchVoltage => None,
+            Quantity::Collapse
+            | Quantity::LowestFrequency
+            | Quantity::PatchVoltage
+            | Quantity::Output { .. } => None,
         }
     }
 
@@ -341,6 +376,13 @@ impl Quantity {
             ))
         };
         match *self {
+            Quantity::Output { about, .. } => (!scene.requests(about.output)).then(|| {
+                format!(
+                    "quantity {name} needs the output \"{}\" (add it to output.custom, e.g. \
+                     in [set.output])",
+                    about.output
+                )
+            }),
             Quantity::FrequencyRange { mode, .. } | Quantity::StiffnessRatio { mode, .. } => {
                 if !has(OutputKind::Frequencies) {
                     return needs("frequencies");
@@ -504,6 +546,11 @@ impl Quantity {
                 self.derive_piezo(result, i, needs)
             }
             Quantity::Collapse => Err("the collapse is derived above".into()),
+            Quantity::Output { ref name, about } => match result.quantity(name) {
+                Some(Ok(v)) => Ok(vec![format_value(v)]),
+                Some(Err(why)) => Err(format!("quantity {name}: {why}")),
+                None => Err(needs(about.output)),
+            },
             Quantity::LowestFrequency => Err(
                 "quantity f_machine_lowest_Hz is computed from the case's scene \
                  (Quantity::derive_from_scene), not from its run"

@@ -1,6 +1,7 @@
 //! Running a study into an output directory (in parallel, sharded, resumable) and merging
 //! shard directories (`docs/studies.md`, "Output directory").
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -60,7 +61,7 @@ impl std::fmt::Display for Shard {
 /// per study.
 pub const STUDY_PRODUCTS: Products = Products {
     kind: "study",
-    names: &[
+    names: Cow::Borrowed(&[
         "study.json",
         "results.csv",
         "cases",
@@ -69,8 +70,8 @@ pub const STUDY_PRODUCTS: Products = Products {
         "map.csv",
         "map.json",
         "map.svg",
-    ],
-    patterns: &[],
+    ]),
+    patterns: Cow::Borrowed(&[]),
     legacy: Some(Legacy::JsonKey {
         file: "study.json",
         key: "fingerprint",

@@ -465,15 +465,16 @@ fn probe(
     };
     let name = format!("{}_search", study.name);
     let file = format!("{} search {} = {value}", study.name, search.key);
-    let scene = match flexprr_scene::Scene::from_text(&file, &name, &text) {
-        Ok(s) => s,
-        Err(e) => {
-            out.error = Some(e.to_string());
-            return out;
-        }
-    };
+    let scene =
+        match flexprr_scene::Scene::from_text_with(&study.plugins.scenes, &file, &name, &text) {
+            Ok(s) => s,
+            Err(e) => {
+                out.error = Some(e.to_string());
+                return out;
+            }
+        };
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        flexprr_run::run(&scene, &mut |_| {})
+        flexprr_run::run_registered(&scene, &study.plugins.outputs, &mut |_| {})
     }));
     let Ok(outcome) = outcome else {
         out.error = Some("the run panicked (a bug: please report it)".into());

@@ -23,13 +23,13 @@ use std::fmt::Write as _;
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
 
-use flexprr_run::{Collapse, RunResult, run};
+use flexprr_run::{Collapse, RunResult, run_registered};
 use flexprr_scene::{ScenarioError, Scene, locate, parse_toml};
 
 pub use crate::error::{MAX_INPUT_BYTES, StudyError, read_input_file};
 pub use crate::file::{AxisConfig, Combine, PlotConfig, RangeConfig, Spacing, StudyFile};
 pub use crate::plot::write_plots;
-pub use crate::quantity::{Column, ColumnValues, Quantity};
+pub use crate::quantity::{Column, ColumnValues, OutputQuantity, Quantity};
 pub use crate::record::{
     CaseFailure, CaseRecord, CaseStatus, FailureKind, classify_run_failure, format_value,
     read_case_records, results_csv,
@@ -87,6 +87,19 @@ pub struct Study {
     /// The files the study reads (the study file, when loaded from one, and the base
     /// scene file): an output directory never overwrites them.
     pub inputs: Vec<std::path::PathBuf>,
+    /// The parts its scenes and runs may name beyond the built-in ones.
+    pub plugins: Plugins,
+}
+
+/// The registries a study loads its scenes and runs its cases with: the scene layer's named
+/// parts and the run's output producers (whose quantities a study reaches by name,
+/// [`Quantity::Output`]). The built-in ones by default.
+#[derive(Debug, Clone, Default)]
+pub struct Plugins {
+    /// Named parts of scenes (models, bases, laws, declared outputs).
+    pub scenes: flexprr_scene::Registry,
+    /// Output producers.
+    pub outputs: flexprr_run::OutputRegistry,
 }
 
 /// Deep merge: tables merge key by key, anything else replaces.
@@ -147,10 +160,19 @@ impl Study {
     /// [`StudyError::Input`] (with `file:line:column` and the key) for anything wrong in the
     /// study, [`StudyError::Scene`] for a base scene that is not valid TOML.
     pub fn load(path: &Path) -> Result<Self, StudyError> {
+        Self::load_with(Plugins::default(), path)
+    }
+
+    /// As [`Study::load`], with the parts and outputs of `plugins`.
+    ///
+    /// # Errors
+    /// As [`Study::load`].
+    pub fn load_with(plugins: Plugins, path: &Path) -> Result<Self, StudyError> {
         let text = read_input_file(path)?;
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("study");
         let dir = path.parent().unwrap_or(Path::new("."));
-        let mut study = Self::from_text(&path.display().to_string(), name, &text, dir)?;
+        let file = path.display().to_string();
+        let mut study = Self::from_text_with(plugins, &file, name, &text, dir)?;
         study.inputs.insert(0, path.to_path_buf());
         Ok(study)
     }
@@ -178,14 +200,28 @@ impl Study {
         text: &str,
         dir: &Path,
     ) -> Result<Self, StudyError> {
-        let raw: StudyFile =
+        Self::from_text_with(Plugins::default(), file, default_name, text, dir)
+    }
+
+    /// As [`Study::from_text`], with the parts and outputs of `plugins`.
+    ///
+    /// # Errors
+    /// As [`Study::load`].
+    pub fn from_text_with(
+        plugins: Plugins,
+        file: &str,
+        default_name: &str,
+        text: &str,
+        dir: &Path,
+    ) -> Result<Self, StudyError> {
+        let mut raw: StudyFile =
             parse_toml(file, text).map_err(|e| StudyError::from_study_parse(file, e))?;
         let at = Locator { file, text };
         let (mut base, source) = load_base(&raw, dir, &at)?;
         merge_into(&mut base, &raw.set);
         let axes = expand_axes(&raw.axis, &base, &at)?;
         let cases = combine_cases(raw.combine, &axes, &at)?;
-        check_quantities(&raw.quantities, &at)?;
+        check_quantities(&mut raw.quantities, &plugins.outputs, &at)?;
         let search = match &raw.search {
             None => None,
             Some(config) => {
@@ -232,6 +268,7 @@ impl Study {
             search,
             map,
             inputs: source.path().into_iter().collect(),
+            plugins,
         };
         study.check_plots(&at)?;
         let context = crate::validate::Context {
@@ -416,7 +453,8 @@ impl Study {
                 message,
             })?;
         let name = format!("{}_{:06}", self.name, case.id);
-        Scene::from_text(&format!("{} case {}", self.name, case.id), &name, &text)
+        let file = format!("{} case {}", self.name, case.id);
+        Scene::from_text_with(&self.plugins.scenes, &file, &name, &text)
     }
 
     /// Runs one case; never fails: bad parameters, run failures and panics are recorded in
@@ -452,7 +490,10 @@ impl Study {
         if let Some(why) = self.quantities.iter().find_map(|q| q.unavailable(&scene)) {
             return Err(CaseFailure::new(FailureKind::Quantity, None, &why));
         }
-        let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| run(&scene, &mut |_| {})));
+        let outputs = &self.plugins.outputs;
+        let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| {
+            run_registered(&scene, outputs, &mut |_| {})
+        }));
         let wants_collapse = self.quantities.contains(&Quantity::Collapse);
         let (result, collapse) = match outcome {
             Ok(Ok(r)) => (r, None),
@@ -781,9 +822,37 @@ fn combine_cases(
     }
 }
 
-/// Links are 1-3 and modes start at 1.
-fn check_quantities(quantities: &[Quantity], at: &Locator<'_>) -> Result<(), StudyError> {
-    for (k, q) in quantities.iter().enumerate() {
+/// Links are 1-3 and modes start at 1; a quantity of an output is one its producers offer
+/// (its output, unit and label are filled in from them).
+fn check_quantities(
+    quantities: &mut [Quantity],
+    outputs: &flexprr_run::OutputRegistry,
+    at: &Locator<'_>,
+) -> Result<(), StudyError> {
+    let offered = outputs.quantities();
+    for (k, q) in quantities.iter_mut().enumerate() {
+        if let Quantity::Output { name, about } = q {
+            let Some((output, found)) = offered.iter().find(|(_, o)| o.name == name) else {
+                let names: Vec<String> = offered
+                    .iter()
+                    .map(|(_, o)| format!("`{}`", o.name))
+                    .collect();
+                let known = if names.is_empty() {
+                    "no output offers quantities".to_string()
+                } else {
+                    format!("expected one of {}", names.join(", "))
+                };
+                return Err(at.input(
+                    &format!("quantities.{k}.name"),
+                    format!("unknown output quantity `{name}`, {known}"),
+                ));
+            };
+            *about = crate::quantity::OutputQuantity {
+                output,
+                unit: found.unit,
+                label: found.label,
+            };
+        }
         if let Some(link) = q.link().filter(|l| !(1..=3).contains(l)) {
             return Err(at.input(
                 &format!("quantities.{k}.link"),

@@ -296,7 +296,9 @@ pub(crate) fn check_searches(
             let probe = probe_table(search, table, criterion, value)
                 .map_err(|m| at.input("search.key", m))?;
             let text = toml::to_string(&probe).map_err(|e| at.input("search", e.to_string()))?;
-            if let Err(e) = Scene::from_text(&study.name, &study.name, &text) {
+            if let Err(e) =
+                Scene::from_text_with(&study.plugins.scenes, &study.name, &study.name, &text)
+            {
                 return Err(place_probe_error(context, search, e, end, value, &case));
             }
         }

@@ -250,3 +250,15 @@ fn a_missing_study_or_base_scene_is_bad_input() {
     assert!(e.is_input(), "{e}");
     assert!(e.to_string().contains("absent.toml: cannot be read"), "{e}");
 }
+
+#[test]
+fn an_unknown_output_quantity_is_located_at_its_name_with_the_names_offered() {
+    let body = "quantities = [{ kind = \"output\", name = \"tip_speed\" }]\n\n[[axis]]\nkey = \"trajectory.frequency\"\nvalues = [10.0]\n";
+    // The built-in outputs offer no quantity by name: the message says so.
+    assert_located(
+        &error(body),
+        &at(body, "name = ", 0),
+        "quantities.0.name",
+        "unknown output quantity `tip_speed`, no output offers quantities",
+    );
+}

@@ -12,6 +12,7 @@ mod figure;
 mod report;
 mod shape;
 
+use std::borrow::Cow;
 use std::time::Instant;
 
 use flexprr_kinematics::Pose;
@@ -36,8 +37,8 @@ pub const SHAPE_POINTS: usize = 21;
 /// refuses to write over and recognises an earlier output by.
 pub const MODES_PRODUCTS: Products = Products {
     kind: "modes",
-    names: &["modes.json", "modes.csv", "modes.svg"],
-    patterns: &[],
+    names: Cow::Borrowed(&["modes.json", "modes.csv", "modes.svg"]),
+    patterns: Cow::Borrowed(&[]),
     legacy: None,
 };
 

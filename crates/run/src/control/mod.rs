@@ -7,23 +7,16 @@
 //! which model ran. A snapshot with [`MachineSnapshot::actuators`] is an actuated model's; a
 //! snapshot without is a model whose sliders are prescribed.
 
-mod feasibility;
-mod figures;
-mod scan;
 mod servo;
-mod stats;
 mod tables;
 
-use crate::column::Quantity;
-use flexprr_dynamics::NamedQuantity;
 use flexprr_dynamics::{DynamicsError, MachineSnapshot};
 use flexprr_scene::{OutputKind, Scene};
 use serde_json::Value;
 
-pub use feasibility::{Feasibility, LegRequirement, SCAN_TOLERANCE};
-pub(crate) use figures::figures;
+pub use flexprr_requirement::Peak;
+pub use flexprr_requirement::{Feasibility, LegRequirement, SCAN_TOLERANCE};
 pub use servo::{PlatformSummary, ServoSummary, SliderSummary};
-pub use stats::Peak;
 
 use crate::samples::Samples;
 use crate::table::RunResult;
@@ -68,9 +61,10 @@ pub(crate) fn produce(
 ) -> Result<(), DynamicsError> {
     let actuated = snapshots.filter(|s| s.first().is_some_and(|p| p.actuators.is_some()));
     let motor = scene.actuator.as_deref().filter(|a| a.ratings().is_some());
-    let motor_required = motor
-        .map(|m| feasibility::required(m, samples, &scene.machine))
-        .transpose()?;
+    let motor_required = match motor {
+        Some(m) => Some(required(m, samples, scene)?),
+        None => None,
+    };
     if scene.outputs.contains(&OutputKind::Tracking) {
         if let Some(snapshots) = snapshots {
             result.tables.push(tables::tracking(samples, snapshots));
@@ -83,7 +77,7 @@ pub(crate) fn produce(
             (None, None) => {
                 let ideal = flexprr_control::IdealForce;
                 let actuator = scene.actuator.as_deref().unwrap_or(&ideal);
-                let required = feasibility::required(actuator, samples, &scene.machine)?;
+                let required = required(actuator, samples, scene)?;
                 tables::actuators_required(samples, &required)
             }
         };
@@ -102,6 +96,23 @@ pub(crate) fn produce(
         result.add_report(report);
     }
     Ok(())
+}
+
+/// What `actuator` must deliver along the commanded motion at the samples' times.
+///
+/// # Errors
+/// A singular rigid inverse dynamics at an output time.
+fn required(
+    actuator: &dyn flexprr_control::Actuator,
+    samples: &mut Samples,
+    scene: &Scene,
+) -> Result<flexprr_requirement::Required, DynamicsError> {
+    let reactions = samples.with_reactions(&scene.machine)?.to_vec();
+    Ok(flexprr_requirement::required(
+        actuator,
+        &samples.states,
+        &reactions,
+    ))
 }
 
 impl crate::report::Report for ControlReport {
@@ -158,16 +169,7 @@ pub fn report_of(result: &RunResult) -> &ControlReport {
     result.report::<ControlReport>().unwrap_or(&NONE)
 }
 
-/// Motor torque after saturation (N m): `actuators.csv`, `motor_torque_<i>_N_m`.
-pub const MOTOR_TORQUE: Quantity =
-    Quantity::Named(NamedQuantity::new("motor_torque", "N_m", "τ", "N·m"));
-/// Motor speed (rev/s): `motor_speed_<i>_rev_s`.
-pub const MOTOR_SPEED: Quantity =
-    Quantity::Named(NamedQuantity::new("motor_speed", "rev_s", "n", "rev/s"));
-/// Whether the motor torque is saturated at its peak (1) or not (0):
-/// `motor_saturated_<i>_flag`.
-pub const MOTOR_SATURATED: Quantity =
-    Quantity::Named(NamedQuantity::new("motor_saturated", "flag", "sat", "1"));
+pub use flexprr_figures::columns::{MOTOR_SATURATED, MOTOR_SPEED, MOTOR_TORQUE};
 
 #[cfg(test)]
 mod tests {

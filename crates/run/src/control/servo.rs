@@ -7,8 +7,8 @@ use flexprr_dynamics::MachineSnapshot;
 use flexprr_scene::Scene;
 use serde_json::{Value, json};
 
-use super::stats::{Peak, first_crossing, margin, num, number, rms, sig};
 use crate::samples::Samples;
+use flexprr_requirement::stats::{Peak, first_crossing, margin, num, number, rms, sig};
 
 /// One slider of an actuated run.
 #[derive(Debug, Clone, Copy, PartialEq)]

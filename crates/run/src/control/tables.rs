@@ -3,8 +3,8 @@
 use flexprr_control::{ActuatorSignal, MOTOR_SIGNALS};
 use flexprr_dynamics::{Column, MachineSnapshot, NamedQuantity, Quantity as Q, Table};
 
-use super::feasibility::Required;
 use crate::samples::Samples;
+use flexprr_requirement::Required;
 
 /// `tracking.csv`: per slider `rho_ref - rho` (the commanded inverse kinematics of the
 /// samples minus the model's slider), and the platform's commanded minus actual pose. Zero

@@ -7,35 +7,22 @@
 //! Everything reads the integrated model through [`SceneModel::patch_states`] and
 //! [`SceneModel::deflection`]; nothing here asks which model ran.
 
-mod figures;
 mod report;
 
-use flexprr_dynamics::{DynamicsError, NamedQuantity, PatchState, SceneModel};
+use flexprr_dynamics::{DynamicsError, PatchState, SceneModel};
 use flexprr_integrators::Solution;
 use flexprr_scene::{OutputKind, Scene};
 
-pub(crate) use figures::figures;
 pub use report::{LinkReduction, PatchSummary, PiezoReport};
 
 use crate::column::{Column, Quantity as Q};
 use crate::table::{RunResult, Table};
 use crate::variant::VariantRun;
 
-/// Transverse deflection w at xi of the same scene without its vibration control (m):
-/// `w_<i>_xi<xi>_uncontrolled_m`.
-pub const DEFLECTION_UNCONTROLLED: Q =
-    Q::Named(NamedQuantity::new("w", "m", "w", "m").with_suffix("uncontrolled"));
-/// A patch's sensor voltage `V_s` (V); link and the patch's index on it.
-pub const PATCH_SENSOR_VOLTAGE: Q = Q::Named(NamedQuantity::new("V_sensor", "V", "V_s", "V"));
-/// A patch's voltage command from the vibration control law (V).
-pub const PATCH_COMMAND_VOLTAGE: Q = Q::Named(NamedQuantity::new("V_command", "V", "V_c", "V"));
-/// A patch's applied voltage: the command clipped at its limit (V).
-pub const PATCH_VOLTAGE: Q = Q::Named(NamedQuantity::new("V_applied", "V", "V", "V"));
-/// Whether a patch's command was clipped at its limit (1) or not (0).
-pub const PATCH_SATURATED: Q = Q::Named(NamedQuantity::new("patch_saturated", "flag", "sat", "1"));
-/// Mechanical power a patch's actuator delivers to its link (W; negative when it removes
-/// energy).
-pub const PATCH_POWER: Q = Q::Named(NamedQuantity::new("P_patch", "W", "P", "W"));
+pub use flexprr_figures::columns::{
+    DEFLECTION_UNCONTROLLED, PATCH_COMMAND_VOLTAGE, PATCH_POWER, PATCH_SATURATED,
+    PATCH_SENSOR_VOLTAGE, PATCH_VOLTAGE,
+};
 
 /// Where along the links the reduction is measured: the mid-point.
 pub const REDUCTION_XI: f64 = 0.5;
@@ -87,12 +74,7 @@ pub(crate) fn produce(
     Ok(())
 }
 
-/// Patch `p`'s index among the patches on its link (0-based): the second index of its
-/// columns.
-pub(crate) fn index_on_link(scene: &Scene, p: usize) -> usize {
-    let link = scene.patches[p].link;
-    scene.patches[..p].iter().filter(|q| q.link == link).count()
-}
+pub(crate) use flexprr_figures::columns::index_on_link;
 
 /// `piezo.csv`: per patch (link, index on the link) the sensor voltage, the command, the
 /// applied voltage, the saturation flag and the actuator power.

@@ -2,8 +2,7 @@
 //! ([`flexprr_plot`]: [`Figure`], [`Panel`], [`Axis`], [`Series`], ticks, decimation), so
 //! that `flexprr_run::plot::Figure` and the like keep working.
 
-mod machine_frequencies_figure;
-mod run_figures;
+pub(crate) mod run_figures;
 
 pub use flexprr_plot::*;
 pub use run_figures::run_figures;

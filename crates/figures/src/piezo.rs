@@ -1,15 +1,18 @@
 //! `piezo.svg`: each patch's applied voltage (with the voltage limits and, dashed, the
 //! command where it was clipped), its sensor voltage and its actuator power against time.
 
+use flexprr_dynamics::{Column, Quantity as Q, Table};
+use flexprr_plot::{Axis, Dash, Figure, Panel, Series, Style};
 use flexprr_scene::Scene;
 
-use crate::plot::{Axis, Dash, Figure, Panel, Series, Style};
-use crate::table::{RunResult, Table};
+use crate::columns::{
+    PATCH_COMMAND_VOLTAGE, PATCH_POWER, PATCH_SENSOR_VOLTAGE, PATCH_VOLTAGE, index_on_link,
+};
 
-/// The column `stem_<link>_<index>_unit` of patch `p` of `scene`.
-fn header(scene: &Scene, p: usize, stem: &str, unit: &str) -> String {
-    let index = super::index_on_link(scene, p);
-    format!("{stem}_{}_{}_{unit}", scene.patches[p].link + 1, index + 1)
+/// The header of patch `p`'s column of `quantity` (its link and index on the link).
+fn header(scene: &Scene, p: usize, quantity: Q) -> String {
+    let index = index_on_link(scene, p);
+    Column::mode(quantity, scene.patches[p].link, index).header()
 }
 
 /// Patch `p`'s legend label: its link and span.
@@ -23,12 +26,11 @@ fn label(scene: &Scene, p: usize) -> String {
     )
 }
 
-/// One series per patch of the column `stem`/`unit`, coloured by patch, labelled when
-/// `labelled`.
-fn per_patch(scene: &Scene, t: &Table, stem: &str, unit: &str, labelled: bool) -> Vec<Series> {
+/// One series per patch of `quantity`, coloured by patch, labelled when `labelled`.
+fn per_patch(scene: &Scene, t: &Table, quantity: Q, labelled: bool) -> Vec<Series> {
     (0..scene.patches.len())
         .filter_map(|p| {
-            let y = t.column(&header(scene, p, stem, unit))?;
+            let y = t.column(&header(scene, p, quantity))?;
             let name = if labelled {
                 label(scene, p)
             } else {
@@ -39,18 +41,16 @@ fn per_patch(scene: &Scene, t: &Table, stem: &str, unit: &str, labelled: bool) -
         .collect()
 }
 
-/// The figure of the `piezo` table, when the run has it.
-pub(crate) fn figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
-    let Some(t) = result.table("piezo").filter(|t| t.rows() > 1) else {
+/// The figure of the `piezo` table, when the run has it; `saturated`: whether a patch's
+/// command was clipped (the commands are drawn then).
+pub fn figures(scene: &Scene, piezo: Option<&Table>, saturated: bool) -> Vec<(String, Figure)> {
+    let Some(t) = piezo.filter(|t| t.rows() > 1) else {
         return Vec::new();
     };
-    let mut voltage = per_patch(scene, t, "V_applied", "V", true);
-    let saturated = result
-        .report::<super::PiezoReport>()
-        .is_some_and(|r| r.any_saturated());
+    let mut voltage = per_patch(scene, t, PATCH_VOLTAGE, true);
     if saturated {
         let commands = (0..scene.patches.len()).filter_map(|p| {
-            let y = t.column(&header(scene, p, "V_command", "V"))?;
+            let y = t.column(&header(scene, p, PATCH_COMMAND_VOLTAGE))?;
             Some(Series::new(
                 "",
                 t.time(),
@@ -85,11 +85,11 @@ pub(crate) fn figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)
         })
         .panel(Panel {
             y: Axis::new("V_{s}", "V"),
-            series: per_patch(scene, t, "V_sensor", "V", false),
+            series: per_patch(scene, t, PATCH_SENSOR_VOLTAGE, false),
         })
         .panel(Panel {
             y: Axis::new("P", "W"),
-            series: per_patch(scene, t, "P_patch", "W", false),
+            series: per_patch(scene, t, PATCH_POWER, false),
         });
     vec![("piezo.svg".to_string(), figure)]
 }

@@ -2,17 +2,18 @@
 //! against time) and `actuators.svg` (force on each slider; where a motor is modelled its
 //! torque with the peak and continuous ratings, and its speed with the largest speed).
 
+use flexprr_dynamics::{Column, Quantity as Q, Table};
+use flexprr_plot::{Axis, Dash, Figure, Panel, Series, Style};
 use flexprr_scene::Scene;
 
-use crate::plot::{Axis, Dash, Figure, Panel, Series, Style};
-use crate::table::{RunResult, Table};
+use crate::columns::{MOTOR_SPEED, MOTOR_TORQUE};
 
-/// One series per slider of the columns `header(i)`, `i = 1..=3`, labelled `slider i` when
-/// `labelled` (the legend once per figure: the colours are the same in every panel).
-fn per_slider(table: &Table, header: impl Fn(usize) -> String, labelled: bool) -> Vec<Series> {
+/// One series per slider of `quantity`, labelled `slider i` when `labelled` (the legend
+/// once per figure: the colours are the same in every panel).
+fn per_slider(table: &Table, quantity: Q, labelled: bool) -> Vec<Series> {
     (1..=3)
         .filter_map(|i| {
-            let y = table.column(&header(i))?;
+            let y = table.column(&Column::link(quantity, i - 1).header())?;
             let label = if labelled {
                 format!("slider {i}")
             } else {
@@ -41,8 +42,12 @@ fn panel(y: Axis, series: impl IntoIterator<Item = Series>) -> Panel {
     }
 }
 
-/// The control figures of the tables `result` holds.
-pub(crate) fn figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)> {
+/// The control figures of the `tracking` and `actuators` tables a run has.
+pub fn figures(
+    scene: &Scene,
+    tracking: Option<&Table>,
+    actuators: Option<&Table>,
+) -> Vec<(String, Figure)> {
     let about = format!("flexprr run of scene {}", scene.name);
     let figure = |title: &str| {
         Figure::new(Axis::new("t", "s"))
@@ -50,31 +55,32 @@ pub(crate) fn figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)
             .description(&about)
     };
     let mut out = Vec::new();
-    if let Some(t) = result.table("tracking").filter(|t| t.rows() > 1) {
-        let platform = ["x", "y"].iter().enumerate().filter_map(|(k, c)| {
-            let y = t.column(&format!("platform_error_{c}_m"))?;
+    if let Some(t) = tracking.filter(|t| t.rows() > 1) {
+        let errors = [(Q::PlatformErrorX, "x"), (Q::PlatformErrorY, "y")];
+        let platform = errors.iter().enumerate().filter_map(|(k, (q, c))| {
+            let y = t.column(&Column::of(*q).header())?;
             let style = Style::nth(k + 3).dash(if k == 0 { Dash::Solid } else { Dash::Dashed });
             Some(Series::new(format!("e_{{{c}}}"), t.time(), y, style))
         });
         let orientation = t
-            .column("platform_error_phi_rad")
+            .column(&Column::of(Q::PlatformErrorPhi).header())
             .map(|y| Series::new("", t.time(), y, Style::nth(5)));
         let f = figure("Tracking errors (commanded minus actual)")
             .panel(panel(
                 Axis::new("ρ_{ref} − ρ", "m"),
-                per_slider(t, |i| format!("slider_error_{i}_m"), true),
+                per_slider(t, Q::SliderError, true),
             ))
             .panel(panel(Axis::new("platform e_{x}, e_{y}", "m"), platform))
             .panel(panel(Axis::new("platform e_{φ}", "rad"), orientation));
         out.push(("tracking.svg".to_string(), f));
     }
-    if let Some(t) = result.table("actuators").filter(|t| t.rows() > 1) {
+    if let Some(t) = actuators.filter(|t| t.rows() > 1) {
         let ratings = scene.actuator.as_ref().and_then(|a| a.ratings());
         let mut f = figure("Actuator force on each slider").panel(panel(
             Axis::new("F", "N"),
-            per_slider(t, |i| format!("actuator_force_{i}_N"), true),
+            per_slider(t, Q::ActuatorForce, true),
         ));
-        let torque = per_slider(t, |i| format!("motor_torque_{i}_N_m"), false);
+        let torque = per_slider(t, MOTOR_TORQUE, false);
         if !torque.is_empty() {
             let mut series = torque;
             if let Some(r) = ratings {
@@ -94,7 +100,7 @@ pub(crate) fn figures(scene: &Scene, result: &RunResult) -> Vec<(String, Figure)
             }
             f = f.panel(panel(Axis::new("τ", "N·m"), series));
             // The slider entries again: a lone "max speed" entry would get no legend.
-            let mut speed = per_slider(t, |i| format!("motor_speed_{i}_rev_s"), true);
+            let mut speed = per_slider(t, MOTOR_SPEED, true);
             if let Some(r) = ratings {
                 speed.extend(rating_lines(
                     t,

@@ -4,18 +4,19 @@
 //! force, slider mass included, plus the rotor's reflected inertia), and through
 //! [`Actuator::required`] the motor torque and speed; compared with the peak torque, the
 //! continuous torque (against the RMS torque) and the largest speed. The check is made on
-//! the motion itself, between the output samples ([`super::scan`]); the `actuators` table
+//! the motion itself, between the output samples ([`crate::scan`]); the `actuators` table
 //! gives the same requirement at the output times.
 
 use flexprr_control::{Actuator, MotorRatings};
-use flexprr_dynamics::{DynamicsError, Machine, inverse_dynamics};
+use flexprr_dynamics::{DynamicsError, inverse_dynamics};
 use flexprr_scene::Scene;
 use serde_json::{Value, json};
 
-pub use super::scan::TOLERANCE as SCAN_TOLERANCE;
-use super::scan::scan;
-use super::stats::{Peak, margin, num, number, sig};
-use crate::samples::Samples;
+pub use crate::scan::TOLERANCE as SCAN_TOLERANCE;
+use crate::scan::scan;
+use crate::stats::{Peak, margin, num, number, sig};
+use flexprr_dynamics::JointReactions;
+use flexprr_kinematics::MachineState;
 
 /// Per leg, a time series.
 type PerLeg = [Vec<f64>; 3];
@@ -23,32 +24,27 @@ type PerLeg = [Vec<f64>; 3];
 /// What the actuators must deliver along the commanded rigid motion, per leg, at the
 /// samples' times.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Required {
+pub struct Required {
     /// Force on the slider (N): `F_a_rigid + m_r rho''`.
-    pub(crate) force: [Vec<f64>; 3],
+    pub force: [Vec<f64>; 3],
     /// Motor torque (N m) and speed (rev/s), where a motor is modelled.
-    pub(crate) motor: Option<(PerLeg, PerLeg)>,
+    pub motor: Option<(PerLeg, PerLeg)>,
     /// The peak torque the torque saturates at, where a motor is modelled.
-    pub(crate) peak_torque: Option<f64>,
+    pub peak_torque: Option<f64>,
 }
 
-/// The requirement of the commanded motion of `samples` on `actuator` (the same on every
-/// leg).
-///
-/// # Errors
-/// A singular rigid inverse dynamics at an output time.
-pub(crate) fn required(
+/// The requirement of the commanded motion on `actuator` (the same on every leg) at the
+/// output times, from the inverse kinematics `states` and the rigid joint `reactions` there.
+pub fn required(
     actuator: &dyn Actuator,
-    samples: &mut Samples,
-    machine: &Machine,
-) -> Result<Required, DynamicsError> {
-    let reactions = samples.with_reactions(machine)?.to_vec();
+    states: &[MachineState],
+    reactions: &[JointReactions],
+) -> Required {
     let reflected = actuator.reflected_mass();
     let force: [Vec<f64>; 3] = std::array::from_fn(|i| {
-        samples
-            .states
+        states
             .iter()
-            .zip(&reactions)
+            .zip(reactions)
             .map(|(state, r)| r.driving_force[i] + reflected * state.legs[i].rho_ddot)
             .collect()
     });
@@ -56,7 +52,7 @@ pub(crate) fn required(
     let mut speed: [Vec<f64>; 3] = Default::default();
     let mut motor = true;
     for i in 0..3 {
-        for (f, state) in force[i].iter().zip(&samples.states) {
+        for (f, state) in force[i].iter().zip(states) {
             match actuator.required(*f, state.legs[i].rho_dot) {
                 Some((tau, n)) => {
                     torque[i].push(tau);
@@ -66,11 +62,11 @@ pub(crate) fn required(
             }
         }
     }
-    Ok(Required {
+    Required {
         force,
         motor: motor.then_some((torque, speed)),
         peak_torque: actuator.ratings().map(|r| r.peak_torque),
-    })
+    }
 }
 
 /// One leg's requirement against the ratings.
@@ -129,7 +125,7 @@ fn earliest(times: impl Iterator<Item = Option<f64>>) -> Option<(f64, usize)> {
 
 impl Feasibility {
     /// The check of the commanded motion of `scene` on `actuator` over the scene's whole
-    /// time span, between the output samples ([`super::scan`]): at every time, the rigid
+    /// time span, between the output samples ([`crate::scan`]): at every time, the rigid
     /// inverse dynamics gives the force on each slider, `F_a_rigid + m_r rho''`, and the
     /// actuator the torque and speed it needs; their peaks, RMS values and first crossings
     /// of the ratings are found to the scan's resolution, whatever the output step. `None`
@@ -138,10 +134,7 @@ impl Feasibility {
     /// # Errors
     /// A pose of the commanded motion where the inverse kinematics or the rigid inverse
     /// dynamics fails, with its time.
-    pub(crate) fn scan(
-        scene: &Scene,
-        actuator: &dyn Actuator,
-    ) -> Result<Option<Self>, DynamicsError> {
+    pub fn scan(scene: &Scene, actuator: &dyn Actuator) -> Result<Option<Self>, DynamicsError> {
         let Some(ratings) = actuator.ratings() else {
             return Ok(None);
         };

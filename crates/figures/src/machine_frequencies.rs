@@ -3,9 +3,8 @@
 //! tabulated whole-machine frequencies on a logarithmic axis, and their damping ratios (as
 //! points) when any mode is damped.
 
-use super::{Axis, Dash, Figure, Panel, Series, Style};
-use crate::column::{Column, Quantity as Q};
-use crate::table::Table;
+use flexprr_dynamics::{Column, Quantity as Q, Table};
+use flexprr_plot::{Axis, Dash, Figure, Panel, Series, Style};
 
 /// A whole-machine mode's column.
 fn machine(quantity: Q, k: usize) -> Column {
@@ -30,7 +29,7 @@ const NEAR_FIRST_FAMILY: f64 = 2.5;
 pub(crate) fn machine_frequencies_figure(t: &Table, about: &str) -> Figure {
     let time = t.time();
     let modes: Vec<&[f64]> = (0..)
-        .map_while(|k| t.get(&machine(crate::machine_frequencies::MACHINE_FREQUENCY, k)))
+        .map_while(|k| t.get(&machine(crate::columns::MACHINE_FREQUENCY, k)))
         .collect();
     let ked: Vec<&[f64]> = (0..3)
         .filter_map(|i| t.get(&Column::mode(Q::Frequency, i, 0)))
@@ -69,12 +68,7 @@ pub(crate) fn machine_frequencies_figure(t: &Table, about: &str) -> Figure {
         .panel(near)
         .panel(all);
     let damping: Vec<&[f64]> = (0..)
-        .map_while(|k| {
-            t.get(&machine(
-                crate::machine_frequencies::MACHINE_DAMPING_RATIO,
-                k,
-            ))
-        })
+        .map_while(|k| t.get(&machine(crate::columns::MACHINE_DAMPING_RATIO, k)))
         .collect();
     if damping
         .iter()

@@ -12,7 +12,7 @@
 
 use flexprr_dynamics::DynamicsError;
 
-use super::stats::Peak;
+use crate::stats::Peak;
 
 /// Largest change of a peak or an RMS value between two refinements, relative to the
 /// channel's peak, at which the grid counts as converged.
@@ -28,11 +28,11 @@ const MAX_INTERVALS: usize = 1 << 18;
 const SEARCH_ITERATIONS: usize = 60;
 
 /// A function of time writing its channels into the slice, or failing at that time.
-pub(crate) type Channels<'a> = dyn FnMut(f64, &mut [f64]) -> Result<(), DynamicsError> + 'a;
+pub type Channels<'a> = dyn FnMut(f64, &mut [f64]) -> Result<(), DynamicsError> + 'a;
 
 /// What a scan found, per channel.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Scan {
+pub struct Scan {
     /// The span scanned (s).
     pub span: (f64, f64),
     /// The largest grid step of the last level (s).
@@ -322,7 +322,7 @@ impl Grid<'_> {
 ///
 /// # Errors
 /// The first evaluation of `f` that fails.
-pub(crate) fn scan(
+pub fn scan(
     f: &mut Channels<'_>,
     (t0, t1): (f64, f64),
     breakpoints: &[f64],
