@@ -219,6 +219,12 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
         let _ = (force, velocity);
         None
     }
+    /// The motor's drive (its torque-speed envelope), where one is modelled: what the
+    /// feasibility check of a commanded motion compares the winding voltage and current
+    /// with. None by default.
+    fn drive(&self) -> Option<Drive> {
+        None
+    }
     /// As [`Actuator::apply`], with the actuator's non-smooth friction (Coulomb friction,
     /// whose smoothed slope at rest is an artefact of the smoothing, not a damper) evaluated
     /// at the velocity `friction_velocity` instead of `velocity`: a linearisation holds it
@@ -547,6 +553,9 @@ impl Actuator for MotorBallScrew {
     }
     fn ratings(&self) -> Option<MotorRatings> {
         Some(self.ratings)
+    }
+    fn drive(&self) -> Option<Drive> {
+        self.drive
     }
     /// The torque that delivers `force` against the friction at `velocity`:
     /// `tau = F / (g eta) + tau_f(g rho')`, and the speed `rho' / p`.

@@ -7,7 +7,7 @@
 //! the motion itself, between the output samples ([`crate::scan`]); the `actuators` table
 //! gives the same requirement at the output times.
 
-use flexprr_control::{Actuator, MotorRatings};
+use flexprr_control::{Actuator, Drive, MotorRatings};
 use flexprr_dynamics::{DynamicsError, inverse_dynamics};
 use flexprr_scene::Scene;
 use serde_json::{Value, json};
@@ -83,6 +83,23 @@ pub struct LegRequirement {
     pub over_torque: Option<f64>,
     /// First time the required speed exceeds the largest speed (s).
     pub over_speed: Option<f64>,
+    /// With a drive: the largest steady-state winding voltage `R tau / K_t + K_e omega`
+    /// (V) and when, its first time beyond the bus voltage, the largest current (A) and
+    /// its first time beyond the current limit.
+    pub electrical: Option<Electrical>,
+}
+
+/// One leg's electrical requirement on a motor with a [`Drive`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Electrical {
+    /// Largest winding voltage magnitude (V) and when.
+    pub peak_voltage: Peak,
+    /// First time the voltage exceeds the bus voltage (s).
+    pub over_voltage: Option<f64>,
+    /// Largest current magnitude (A) and when.
+    pub peak_current: Peak,
+    /// First time the current exceeds the current limit (s).
+    pub over_current: Option<f64>,
 }
 
 impl LegRequirement {
@@ -103,6 +120,8 @@ pub struct Feasibility {
     pub actuator: String,
     /// Its ratings.
     pub ratings: MotorRatings,
+    /// Its drive, where modelled.
+    pub drive: Option<Drive>,
     /// Each leg's requirement.
     pub legs: [LegRequirement; 3],
     /// Time span the requirement covers (s): the scene's whole time span (the commanded
@@ -143,6 +162,7 @@ impl Feasibility {
         }
         let machine = &scene.machine;
         let reflected = actuator.reflected_mass();
+        let drive = actuator.drive();
         let mut requirement = |t: f64, out: &mut [f64]| -> Result<(), DynamicsError> {
             let motion = scene.trajectory.motion(t);
             let state = machine
@@ -156,12 +176,16 @@ impl Feasibility {
                 let (torque, speed) = actuator.required(force, leg.rho_dot).unwrap_or_default();
                 out[i] = torque;
                 out[3 + i] = speed;
+                if let Some(d) = &drive {
+                    out[6 + i] = d.voltage(torque, std::f64::consts::TAU * speed);
+                    out[9 + i] = d.current(torque);
+                }
             }
             Ok(())
         };
         let times = &scene.output_times;
         let span = (times[0], times[times.len() - 1]);
-        let limits = [
+        let mut limits = vec![
             ratings.peak_torque,
             ratings.peak_torque,
             ratings.peak_torque,
@@ -169,6 +193,10 @@ impl Feasibility {
             ratings.max_speed,
             ratings.max_speed,
         ];
+        if let Some(d) = &drive {
+            limits.extend([d.bus_voltage; 3]);
+            limits.extend([d.current_limit; 3]);
+        }
         let found = scan(
             &mut requirement,
             span,
@@ -181,10 +209,17 @@ impl Feasibility {
             peak_speed: found.peaks[3 + i],
             over_torque: found.first_over[i],
             over_speed: found.first_over[3 + i],
+            electrical: drive.map(|_| Electrical {
+                peak_voltage: found.peaks[6 + i],
+                over_voltage: found.first_over[6 + i],
+                peak_current: found.peaks[9 + i],
+                over_current: found.first_over[9 + i],
+            }),
         });
         Ok(Some(Self {
             actuator: actuator.name().to_string(),
             ratings,
+            drive,
             legs,
             span,
             grid_step: found.step,
@@ -192,13 +227,36 @@ impl Feasibility {
         }))
     }
 
-    /// Whether every leg stays within every rating.
+    /// Whether every leg stays within every rating (and its drive's bus voltage and
+    /// current limit).
     pub fn feasible(&self) -> bool {
         self.legs.iter().all(|l| {
             l.margins(&self.ratings)
                 .iter()
                 .all(|m| m.is_none_or(|m| m >= 1.0))
+                && l.electrical
+                    .is_none_or(|e| e.over_voltage.is_none() && e.over_current.is_none())
         })
+    }
+
+    /// The first time and leg (0-based) at which the required winding voltage exceeds the
+    /// bus voltage (with a drive).
+    pub fn first_over_voltage(&self) -> Option<(f64, usize)> {
+        earliest(
+            self.legs
+                .iter()
+                .map(|l| l.electrical.and_then(|e| e.over_voltage)),
+        )
+    }
+
+    /// The first time and leg (0-based) at which the required current exceeds the drive's
+    /// current limit.
+    pub fn first_over_current(&self) -> Option<(f64, usize)> {
+        earliest(
+            self.legs
+                .iter()
+                .map(|l| l.electrical.and_then(|e| e.over_current)),
+        )
     }
 
     /// The first time and leg (0-based) at which the required speed exceeds the rating.
@@ -258,6 +316,46 @@ impl Feasibility {
                 sig(1e3 * p.t),
             ));
         }
+        if let (Some(d), Some((t, leg))) = (&self.drive, self.first_over_voltage()) {
+            let w = worst(&|l| l.electrical.map_or(0.0, |e| e.peak_voltage.value));
+            let p = self.legs[w]
+                .electrical
+                .map(|e| e.peak_voltage)
+                .unwrap_or_default();
+            out.push(format!(
+                "infeasible motion: voltage: the commanded motion needs a winding voltage \
+                 (R i + K_e omega, the back-EMF included) above the {} motors' bus_voltage of {} \
+                 V from t = {} ms on leg {}, up to {} V on leg {} at t = {} ms (no-load speed \
+                 V / K_e = {} rev/s)",
+                self.actuator,
+                sig(d.bus_voltage),
+                sig(1e3 * t),
+                leg + 1,
+                sig(p.value),
+                w + 1,
+                sig(1e3 * p.t),
+                sig(d.no_load_speed() / std::f64::consts::TAU),
+            ));
+        }
+        if let (Some(d), Some((t, leg))) = (&self.drive, self.first_over_current()) {
+            let w = worst(&|l| l.electrical.map_or(0.0, |e| e.peak_current.value));
+            let p = self.legs[w]
+                .electrical
+                .map(|e| e.peak_current)
+                .unwrap_or_default();
+            out.push(format!(
+                "infeasible motion: current: the commanded motion needs more current than the \
+                 {} motors' current_limit of {} A from t = {} ms on leg {}, up to {} A on leg {} \
+                 at t = {} ms",
+                self.actuator,
+                sig(d.current_limit),
+                sig(1e3 * t),
+                leg + 1,
+                sig(p.value),
+                w + 1,
+                sig(1e3 * p.t),
+            ));
+        }
         let w = worst(&|l| l.rms_torque);
         let rms_torque = self.legs[w].rms_torque;
         if rms_torque > r.continuous_torque {
@@ -285,7 +383,7 @@ impl Feasibility {
             .enumerate()
             .map(|(i, l)| {
                 let [peak, continuous, speed] = l.margins(r);
-                json!({
+                let mut leg = json!({
                     "leg": i + 1,
                     "peak_torque_N_m": num(l.peak_torque.value),
                     "t_peak_torque_s": num(l.peak_torque.t),
@@ -297,13 +395,22 @@ impl Feasibility {
                     "speed_margin": number(speed),
                     "first_over_peak_torque_s": number(l.over_torque),
                     "first_over_max_speed_s": number(l.over_speed),
-                })
+                });
+                if let Some(e) = &l.electrical {
+                    leg["peak_voltage_V"] = num(e.peak_voltage.value);
+                    leg["t_peak_voltage_s"] = num(e.peak_voltage.t);
+                    leg["first_over_bus_voltage_s"] = number(e.over_voltage);
+                    leg["peak_current_A"] = num(e.peak_current.value);
+                    leg["t_peak_current_s"] = num(e.peak_current.t);
+                    leg["first_over_current_limit_s"] = number(e.over_current);
+                }
+                leg
             })
             .collect();
         let event = |e: Option<(f64, usize)>| {
             e.map_or(Value::Null, |(t, leg)| json!({ "t_s": t, "leg": leg + 1 }))
         };
-        json!({
+        let mut out = json!({
             "actuator": self.actuator,
             "source": "rigid inverse dynamics of the commanded motion over the whole time span, between the output samples",
             "resolution": {
@@ -322,6 +429,18 @@ impl Feasibility {
             "first_over_max_speed": event(self.first_over_speed()),
             "first_over_peak_torque": event(self.first_over_torque()),
             "legs": legs,
-        })
+        });
+        if let Some(d) = &self.drive {
+            out["drive"] = json!({
+                "torque_constant_N_m_A": num(d.torque_constant),
+                "resistance_ohm": num(d.resistance),
+                "bus_voltage_V": num(d.bus_voltage),
+                "current_limit_A": number(Some(d.current_limit)),
+                "no_load_speed_rev_s": num(d.no_load_speed() / std::f64::consts::TAU),
+            });
+            out["first_over_bus_voltage"] = event(self.first_over_voltage());
+            out["first_over_current_limit"] = event(self.first_over_current());
+        }
+        out
     }
 }

@@ -482,3 +482,85 @@ fn unit(name: &str) -> &'static str {
         _ => "N",
     }
 }
+
+#[test]
+fn a_drive_reports_when_the_motion_needs_more_voltage_than_its_bus() {
+    // The 2 Hz circle needs up to about 80 rev/s; K_e = 0.2 V s/rad on a 100 V bus leaves a
+    // no-load speed of 79.6 rev/s, so the back-EMF alone nearly uses the bus.
+    let (kt, resistance, bus, current_limit) = (0.2, 1.5, 100.0, 12.0);
+    let text = config("servo_motor_f2.toml")
+        .replace("output_step = 5e-4", "output_step = 1e-4")
+        .replace(
+            r#"requests = ["tracking", "actuators", "deflections", "viewer"]"#,
+            r#"requests = ["kinematics", "driving_forces", "actuators"]"#,
+        )
+        .replace(
+            "max_speed = 100 ",
+            &format!(
+                "torque_constant = {kt}\nresistance = {resistance}\nbus_voltage = {bus}\ncurrent_limit = {current_limit}\nmax_speed = 100 "
+            ),
+        );
+    assert!(text.contains("bus_voltage") && text.contains("\"driving_forces\""));
+    let scene = scene(&text);
+    let result = run(&scene, &mut |_| {}).expect("runs");
+    let feasibility = flexprr_run::control::report_of(&result)
+        .feasibility
+        .as_ref()
+        .expect("checked");
+    let driving = result.table("driving_forces").expect("driving forces");
+    let kinematics = result.table("kinematics").expect("kinematics");
+    let t = kinematics.time();
+    // The steady-state winding voltage R tau / K_t + K_e omega from the run's own tables.
+    let mut expected: Option<(f64, usize)> = None;
+    for i in 0..3 {
+        let f_a = driving
+            .column(&format!("F_a_{}_rigid_N", i + 1))
+            .expect("F_a");
+        let v = kinematics
+            .column(&format!("rho_dot_{}_m_s", i + 1))
+            .expect("v");
+        let a = kinematics
+            .column(&format!("rho_ddot_{}_m_s2", i + 1))
+            .expect("a");
+        let torque: Vec<f64> = (0..v.len())
+            .map(|k| MOTOR.torque(f_a[k], v[k], a[k]))
+            .collect();
+        let voltage: Vec<f64> = (0..v.len())
+            .map(|k| resistance * torque[k] / kt + kt * MOTOR.ratio() * v[k])
+            .collect();
+        let electrical = feasibility.legs[i].electrical.expect("a drive");
+        let sampled = voltage.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+        let scanned = electrical.peak_voltage.value;
+        assert!(
+            scanned >= sampled * (1.0 - 1e-9) && scanned <= sampled * (1.0 + 1e-4),
+            "leg {}: peak voltage {scanned} vs sampled {sampled}",
+            i + 1
+        );
+        let current = torque.iter().fold(0.0f64, |m, x| m.max(x.abs())) / kt;
+        assert!((electrical.peak_current.value - current).abs() <= 1e-4 * current);
+        assert!(
+            electrical.over_current.is_none(),
+            "{current} A is within 12 A"
+        );
+        if let Some(tc) = crossing(t, &voltage, bus) {
+            if expected.is_none_or(|(te, _)| tc < te) {
+                expected = Some((tc, i));
+            }
+        }
+    }
+    let expected = expected.expect("the bus voltage is exceeded");
+    let (time, leg) = feasibility.first_over_voltage().expect("over voltage");
+    assert_eq!(leg, expected.1);
+    // Located on the motion itself, against the linear interpolation of the 10 kHz samples.
+    assert!((time - expected.0).abs() <= 1e-5, "{time} vs {expected:?}");
+    assert!(!feasibility.feasible());
+    assert!(feasibility.first_over_current().is_none());
+    assert!(
+        result
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("infeasible motion: voltage:") && w.contains("100 V")),
+        "{:?}",
+        result.warnings
+    );
+}
