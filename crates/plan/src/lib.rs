@@ -18,6 +18,7 @@ mod error;
 mod figures;
 mod pipeline;
 mod report;
+mod summary;
 mod variant;
 mod vibration;
 mod write;
@@ -29,6 +30,7 @@ pub use pipeline::{
     DEFAULT_SETTLE_TIME, Options, OrientationSearch, PlanOutcome, SceneTiming, plan_scene,
 };
 pub use report::plan_report;
+pub use summary::{PlanSummary, plan_run};
 pub use variant::{Unshaped, planned_scene_file, scene_toml, unshaped};
 pub use vibration::{
     FlexibleCheck, MODE_POSES, ModesAt, MotionVibration, ShapedMode, ShapingDesign, design_shaper,

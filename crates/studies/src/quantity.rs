@@ -70,6 +70,13 @@ pub enum Quantity {
     /// spent saturated (docs/piezo.md): columns `V_patch_max_V`, `patch_saturated`
     /// (`yes`/`no`), `patch_saturated_fraction`. Scenes with patches.
     PatchVoltage,
+    /// The plan of a scene with a `[plan]` section (docs/planning.md; the case runs
+    /// `flexprr plan` with its flexible check instead of `flexprr run`, and the other
+    /// quantities come from the planned motion's run): columns `cycle_time_s` (the move's
+    /// duration or the period), `plan_frequency_Hz` (a periodic plan's largest repetition
+    /// rate, else empty), `residual_vibration_m` (after a rest-to-rest move, else empty),
+    /// `plan_peak_deflection_m`.
+    Plan,
     /// A scalar an output producer offers by name (`flexprr_run::OutputProducer::quantities`,
     /// the built-in ones or a program's own): column `<name>`. The scenes must request the
     /// output that offers it.
@@ -253,6 +260,32 @@ impl Quantity {
             Quantity::LowestFrequency
             | Quantity::DeflectionReduction { .. }
             | Quantity::PatchVoltage => self.analysis_column_specs(),
+            Quantity::Plan => vec![
+                Column::new(
+                    "cycle_time_s".into(),
+                    "planned cycle time".into(),
+                    "s",
+                    Number,
+                ),
+                Column::new(
+                    "plan_frequency_Hz".into(),
+                    "largest repetition rate".into(),
+                    "Hz",
+                    OptionalNumber,
+                ),
+                Column::new(
+                    "residual_vibration_m".into(),
+                    "residual vibration after the planned move".into(),
+                    "m",
+                    OptionalNumber,
+                ),
+                Column::new(
+                    "plan_peak_deflection_m".into(),
+                    "peak deflection of the planned motion".into(),
+                    "m",
+                    Number,
+                ),
+            ],
             Quantity::Output { ref name, about } => vec![Column::new(
                 name.clone(),
                 if about.label.is_empty() {
@@ -348,6 +381,7 @@ impl Quantity {
             Quantity::Collapse
             | Quantity::LowestFrequency
             | Quantity::PatchVoltage
+            | Quantity::Plan
             | Quantity::Output { .. } => None,
         }
     }
@@ -413,6 +447,11 @@ impl Quantity {
                     None
                 }
             }
+            Quantity::Plan => scene.file.plan.is_none().then(|| {
+                "quantity cycle_time_s needs a [plan] section in the scene (docs/planning.md): \
+                 add one to the base scene or the study's [set.plan]"
+                    .to_string()
+            }),
             Quantity::PatchVoltage => scene.patches.is_empty().then(|| {
                 format!(
                     "quantity {name} needs piezoelectric patches ([[links.patches]], \
@@ -546,6 +585,18 @@ impl Quantity {
                 self.derive_piezo(result, i, needs)
             }
             Quantity::Collapse => Err("the collapse is derived above".into()),
+            Quantity::Plan => {
+                let plan = result
+                    .report::<flexprr_plan::PlanSummary>()
+                    .ok_or_else(|| "quantity cycle_time_s: the case was not planned".to_string())?;
+                let optional = |v: Option<f64>| v.map_or(String::new(), format_value);
+                Ok(vec![
+                    format_value(plan.cycle_time),
+                    optional(plan.frequency),
+                    optional(plan.residual_vibration),
+                    format_value(plan.peak_deflection.unwrap_or(0.0)),
+                ])
+            }
             Quantity::Output { ref name, about } => match result.quantity(name) {
                 Some(Ok(v)) => Ok(vec![format_value(v)]),
                 Some(Err(why)) => Err(format!("quantity {name}: {why}")),

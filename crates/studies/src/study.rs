@@ -490,6 +490,9 @@ impl Study {
         if let Some(why) = self.quantities.iter().find_map(|q| q.unavailable(&scene)) {
             return Err(CaseFailure::new(FailureKind::Quantity, None, &why));
         }
+        if self.quantities.contains(&Quantity::Plan) {
+            return self.plan_case(scene);
+        }
         let outputs = &self.plugins.outputs;
         let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| {
             run_registered(&scene, outputs, &mut |_| {})
@@ -521,6 +524,38 @@ impl Study {
             return Err(CaseFailure::new(FailureKind::Diverged, time, &message));
         }
         let values = self.derive_quantities(&scene, &result, collapse.as_ref())?;
+        Ok((values, scene, result))
+    }
+
+    /// A case with the `plan` quantity: the scene planned by its `[plan]` section with the
+    /// flexible check ([`flexprr_plan::plan_run`]), its quantities from the planned motion's
+    /// run. A plan no motion can meet is an invalid input (the limit and where); a failed
+    /// run of the flexible model is classified as any run failure.
+    fn plan_case(&self, scene: Scene) -> Result<(Vec<String>, Scene, RunResult), CaseFailure> {
+        use flexprr_plan::PlanError;
+        let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| flexprr_plan::plan_run(&scene)));
+        let result = match outcome {
+            Ok(Ok(result)) => result,
+            Ok(Err(PlanError::Run { source, .. })) => {
+                let (kind, time) = classify_run_failure(&source);
+                return Err(CaseFailure::new(kind, time, &source.to_string()));
+            }
+            Ok(Err(e)) => {
+                return Err(CaseFailure::new(
+                    FailureKind::InvalidInput,
+                    None,
+                    &format!("plan: {e}"),
+                ));
+            }
+            Err(_) => {
+                return Err(CaseFailure::new(
+                    FailureKind::Panic,
+                    None,
+                    "panic while planning",
+                ));
+            }
+        };
+        let values = self.derive_quantities(&scene, &result, None)?;
         Ok((values, scene, result))
     }
 
