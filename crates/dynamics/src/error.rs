@@ -62,7 +62,133 @@ pub enum DynamicsError {
         /// What is expected.
         reason: &'static str,
     },
-    /// Inconsistent model set-up (e.g. a damping list longer than the modes).
+    /// A state or guess whose length is not the model's.
+    #[error("{what} has {found} {unit}, the {model} {expected}")]
+    Dimension {
+        /// What was given (`"state"`, `"static guess"`).
+        what: &'static str,
+        /// Its unit of length (`"entries"`, `"coordinates"`).
+        unit: &'static str,
+        /// The model it was given to (`"coupled system"`, `"beam"`).
+        model: &'static str,
+        /// Its length.
+        found: usize,
+        /// The model's length.
+        expected: usize,
+    },
+    /// A coordinate index past the model's coordinates.
+    #[error("coordinate index {index} out of range (the beam has {count})")]
+    CoordinateIndex {
+        /// The index given (0-based).
+        index: usize,
+        /// Number of coordinates.
+        count: usize,
+    },
+    /// A point force on a link that does not exist, outside the link, or not finite.
+    #[error(
+        "a point force needs link 1, 2 or 3, xi in [0, 1] and a finite force; got link {link}, xi {xi}, force {force}"
+    )]
+    PointForce {
+        /// The link (1-based, as in the message).
+        link: usize,
+        /// Where along it.
+        xi: f64,
+        /// The force (N).
+        force: f64,
+    },
+    /// A link's modal mass matrix is not positive definite (a bad section or basis).
+    #[error("the modal mass matrix of link {link} is not positive definite")]
+    ModalMass {
+        /// The link (1-based).
+        link: usize,
+    },
+    /// A link's modal eigen-decomposition failed.
+    #[error("eigen-decomposition failed for link {link}")]
+    Eigen {
+        /// The link (1-based).
+        link: usize,
+    },
+    /// The modal damping list does not fit a link's modes.
+    #[error(
+        "modal damping lists {ratios} ratios but link {link} has {modes} modes (give one ratio for all, or one per mode)"
+    )]
+    DampingRatios {
+        /// Number of ratios given.
+        ratios: usize,
+        /// The link (1-based).
+        link: usize,
+        /// Its modes.
+        modes: usize,
+    },
+    /// The mass matrix of a model's equations is singular or not positive definite at a
+    /// pose: the pose cannot be integrated.
+    #[error("at t = {t} s the {matrix} {reason}")]
+    SingularMass {
+        /// Time (s).
+        t: f64,
+        /// Which matrix (`"coupled mass matrix"`, `"generalized mass matrix"`).
+        matrix: &'static str,
+        /// How it fails, with the pivot where known.
+        reason: String,
+    },
+    /// The chords' lines meet in a point, so they do not hold the platform (a type-II pose
+    /// of the chords).
+    #[error("at t = {t} s the chords do not hold the platform (their lines meet in a point)")]
+    ChordsConcurrent {
+        /// Time (s).
+        t: f64,
+    },
+    /// The static solution of a beam failed at a load increment.
+    #[error("static beam: {reason} at increment {step} of {increments}{detail}")]
+    StaticBeam {
+        /// What failed (`"singular tangent stiffness"`, `"Newton did not converge"`).
+        reason: &'static str,
+        /// The increment (1-based).
+        step: usize,
+        /// Number of increments.
+        increments: usize,
+        /// The residual and iterations where Newton failed (empty otherwise).
+        detail: String,
+    },
+    /// A model kind name that no model has.
+    #[error("unknown coupling {name:?}: expected \"ked\", \"coupled\" or \"nonlinear\"")]
+    UnknownCoupling {
+        /// The name given.
+        name: String,
+    },
+    /// A query the model cannot answer: it lacks the capability (docs/architecture.md).
+    #[error("the {kind} model {capability}")]
+    NoCapability {
+        /// The model's kind.
+        kind: &'static str,
+        /// What it lacks.
+        capability: Capability,
+    },
+    /// A query that does not apply to this model's sliders.
+    #[error("{0}")]
+    ActuatedSliders(&'static str),
+    /// Inconsistent model set-up, for the control laws' set-up checks (their messages say
+    /// what to change).
     #[error("{0}")]
     Inconsistent(String),
+}
+
+/// A capability a model may lack ([`DynamicsError::NoCapability`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Capability {
+    /// External loads ([`crate::LoadInput`]).
+    Loads,
+    /// A sampled control law ([`crate::ControlLaws::law_sample`]).
+    SampledLaw,
+}
+
+impl std::fmt::Display for Capability {
+    /// The predicate of the error message: "the ked model takes no external loads (...)".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Capability::Loads => "takes no external loads (the coupled and nonlinear models do)",
+            Capability::SampledLaw => "has no sampled control law",
+        })
+    }
 }

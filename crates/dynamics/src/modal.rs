@@ -519,6 +519,11 @@ impl ModalSystem {
             .map_or_else(Vec::new, |p| p.states(t, &y[..n], &y[n..2 * n]))
     }
 
+    /// Number of piezoelectric patches (0 without).
+    pub fn patch_count(&self) -> usize {
+        self.patches.as_ref().map_or(0, |p| p.law().patches().len())
+    }
+
     /// The first sample time of a sampled vibration law strictly after `t`.
     pub fn next_sample(&self, t: f64) -> Option<f64> {
         self.patches.as_ref().and_then(|p| p.next_sample(t))
