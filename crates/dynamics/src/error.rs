@@ -120,16 +120,20 @@ pub enum DynamicsError {
         /// Its modes.
         modes: usize,
     },
-    /// The mass matrix of a model's equations is singular or not positive definite at a
-    /// pose: the pose cannot be integrated.
-    #[error("at t = {t} s the {matrix} {reason}")]
+    /// The coupled model's mass matrix is singular at a pose: the pose cannot be integrated.
+    #[error("at t = {t} s the coupled mass matrix is singular (zero pivot in column {column})")]
     SingularMass {
         /// Time (s).
         t: f64,
-        /// Which matrix (`"coupled mass matrix"`, `"generalized mass matrix"`).
-        matrix: &'static str,
-        /// How it fails, with the pivot where known.
-        reason: String,
+        /// The column of the zero pivot (0-based).
+        column: usize,
+    },
+    /// The nonlinear model's generalized mass matrix is not positive definite (a bug or a
+    /// non-finite state).
+    #[error("at t = {t} s the generalized mass matrix is not positive definite")]
+    MassNotPositive {
+        /// Time (s).
+        t: f64,
     },
     /// The chords' lines meet in a point, so they do not hold the platform (a type-II pose
     /// of the chords).
@@ -138,17 +142,27 @@ pub enum DynamicsError {
         /// Time (s).
         t: f64,
     },
-    /// The static solution of a beam failed at a load increment.
-    #[error("static beam: {reason} at increment {step} of {increments}{detail}")]
-    StaticBeam {
-        /// What failed (`"singular tangent stiffness"`, `"Newton did not converge"`).
-        reason: &'static str,
-        /// The increment (1-based).
+    /// The static solution of a beam met a singular tangent stiffness.
+    #[error("static beam: singular tangent stiffness at increment {step} of {increments}")]
+    StaticSingular {
+        /// The load increment (1-based).
         step: usize,
         /// Number of increments.
         increments: usize,
-        /// The residual and iterations where Newton failed (empty otherwise).
-        detail: String,
+    },
+    /// Newton's method for the static solution of a beam did not converge.
+    #[error(
+        "static beam: Newton did not converge at increment {step} of {increments} (residual {residual:.3e} after {iterations} iterations)"
+    )]
+    StaticNewton {
+        /// The load increment (1-based).
+        step: usize,
+        /// Number of increments.
+        increments: usize,
+        /// The largest residual left.
+        residual: f64,
+        /// Iterations made.
+        iterations: usize,
     },
     /// A model kind name that no model has.
     #[error("unknown coupling {name:?}: expected \"ked\", \"coupled\" or \"nonlinear\"")]
@@ -164,9 +178,16 @@ pub enum DynamicsError {
         /// What it lacks.
         capability: Capability,
     },
-    /// A query that does not apply to this model's sliders.
-    #[error("{0}")]
-    ActuatedSliders(&'static str),
+    /// The modal mass matrix asked of a coupled model whose sliders are actuated (it is that
+    /// of prescribed sliders).
+    #[error(
+        "the modal mass matrix is that of prescribed sliders; this model's sliders are actuated"
+    )]
+    ActuatedMassMatrix,
+    /// The nonlinear model asked of links without one bending stiffness (tapered or
+    /// stepped).
+    #[error("the nonlinear model needs uniform links (one bending stiffness)")]
+    NonUniformLinks,
     /// Inconsistent model set-up, for the control laws' set-up checks (their messages say
     /// what to change).
     #[error("{0}")]

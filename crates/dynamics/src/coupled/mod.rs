@@ -99,15 +99,13 @@ impl std::fmt::Display for CouplingModel {
 impl FromStr for CouplingModel {
     type Err = DynamicsError;
     /// `"ked"`, `"coupled"` or `"nonlinear"`; anything else is
-    /// [`DynamicsError::Inconsistent`] naming it.
+    /// [`DynamicsError::UnknownCoupling`] naming it.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "ked" => Ok(CouplingModel::Ked),
             "coupled" => Ok(CouplingModel::Coupled),
             "nonlinear" => Ok(CouplingModel::Nonlinear),
-            _ => Err(DynamicsError::Inconsistent(format!(
-                "unknown coupling {s:?}: expected \"ked\", \"coupled\" or \"nonlinear\""
-            ))),
+            _ => Err(DynamicsError::UnknownCoupling { name: s.into() }),
         }
     }
 }
@@ -499,12 +497,7 @@ impl CoupledSystem {
                 let solved = ints
                     .mass
                     .llt(faer::Side::Lower)
-                    .map_err(|_| {
-                        DynamicsError::Inconsistent(format!(
-                            "the modal mass matrix of link {} is not positive definite",
-                            i + 1
-                        ))
-                    })?
+                    .map_err(|_| DynamicsError::ModalMass { link: i + 1 })?
                     .solve(&rhs);
                 for j in 0..range.len() {
                     modal[range.start + j] = solved[(j, 0)];
@@ -718,11 +711,13 @@ impl CoupledSystem {
 
     fn check_state(&self, y: &[f64]) -> Result<(), DynamicsError> {
         if y.len() != self.dim() {
-            return Err(DynamicsError::Inconsistent(format!(
-                "state has {} entries, the coupled system {}",
-                y.len(),
-                self.dim()
-            )));
+            return Err(DynamicsError::Dimension {
+                what: "state",
+                unit: "entries",
+                model: "coupled system",
+                found: y.len(),
+                expected: self.dim(),
+            });
         }
         Ok(())
     }

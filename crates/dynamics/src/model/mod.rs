@@ -623,12 +623,11 @@ pub(crate) fn component_place<M: SceneModel + ?Sized>(
 /// A link other than 0, 1, 2 or a position outside `[0, 1]` or a non-finite force.
 pub(crate) fn check_point_force(p: &PointForce) -> Result<(), DynamicsError> {
     if p.link > 2 || !(0.0..=1.0).contains(&p.xi) || !p.force.is_finite() {
-        return Err(DynamicsError::Inconsistent(format!(
-            "a point force needs link 1, 2 or 3, xi in [0, 1] and a finite force; got link {}, xi {}, force {}",
-            p.link + 1,
-            p.xi,
-            p.force
-        )));
+        return Err(DynamicsError::PointForce {
+            link: p.link + 1,
+            xi: p.xi,
+            force: p.force,
+        });
     }
     Ok(())
 }
