@@ -127,7 +127,7 @@ pub struct CoupledOptions {
     pub axial_stiffness: Option<[f64; 3]>,
     /// With [`CoupledOptions::axial_stiffness`] given, linear analyses at rest relax the
     /// chords into the links' axial springs `EA / l`
-    /// ([`crate::SceneModel::chord_compliance`]); off, they keep them rigid (the paper's
+    /// ([`crate::LinearHints::chord_compliance`]); off, they keep them rigid (the paper's
     /// pinned-pinned idealisation of the locked machine).
     pub elastic_chords_at_rest: bool,
     /// Stop with [`DynamicsError::Collapse`] when a link's mid-point deflection exceeds this
@@ -520,7 +520,7 @@ impl CoupledSystem {
         self.patches.as_ref().map_or(0, |p| p.law().patches().len())
     }
 
-    /// The sampled laws at `t` (see [`crate::SceneModel::sampled_laws`]).
+    /// The sampled laws at `t` (see [`crate::ControlLaws::sampled_laws`]).
     pub fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
         crate::actuation::sampled_laws(
             self.actuated.as_ref(),
@@ -530,7 +530,7 @@ impl CoupledSystem {
     }
 
     /// What the sampled laws command at a sample at `(t, y)` (see
-    /// [`crate::SceneModel::law_sample`]).
+    /// [`crate::ControlLaws::law_sample`]).
     ///
     /// # Errors
     /// A kinematic failure, or a singular rigid inverse dynamics (the feedforward).

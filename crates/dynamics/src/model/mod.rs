@@ -141,7 +141,7 @@ pub struct SampledLaws {
     pub slider_states: Vec<f64>,
 }
 
-/// What the sampled control laws command at a sample ([`SceneModel::law_sample`]).
+/// What the sampled control laws command at a sample ([`ControlLaws::law_sample`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LawSample {
     /// The slider law's force commands (N) (0 without a sampled slider law).
@@ -555,7 +555,7 @@ impl dyn SceneModel + '_ {
     }
     /// A reader's name (`link 1, mode 2`) and an identifier (`eta_1_2`) of generalized
     /// coordinate `k` (`k < modes()`): the model's own ([`LinearHints::coordinate_label`]),
-    /// else through [`Self::component_place`], and the sliders' positions after the links'
+    /// else through [`component_place`](#method.component_place), and the sliders' positions after the links'
     /// coordinates when they are actuated.
     pub fn coordinate_label(&self, k: usize) -> (String, String) {
         if let Some(label) = self.linear_hints().and_then(|h| h.coordinate_label(k)) {
@@ -577,7 +577,7 @@ impl dyn SceneModel + '_ {
         }
     }
     /// A reader's name for state component `component`, for messages: the link, the mode and
-    /// whether it is the coordinate `eta` or its rate (see [`Self::component_place`]).
+    /// whether it is the coordinate `eta` or its rate (see [`component_place`](#method.component_place)).
     pub fn component_name(&self, component: usize) -> String {
         match self.component_place(component) {
             Some((link, mode, rate)) => format!(

@@ -53,7 +53,7 @@ impl NonlinearSystem {
             .as_ref()
             .map_or(0, |(law, _)| law.patches().len())
     }
-    /// The sampled laws at `t` (see [`crate::SceneModel::sampled_laws`]).
+    /// The sampled laws at `t` (see [`crate::ControlLaws::sampled_laws`]).
     pub fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
         crate::actuation::sampled_laws(
             self.actuated.as_ref(),
@@ -62,7 +62,7 @@ impl NonlinearSystem {
         )
     }
     /// What the sampled laws command at a sample at `(t, y)` (see
-    /// [`crate::SceneModel::law_sample`]).
+    /// [`crate::ControlLaws::law_sample`]).
     ///
     /// # Errors
     /// A wrong state length, a kinematic failure, or a singular rigid inverse dynamics (the
