@@ -36,7 +36,7 @@ pub use axial::{
 };
 pub use column::{Column, NamedQuantity, Quantity, Table};
 pub use coupled::{CoupledCounters, CoupledOptions, CoupledOutput, CoupledSystem, CouplingModel};
-pub use error::DynamicsError;
+pub use error::{Capability, DynamicsError};
 pub use formulation::{AxialModel, Formulation};
 pub use frequencies::{BucklingInterval, FrequencyHistory, FrequencyTracker, ModeRange};
 pub use inverse::{
@@ -46,9 +46,10 @@ pub use inverse::{
 pub use machine::{LinkModel, Machine};
 pub use modal::{Counters, Instant, ModalDamping, ModalSystem};
 pub use model::{
-    AXIAL_MODES, ActuatorState, ChordCompliance, ExternalLoads, LawSample, MachineSnapshot,
-    ModelCounters, ModelEnergies, NONLINEAR_ADVICE_FRACTION, PointForce, SampledLaws, SceneModel,
-    SliderMotion, force_table, platform_deviation_table,
+    AXIAL_MODES, ActuatorState, ChordCompliance, ControlLaws, ExternalLoads, LawSample,
+    LinearHints, LoadInput, MachineSnapshot, ModelCounters, ModelEnergies,
+    NONLINEAR_ADVICE_FRACTION, PatchReadout, PointForce, SampledLaws, SceneModel, SliderMotion,
+    force_table, platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
 pub use patches::{Patch, PatchControl, PatchState, modal_velocity_law};

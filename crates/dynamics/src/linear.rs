@@ -37,21 +37,19 @@ const FORCING_TERMS: usize = 2;
 fn unloaded_modes(system: &ModalSystem, index: usize) -> Result<Mat<f64>, DynamicsError> {
     let ints = &system.machine.links[index].integrals;
     let r = ints.r();
-    let llt = ints.mass.llt(Side::Lower).map_err(|_| {
-        DynamicsError::Inconsistent(format!(
-            "the modal mass matrix of link {} is not positive definite",
-            index + 1
-        ))
-    })?;
+    let llt = ints
+        .mass
+        .llt(Side::Lower)
+        .map_err(|_| DynamicsError::ModalMass { link: index + 1 })?;
     let l = llt.L().to_owned();
     let mut x = ints.stiffness.clone();
     forward_substitute(&l, &mut x); // L^-1 Kf
     let mut a = x.transpose().to_owned();
     forward_substitute(&l, &mut a); // L^-1 Kf L^-T
     let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
-        DynamicsError::Inconsistent(format!("eigen-decomposition failed for link {}", index + 1))
-    })?;
+    let eig = a
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| DynamicsError::Eigen { link: index + 1 })?;
     // Phi = L^-T U by back substitution with L^T, column by column.
     let u = eig.U();
     let mut phi = Mat::zeros(r, r);

@@ -118,11 +118,11 @@ pub(crate) fn damping_matrix(
     let ints = &link.integrals;
     let r = ints.r();
     if damping.ratios.len() > 1 && damping.ratios.len() != r {
-        return Err(DynamicsError::Inconsistent(format!(
-            "modal damping lists {} ratios but link {} has {r} modes (give one ratio for all, or one per mode)",
-            damping.ratios.len(),
-            index + 1
-        )));
+        return Err(DynamicsError::DampingRatios {
+            ratios: damping.ratios.len(),
+            link: index + 1,
+            modes: r,
+        });
     }
     if let Some(z) = damping
         .ratios
@@ -135,21 +135,19 @@ pub(crate) fn damping_matrix(
             reason: "must be finite and non-negative",
         });
     }
-    let llt = ints.mass.llt(Side::Lower).map_err(|_| {
-        DynamicsError::Inconsistent(format!(
-            "the modal mass matrix of link {} is not positive definite",
-            index + 1
-        ))
-    })?;
+    let llt = ints
+        .mass
+        .llt(Side::Lower)
+        .map_err(|_| DynamicsError::ModalMass { link: index + 1 })?;
     let l = llt.L().to_owned();
     let mut x = ints.stiffness.clone();
     forward_substitute(&l, &mut x); // L^-1 Kf
     let mut a = x.transpose().to_owned();
     forward_substitute(&l, &mut a); // L^-1 (L^-1 Kf)^T = L^-1 Kf L^-T
     let a = Mat::from_fn(r, r, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let eig = a.self_adjoint_eigen(Side::Lower).map_err(|_| {
-        DynamicsError::Inconsistent(format!("eigen-decomposition failed for link {}", index + 1))
-    })?;
+    let eig = a
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| DynamicsError::Eigen { link: index + 1 })?;
     let s = eig.S();
     let d = Mat::from_fn(r, r, |i, j| {
         if i == j {
@@ -171,12 +169,10 @@ impl LinkOperators {
     ) -> Result<Self, DynamicsError> {
         let ints = &link.integrals;
         let r = ints.r();
-        let llt = ints.mass.llt(Side::Lower).map_err(|_| {
-            DynamicsError::Inconsistent(format!(
-                "the modal mass matrix of link {} is not positive definite",
-                index + 1
-            ))
-        })?;
+        let llt = ints
+            .mass
+            .llt(Side::Lower)
+            .map_err(|_| DynamicsError::ModalMass { link: index + 1 })?;
         let m_inv = llt.inverse();
         let apply = |m: &Mat<f64>| to_row_major(&(&m_inv * m));
         let geometric: [Vec<f64>; 3] = std::array::from_fn(|n| {
@@ -517,6 +513,11 @@ impl ModalSystem {
         self.patches
             .as_mut()
             .map_or_else(Vec::new, |p| p.states(t, &y[..n], &y[n..2 * n]))
+    }
+
+    /// Number of piezoelectric patches (0 without).
+    pub fn patch_count(&self) -> usize {
+        self.patches.as_ref().map_or(0, |p| p.law().patches().len())
     }
 
     /// The first sample time of a sampled vibration law strictly after `t`.

@@ -316,11 +316,8 @@ impl PatchLoop {
                 .integrals
                 .mass
                 .llt(faer::Side::Lower)
-                .map_err(|_| {
-                    DynamicsError::Inconsistent(format!(
-                        "the modal mass matrix of link {} is not positive definite",
-                        patch.link + 1
-                    ))
+                .map_err(|_| DynamicsError::ModalMass {
+                    link: patch.link + 1,
                 })?
                 .solve(&rhs);
             forcing.push((0..d.len()).map(|j| inverse[(j, 0)]).collect());

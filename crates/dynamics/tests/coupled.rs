@@ -493,7 +493,7 @@ fn bad_input_is_an_error() {
     assert_eq!("ked".parse::<CouplingModel>().unwrap(), CouplingModel::Ked);
     let err = "rigid".parse::<CouplingModel>().unwrap_err();
     assert!(
-        matches!(&err, DynamicsError::Inconsistent(m) if m.contains("rigid")),
+        matches!(&err, DynamicsError::UnknownCoupling { name } if name == "rigid"),
         "{err}"
     );
     // A path that leaves the workspace: the failure is kept with its time and the right-hand

@@ -1,5 +1,5 @@
 //! The coupled model's chords relaxed into the links' axial springs for linear analyses at
-//! rest (`SceneModel::chord_compliance`, crates/dynamics/src/coupled/elastic.rs), checked
+//! rest (`LinearHints::chord_compliance`, crates/dynamics/src/coupled/elastic.rs), checked
 //! against what does not depend on it:
 //! * the mass matrix it gives for the model's own coordinates is the coupled model's: times
 //!   the exact input columns of the rigid model's linearisation (unit slider forces, point

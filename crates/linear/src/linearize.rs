@@ -4,14 +4,14 @@
 //! `y[k] = C x[k] + D u[k]` of the sampled loop ([`crate::discrete`]).
 //!
 //! * `A` from the model's mechanical form `M`, `C`, `K` where the model says they are the
-//!   exact derivatives there ([`flexprr_dynamics::SceneModel::exact_mechanical_form`]: the
+//!   exact derivatives there ([`flexprr_dynamics::LinearHints::exact_mechanical_form`]: the
 //!   nonlinear model at rest without actuators or patches), `A = [0 I; -M^-1 K  -M^-1 C]`;
 //! * elsewhere `A = df/dy` by central differences with one Richardson extrapolation (error of fourth
 //!   order in the step; exact for the models' quadratic terms, Dahlquist & Bjorck,
 //!   *Numerical Methods in Scientific Computing*, 2008, 3.3.4);
 //! * `B`: central differences of the right-hand side in each input (forces, setpoints,
 //!   patch voltages); exact for the loads, in which the right-hand side is affine
-//!   ([`flexprr_dynamics::SceneModel::set_loads`]);
+//!   ([`flexprr_dynamics::LoadInput::set_loads`]);
 //! * `C`: outputs that are functions of the state (slider positions and velocities, the
 //!   platform pose and its rates, tracking errors, deflections, slopes, patch sensors, the
 //!   law's command and the motor torque) by the same differences, and `D` by differences in
@@ -88,7 +88,7 @@ pub struct Linearization {
     /// The outputs' values at the operating point.
     pub output_values: Vec<f64>,
     /// Whether the model's axially rigid chords were relaxed into the links' axial springs
-    /// (a model that offers it, at rest: [`flexprr_dynamics::SceneModel::chord_compliance`]).
+    /// (a model that offers it, at rest: [`flexprr_dynamics::LinearHints::chord_compliance`]).
     /// Then the coordinates are the model's followed by the platform's deviation `(dx, dy,
     /// dphi)` from the pose the rigid chords impose (and the links' axial coordinates), and
     /// the state is those coordinates, their rates, then the control law's states.
@@ -258,7 +258,7 @@ pub enum Derivatives {
     /// Central differences of the right-hand side with one Richardson extrapolation.
     Differences,
     /// From the model's exact mechanical form (`M`, `C`, `K`;
-    /// [`flexprr_dynamics::SceneModel::exact_mechanical_form`]) where it is exact, else by
+    /// [`flexprr_dynamics::LinearHints::exact_mechanical_form`]) where it is exact, else by
     /// differences (the default).
     #[default]
     Analytic,

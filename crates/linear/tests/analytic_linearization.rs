@@ -8,7 +8,9 @@
 use std::sync::Arc;
 
 use flexprr_control::{Actuator, IdealForce, Pid};
-use flexprr_dynamics::{Actuation, NonlinearOptions, NonlinearSystem, SceneModel, paper};
+use flexprr_dynamics::{
+    Actuation, LinearHints, NonlinearOptions, NonlinearSystem, SceneModel, paper,
+};
 use flexprr_kinematics::{Circle, Line, Pose, Trajectory};
 use flexprr_linear::{Derivatives, Input, Output, linearize, linearize_with, modes};
 use nalgebra::{Point2, Vector3};

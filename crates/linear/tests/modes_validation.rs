@@ -9,7 +9,7 @@
 //! (r = 3) and the lowest 12 of the nonlinear model within 0.5 %. Measured (printed) and
 //! asserted here:
 //! * the coupled model at rest has its chords relaxed into the links' axial springs
-//!   (`SceneModel::chord_compliance`, as a scene builds it with `EA`): its lowest 9 (and 12
+//!   (`LinearHints::chord_compliance`, as a scene builds it with `EA`): its lowest 9 (and 12
 //!   with the servo) are within 0.005 %. With the chords axially rigid (no `EA` given) the
 //!   third bending family stays at the pinned-pinned 1047.5 Hz where the axially elastic
 //!   machine's sits up to 0.6 % lower at poses where a platform (axial) mode comes near it

@@ -35,7 +35,7 @@ pub struct DeflectionModel {
 
 impl DeflectionModel {
     /// Tabulates the shape values of every link of `model` at `points`; none for a model
-    /// whose deflection is not linear in its coordinates ([`SceneModel::linear_deflection`]:
+    /// whose deflection is not linear in its coordinates ([`flexprr_dynamics::LinearHints::linear_deflection`]:
     /// the nonlinear model, which checks its own collapse limit), so [`DeflectionModel::links`]
     /// is 0 and nothing is checked.
     pub fn new(model: &dyn SceneModel, points: &[f64]) -> Self {

@@ -158,11 +158,9 @@ impl Scene {
     /// the start time.
     pub fn build_nonlinear(&self) -> Result<NonlinearSystem, DynamicsError> {
         let settings = self.large_deflection;
-        let bending = settings.bending_stiffness.ok_or_else(|| {
-            DynamicsError::Inconsistent(
-                "the nonlinear model needs uniform links (one bending stiffness)".into(),
-            )
-        })?;
+        let bending = settings
+            .bending_stiffness
+            .ok_or(DynamicsError::NonUniformLinks)?;
         let options = NonlinearOptions {
             axial_damping_time: settings.axial_damping_time,
             collapse_deflection: Some(settings.collapse_deflection),

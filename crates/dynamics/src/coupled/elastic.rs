@@ -151,11 +151,9 @@ impl CoupledSystem {
             springs[(i, i)] = axial[i] / length;
             axial_links[i] = (link.mass, axial[i] / length, e.dot(&u), ge);
         }
-        let g_inv = g.try_inverse().ok_or_else(|| {
-            DynamicsError::Inconsistent(format!(
-                "at t = {t} s the chords do not hold the platform (their lines meet in a point)"
-            ))
-        })?;
+        let g_inv = g
+            .try_inverse()
+            .ok_or(DynamicsError::ChordsConcurrent { t })?;
         // p = P_z z: only the sliders move the platform through rigid chords (P = G^-1 H).
         let slider_map = g_inv * h;
         let mut p_z = Mat::<f64>::zeros(3, n);

@@ -42,12 +42,7 @@ impl LinkData {
         let m_inv = ints
             .mass
             .llt(Side::Lower)
-            .map_err(|_| {
-                DynamicsError::Inconsistent(format!(
-                    "the modal mass matrix of link {} is not positive definite",
-                    index + 1
-                ))
-            })?
+            .map_err(|_| DynamicsError::ModalMass { link: index + 1 })?
             .inverse();
         let apply = |a: &Mat<f64>| crate::modal::to_row_major(&(&m_inv * a));
         let apply_vec = |v: &[f64]| -> Vec<f64> {

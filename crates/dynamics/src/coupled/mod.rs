@@ -99,15 +99,13 @@ impl std::fmt::Display for CouplingModel {
 impl FromStr for CouplingModel {
     type Err = DynamicsError;
     /// `"ked"`, `"coupled"` or `"nonlinear"`; anything else is
-    /// [`DynamicsError::Inconsistent`] naming it.
+    /// [`DynamicsError::UnknownCoupling`] naming it.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "ked" => Ok(CouplingModel::Ked),
             "coupled" => Ok(CouplingModel::Coupled),
             "nonlinear" => Ok(CouplingModel::Nonlinear),
-            _ => Err(DynamicsError::Inconsistent(format!(
-                "unknown coupling {s:?}: expected \"ked\", \"coupled\" or \"nonlinear\""
-            ))),
+            _ => Err(DynamicsError::UnknownCoupling { name: s.into() }),
         }
     }
 }
@@ -129,7 +127,7 @@ pub struct CoupledOptions {
     pub axial_stiffness: Option<[f64; 3]>,
     /// With [`CoupledOptions::axial_stiffness`] given, linear analyses at rest relax the
     /// chords into the links' axial springs `EA / l`
-    /// ([`crate::SceneModel::chord_compliance`]); off, they keep them rigid (the paper's
+    /// ([`crate::LinearHints::chord_compliance`]); off, they keep them rigid (the paper's
     /// pinned-pinned idealisation of the locked machine).
     pub elastic_chords_at_rest: bool,
     /// Stop with [`DynamicsError::Collapse`] when a link's mid-point deflection exceeds this
@@ -499,12 +497,7 @@ impl CoupledSystem {
                 let solved = ints
                     .mass
                     .llt(faer::Side::Lower)
-                    .map_err(|_| {
-                        DynamicsError::Inconsistent(format!(
-                            "the modal mass matrix of link {} is not positive definite",
-                            i + 1
-                        ))
-                    })?
+                    .map_err(|_| DynamicsError::ModalMass { link: i + 1 })?
                     .solve(&rhs);
                 for j in 0..range.len() {
                     modal[range.start + j] = solved[(j, 0)];
@@ -527,7 +520,7 @@ impl CoupledSystem {
         self.patches.as_ref().map_or(0, |p| p.law().patches().len())
     }
 
-    /// The sampled laws at `t` (see [`crate::SceneModel::sampled_laws`]).
+    /// The sampled laws at `t` (see [`crate::ControlLaws::sampled_laws`]).
     pub fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
         crate::actuation::sampled_laws(
             self.actuated.as_ref(),
@@ -537,7 +530,7 @@ impl CoupledSystem {
     }
 
     /// What the sampled laws command at a sample at `(t, y)` (see
-    /// [`crate::SceneModel::law_sample`]).
+    /// [`crate::ControlLaws::law_sample`]).
     ///
     /// # Errors
     /// A kinematic failure, or a singular rigid inverse dynamics (the feedforward).
@@ -718,11 +711,13 @@ impl CoupledSystem {
 
     fn check_state(&self, y: &[f64]) -> Result<(), DynamicsError> {
         if y.len() != self.dim() {
-            return Err(DynamicsError::Inconsistent(format!(
-                "state has {} entries, the coupled system {}",
-                y.len(),
-                self.dim()
-            )));
+            return Err(DynamicsError::Dimension {
+                what: "state",
+                unit: "entries",
+                model: "coupled system",
+                found: y.len(),
+                expected: self.dim(),
+            });
         }
         Ok(())
     }

@@ -114,9 +114,7 @@ impl CoupledSystem {
     pub fn mass_matrix(&mut self, t: f64, y: &[f64]) -> Result<Vec<f64>, DynamicsError> {
         self.check_state(y)?;
         if self.actuated.is_some() {
-            return Err(DynamicsError::Inconsistent(
-                "the modal mass matrix is that of prescribed sliders; this model's sliders are actuated".into(),
-            ));
+            return Err(DynamicsError::ActuatedMassMatrix);
         }
         let kin = self.kinetics(t, y)?;
         let n = self.modes;
@@ -274,11 +272,8 @@ impl CoupledSystem {
         unknowns: usize,
     ) -> Result<Projections, DynamicsError> {
         self.counters.acceleration_solves += 1;
-        solve_in_place(&mut w[..unknowns * unknowns], &mut c[..unknowns]).map_err(|column| {
-            DynamicsError::Inconsistent(format!(
-                "at t = {t} s the coupled mass matrix is singular (zero pivot in column {column})"
-            ))
-        })?;
+        solve_in_place(&mut w[..unknowns * unknowns], &mut c[..unknowns])
+            .map_err(|column| DynamicsError::SingularMass { t, column })?;
         Ok(Projections {
             s: Vector3::new(c[0], c[1], c[2]),
             m: Vector3::new(c[3], c[4], c[5]),

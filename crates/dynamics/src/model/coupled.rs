@@ -5,7 +5,10 @@
 
 use flexprr_integrators::Solution;
 
-use crate::model::{force_table, modal_energies, platform_deviation_table};
+use crate::model::{
+    ControlLaws, LinearHints, LoadInput, PatchReadout, force_table, modal_energies,
+    platform_deviation_table,
+};
 use crate::{
     Column, CoupledSystem, DynamicsError, Machine, MachineSnapshot, ModelCounters, ModelEnergies,
     Quantity as Q, SceneModel, SliderMotion, Table,
@@ -65,38 +68,23 @@ impl SceneModel for CoupledSystem {
             actuators: out.actuators,
         })
     }
-    fn platform_follows_links(&self) -> bool {
-        true
+    fn patches(&mut self) -> Option<&mut dyn PatchReadout> {
+        Some(self)
     }
-    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
-        Ok(CoupledSystem::patch_states(self, t, y))
+    fn loads(&mut self) -> Option<&mut dyn LoadInput> {
+        Some(self)
     }
-    fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
-        CoupledSystem::set_loads(self, loads)
+    fn linear_hints(&self) -> Option<&dyn LinearHints> {
+        Some(self)
     }
-    fn chord_compliance(
-        &mut self,
-        t: f64,
-        y: &[f64],
-    ) -> Result<Option<crate::ChordCompliance>, DynamicsError> {
-        CoupledSystem::chord_compliance(self, t, y)
+    fn linear_hints_mut(&mut self) -> Option<&mut dyn LinearHints> {
+        Some(self)
     }
-    fn actuation(&self) -> Option<&crate::Actuation> {
-        CoupledSystem::actuation(self)
+    fn control(&self) -> Option<&dyn ControlLaws> {
+        Some(self)
     }
-    fn patch_count(&self) -> usize {
-        CoupledSystem::patch_count(self)
-    }
-    fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
-        CoupledSystem::sampled_laws(self, t)
-    }
-    fn law_sample(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        slider_states: &[f64],
-    ) -> Result<crate::LawSample, DynamicsError> {
-        CoupledSystem::law_sample(self, t, y, slider_states)
+    fn control_mut(&mut self) -> Option<&mut dyn ControlLaws> {
+        Some(self)
     }
     /// The modal energies and the kinetic energy of the whole machine: sliders (with the
     /// actuators' reflected inertia), platform, and each link's
@@ -197,5 +185,51 @@ impl SceneModel for CoupledSystem {
                 100.0 * NONLINEAR_ADVICE_FRACTION
             )
         })
+    }
+}
+
+impl PatchReadout for CoupledSystem {
+    fn patch_count(&self) -> usize {
+        CoupledSystem::patch_count(self)
+    }
+    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
+        Ok(CoupledSystem::patch_states(self, t, y))
+    }
+}
+
+impl LoadInput for CoupledSystem {
+    fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
+        CoupledSystem::set_loads(self, loads)
+    }
+}
+
+/// The chords relax into axial springs at rest; the platform follows the links.
+impl LinearHints for CoupledSystem {
+    fn chord_compliance(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<crate::ChordCompliance>, DynamicsError> {
+        CoupledSystem::chord_compliance(self, t, y)
+    }
+    fn platform_follows_links(&self) -> bool {
+        true
+    }
+}
+
+impl ControlLaws for CoupledSystem {
+    fn actuation(&self) -> Option<&crate::Actuation> {
+        CoupledSystem::actuation(self)
+    }
+    fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
+        CoupledSystem::sampled_laws(self, t)
+    }
+    fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<crate::LawSample, DynamicsError> {
+        CoupledSystem::law_sample(self, t, y, slider_states)
     }
 }

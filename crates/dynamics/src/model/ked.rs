@@ -4,8 +4,8 @@
 //! elastic inertia (model.md section 4).
 
 use crate::{
-    DynamicsError, Machine, MachineSnapshot, ModalSystem, ModelCounters, SceneModel, SliderMotion,
-    end_forces, inverse_dynamics,
+    DynamicsError, Machine, MachineSnapshot, ModalSystem, ModelCounters, PatchReadout, SceneModel,
+    SliderMotion, end_forces, inverse_dynamics,
 };
 
 impl SceneModel for ModalSystem {
@@ -57,6 +57,15 @@ impl SceneModel for ModalSystem {
             driving_force: reactions.driving_force,
             actuators: None,
         })
+    }
+    fn patches(&mut self) -> Option<&mut dyn PatchReadout> {
+        Some(self)
+    }
+}
+
+impl PatchReadout for ModalSystem {
+    fn patch_count(&self) -> usize {
+        ModalSystem::patch_count(self)
     }
     fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
         Ok(ModalSystem::patch_states(self, t, y))

@@ -19,7 +19,7 @@ pub use coupled::NONLINEAR_ADVICE_FRACTION;
 use flexprr_integrators::{OdeSystem, Solution};
 use flexprr_kinematics::PlatformMotion;
 
-use crate::{DynamicsError, Machine, Table};
+use crate::{Capability, DynamicsError, Machine, Table};
 
 /// Work counters every scene model reports.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -141,7 +141,7 @@ pub struct SampledLaws {
     pub slider_states: Vec<f64>,
 }
 
-/// What the sampled control laws command at a sample ([`SceneModel::law_sample`]).
+/// What the sampled control laws command at a sample ([`ControlLaws::law_sample`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LawSample {
     /// The slider law's force commands (N) (0 without a sampled slider law).
@@ -207,6 +207,13 @@ pub(crate) fn modal_energies<M: SceneModel + ?Sized>(model: &M, y: &[f64]) -> Mo
 /// coordinates overrides them; a model with tables of its own returns them from
 /// [`SceneModel::tables`].
 ///
+/// What only some models have is a capability, reached through an accessor that is `None`
+/// by default: piezoelectric patches ([`PatchReadout`]), external loads ([`LoadInput`]),
+/// hints for linear analyses and outputs ([`LinearHints`]) and control laws
+/// ([`ControlLaws`]). A new feature adds a capability, not methods on every model. The
+/// queries on `dyn SceneModel` (say [`SceneModel::slider_law`](#method.slider_law)) answer
+/// for every model, with the default where it lacks the capability.
+///
 /// ```
 /// use flexprr_dynamics::{DynamicsError, Machine, MachineSnapshot, ModelCounters, SceneModel, SliderMotion};
 /// use flexprr_integrators::OdeSystem;
@@ -239,7 +246,12 @@ pub(crate) fn modal_energies<M: SceneModel + ?Sized>(model: &M, y: &[f64]) -> Mo
 ///         })
 ///     }
 /// }
-/// # let _ = |m: std::sync::Arc<Machine>| Box::new(Rigid(m)) as Box<dyn SceneModel>;
+/// let model: Box<dyn SceneModel> = Box::new(Rigid(std::sync::Arc::new(
+///     flexprr_dynamics::paper::machine(1, 210e9).unwrap(),
+/// )));
+/// // Without capabilities the queries give the defaults: no control law, a modal deflection,
+/// // the platform on its commanded path.
+/// assert!(!model.slider_law() && model.linear_deflection() && !model.platform_follows_links());
 /// ```
 pub trait SceneModel: OdeSystem + Send {
     /// The model's name in scene files and outputs (`"ked"`, `"coupled"`).
@@ -292,28 +304,84 @@ pub trait SceneModel: OdeSystem + Send {
             .sum();
         Ok(derivative / model.length())
     }
-    /// The piezoelectric patches' sensors, voltages and powers at `(t, y)`; none for a
-    /// model without patches.
+    /// Energies at `(t, y)`: for modal coordinates each link's strain energy
+    /// `eta^T Kf eta / 2` and elastic kinetic energy `eta'^T M eta' / 2`.
     ///
     /// # Errors
     /// A model that needs kinematics for them may fail there.
-    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
-        let _ = (t, y);
-        Ok(Vec::new())
+    fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
+        let _ = t;
+        Ok(modal_energies(self, y))
     }
-    /// Applies `loads` from now on in the right-hand side (the inputs of linear models);
-    /// replaces the loads set before. Models without external loads refuse.
+    /// The model's own tables at the output times of `solution` (say, the coupled model's
+    /// platform deviation and chord forces); none by default.
     ///
     /// # Errors
-    /// The model takes no external loads, or a load names a link or point that does not
-    /// exist.
-    fn set_loads(&mut self, loads: &ExternalLoads) -> Result<(), DynamicsError> {
-        let _ = loads;
-        Err(DynamicsError::Inconsistent(format!(
-            "the {} model takes no external loads (the coupled and nonlinear models do)",
-            self.kind()
-        )))
+    /// A failure at one of the times, with the time.
+    fn tables(&mut self, solution: &Solution) -> Result<Vec<Table>, DynamicsError> {
+        let _ = solution;
+        Ok(Vec::new())
     }
+    /// Advice about the validity of the model's results given the largest deflection a run
+    /// reached (m), e.g. that a small-deflection model is past its range; none by default.
+    fn deflection_advice(&self, max_deflection: f64) -> Option<String> {
+        let _ = max_deflection;
+        None
+    }
+
+    /// The piezoelectric patches on the links, when the model has them.
+    fn patches(&mut self) -> Option<&mut dyn PatchReadout> {
+        None
+    }
+    /// The external loads a linear model applies, when the model takes them.
+    fn loads(&mut self) -> Option<&mut dyn LoadInput> {
+        None
+    }
+    /// What linear analyses and outputs may assume of the model, when it differs from the
+    /// defaults of [`LinearHints`].
+    fn linear_hints(&self) -> Option<&dyn LinearHints> {
+        None
+    }
+    /// [`SceneModel::linear_hints`], for the hints that evaluate the model.
+    fn linear_hints_mut(&mut self) -> Option<&mut dyn LinearHints> {
+        None
+    }
+    /// The model's control laws (the sliders' actuators and law, the patches' vibration
+    /// law), when it has any.
+    fn control(&self) -> Option<&dyn ControlLaws> {
+        None
+    }
+    /// [`SceneModel::control`], for what evaluates the laws.
+    fn control_mut(&mut self) -> Option<&mut dyn ControlLaws> {
+        None
+    }
+}
+
+/// Capability of a model with piezoelectric patches on its links ([`SceneModel::patches`]).
+pub trait PatchReadout {
+    /// Number of patches (in the scene's patch order).
+    fn patch_count(&self) -> usize;
+    /// The patches' sensors, voltages and powers at `(t, y)`.
+    ///
+    /// # Errors
+    /// A model that needs kinematics for them may fail there.
+    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError>;
+}
+
+/// Capability of a model that takes external loads ([`SceneModel::loads`]): the inputs of
+/// its linear models (docs/linear.md).
+pub trait LoadInput {
+    /// Applies `loads` from now on in the right-hand side; replaces the loads set before.
+    ///
+    /// # Errors
+    /// A load names a link or point that does not exist.
+    fn set_loads(&mut self, loads: &ExternalLoads) -> Result<(), DynamicsError>;
+}
+
+/// Hints for linear analyses and outputs ([`SceneModel::linear_hints`]); each default is
+/// what a model without the capability is taken to be: a modal model whose platform follows
+/// the commanded motion.
+pub trait LinearHints {
     /// For a model whose chords are axially rigid, at a state at rest (no motion, straight
     /// links): the data that relax the chords into the links' axial springs in a linear
     /// analysis ([`ChordCompliance`]). `None` (the default) for a model whose chords already
@@ -339,102 +407,160 @@ pub trait SceneModel: OdeSystem + Send {
         false
     }
     /// Whether [`SceneModel::deflection`] is linear in the coordinates and needs no time
-    /// (true for modal models). When false, the divergence guard, which tabulates the
-    /// deflection once per coordinate, does not apply; such a model checks its own limits.
+    /// (true for modal models, the default). When false, the divergence guard, which
+    /// tabulates the deflection once per coordinate, does not apply; such a model checks its
+    /// own limits.
     fn linear_deflection(&self) -> bool {
         true
     }
     /// Whether the platform follows the links (coupled and nonlinear models) rather than the
-    /// commanded motion: then its deviation from the commanded pose is a result worth
-    /// showing.
+    /// commanded motion (the default): then its deviation from the commanded pose is a
+    /// result worth showing.
     fn platform_follows_links(&self) -> bool {
         false
     }
-    /// Energies at `(t, y)`: for modal coordinates each link's strain energy
-    /// `eta^T Kf eta / 2` and elastic kinetic energy `eta'^T M eta' / 2`.
-    ///
-    /// # Errors
-    /// A model that needs kinematics for them may fail there.
-    fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
-        let _ = t;
-        Ok(modal_energies(self, y))
-    }
-    /// The model's own tables at the output times of `solution` (say, the coupled model's
-    /// platform deviation and chord forces); none by default.
-    ///
-    /// # Errors
-    /// A failure at one of the times, with the time.
-    fn tables(&mut self, solution: &Solution) -> Result<Vec<Table>, DynamicsError> {
-        let _ = solution;
-        Ok(Vec::new())
-    }
-    /// Advice about the validity of the model's results given the largest deflection a run
-    /// reached (m), e.g. that a small-deflection model is past its range; none by default.
-    fn deflection_advice(&self, max_deflection: f64) -> Option<String> {
-        let _ = max_deflection;
+    /// A reader's name and an identifier of generalized coordinate `k`, where the model's
+    /// coordinates are not the links' modes; `None` (the default) for the modal names of
+    /// [`SceneModel::coordinate_label`](trait.SceneModel.html#method.coordinate_label).
+    fn coordinate_label(&self, k: usize) -> Option<(String, String)> {
+        let _ = k;
         None
     }
-    /// The link (0-based) and the mode (0-based, within the link) of state component
-    /// `component`, and whether it is a rate: the state holds every link's coordinates,
-    /// then their rates, in [`Self::link_range`] order. `None` for other components.
-    fn component_place(&self, component: usize) -> Option<(usize, usize, bool)> {
-        let modes = self.modes();
-        let (index, rate) = if component < modes {
-            (component, false)
-        } else if component < 2 * modes {
-            (component - modes, true)
-        } else {
-            return None;
-        };
-        (0..3).find_map(|link| {
-            let range = self.link_range(link);
-            range
-                .contains(&index)
-                .then(|| (link, index - range.start, rate))
-        })
-    }
+}
+
+/// Capability of a model under control laws ([`SceneModel::control`]): the sliders'
+/// actuators and law, the patches' vibration law.
+pub trait ControlLaws {
     /// The sliders' actuators and control law, when the sliders are driven by them (`None`
-    /// where the sliders are prescribed or locked, the default).
-    fn actuation(&self) -> Option<&crate::Actuation> {
-        None
-    }
-    /// Whether the sliders are driven by actuators under a control law.
-    fn slider_law(&self) -> bool {
-        self.actuation().is_some()
-    }
-    /// Number of piezoelectric patches on the links (0 without, the default).
-    fn patch_count(&self) -> usize {
-        0
-    }
+    /// where the sliders are prescribed or locked).
+    fn actuation(&self) -> Option<&crate::Actuation>;
     /// The model's sampled control laws at `t`: their periods and the slider law's states
-    /// held there (docs/linear.md, "Discrete time"). None by default.
-    fn sampled_laws(&self, t: f64) -> SampledLaws {
-        let _ = t;
-        SampledLaws::default()
-    }
+    /// held there (docs/linear.md, "Discrete time").
+    fn sampled_laws(&self, t: f64) -> SampledLaws;
     /// What the sampled control laws would command at a sample at `(t, y)`, the slider law
-    /// with the states `slider_states`, under the loads set ([`SceneModel::set_loads`]:
+    /// with the states `slider_states`, under the loads set ([`LoadInput::set_loads`]:
     /// references added): the discretisation of a sampled loop differentiates it.
     ///
     /// # Errors
-    /// A model without sampled laws (the default), a kinematic failure, a singular rigid
-    /// inverse dynamics (the feedforward).
+    /// A kinematic failure, a singular rigid inverse dynamics (the feedforward).
     fn law_sample(
         &mut self,
         t: f64,
         y: &[f64],
         slider_states: &[f64],
+    ) -> Result<LawSample, DynamicsError>;
+}
+
+/// The queries the layers above ask of any model: each answers through the model's
+/// capability, with the default where it has none.
+impl dyn SceneModel + '_ {
+    /// The piezoelectric patches' sensors, voltages and powers at `(t, y)`; none for a
+    /// model without patches.
+    ///
+    /// # Errors
+    /// A model that needs kinematics for them may fail there.
+    pub fn patch_states(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Vec<crate::PatchState>, DynamicsError> {
+        self.patches()
+            .map_or(Ok(Vec::new()), |p| p.patch_states(t, y))
+    }
+    /// Number of piezoelectric patches on the links (0 without).
+    pub fn patch_count(&mut self) -> usize {
+        self.patches().map_or(0, |p| p.patch_count())
+    }
+    /// Applies `loads` from now on in the right-hand side ([`LoadInput::set_loads`]).
+    ///
+    /// # Errors
+    /// The model takes no external loads, or a load names a link or point that does not
+    /// exist.
+    pub fn set_loads(&mut self, loads: &ExternalLoads) -> Result<(), DynamicsError> {
+        let kind = self.kind();
+        match self.loads() {
+            Some(input) => input.set_loads(loads),
+            None => Err(DynamicsError::NoCapability {
+                kind,
+                capability: Capability::Loads,
+            }),
+        }
+    }
+    /// [`LinearHints::chord_compliance`]; `None` for a model without hints.
+    ///
+    /// # Errors
+    /// A kinematic failure at the state.
+    pub fn chord_compliance(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<ChordCompliance>, DynamicsError> {
+        self.linear_hints_mut()
+            .map_or(Ok(None), |h| h.chord_compliance(t, y))
+    }
+    /// [`LinearHints::exact_mechanical_form`]; false for a model without hints.
+    pub fn exact_mechanical_form(&mut self, t: f64, y: &[f64]) -> bool {
+        self.linear_hints_mut()
+            .is_some_and(|h| h.exact_mechanical_form(t, y))
+    }
+    /// [`LinearHints::linear_deflection`]; true for a model without hints.
+    pub fn linear_deflection(&self) -> bool {
+        self.linear_hints().is_none_or(|h| h.linear_deflection())
+    }
+    /// [`LinearHints::platform_follows_links`]; false for a model without hints.
+    pub fn platform_follows_links(&self) -> bool {
+        self.linear_hints()
+            .is_some_and(|h| h.platform_follows_links())
+    }
+    /// The sliders' actuators and control law ([`ControlLaws::actuation`]); `None` where
+    /// the sliders are prescribed or locked.
+    pub fn actuation(&self) -> Option<&crate::Actuation> {
+        self.control().and_then(|c| c.actuation())
+    }
+    /// Whether the sliders are driven by actuators under a control law.
+    pub fn slider_law(&self) -> bool {
+        self.actuation().is_some()
+    }
+    /// The model's sampled control laws at `t` ([`ControlLaws::sampled_laws`]); none for a
+    /// model without control laws.
+    pub fn sampled_laws(&self, t: f64) -> SampledLaws {
+        self.control()
+            .map_or_else(SampledLaws::default, |c| c.sampled_laws(t))
+    }
+    /// What the sampled control laws command at a sample ([`ControlLaws::law_sample`]).
+    ///
+    /// # Errors
+    /// A model without sampled laws, a kinematic failure, a singular rigid inverse dynamics
+    /// (the feedforward).
+    pub fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
     ) -> Result<LawSample, DynamicsError> {
-        let _ = (t, y, slider_states);
-        Err(DynamicsError::Inconsistent(format!(
-            "the {} model has no sampled control law",
-            self.kind()
-        )))
+        let kind = self.kind();
+        match self.control_mut() {
+            Some(laws) => laws.law_sample(t, y, slider_states),
+            None => Err(DynamicsError::NoCapability {
+                kind,
+                capability: Capability::SampledLaw,
+            }),
+        }
+    }
+    /// The link (0-based) and the mode (0-based, within the link) of state component
+    /// `component`, and whether it is a rate: the state holds every link's coordinates,
+    /// then their rates, in [`SceneModel::link_range`] order. `None` for other components.
+    pub fn component_place(&self, component: usize) -> Option<(usize, usize, bool)> {
+        component_place(self, component)
     }
     /// A reader's name (`link 1, mode 2`) and an identifier (`eta_1_2`) of generalized
-    /// coordinate `k` (`k < modes()`): by default through [`Self::component_place`], and
-    /// the sliders' positions after the links' coordinates when they are actuated.
-    fn coordinate_label(&self, k: usize) -> (String, String) {
+    /// coordinate `k` (`k < modes()`): the model's own ([`LinearHints::coordinate_label`]),
+    /// else through [`component_place`](#method.component_place), and the sliders' positions after the links'
+    /// coordinates when they are actuated.
+    pub fn coordinate_label(&self, k: usize) -> (String, String) {
+        if let Some(label) = self.linear_hints().and_then(|h| h.coordinate_label(k)) {
+            return label;
+        }
         match self.component_place(k) {
             Some((link, mode, _)) => (
                 format!("modal coordinate of link {}, mode {}", link + 1, mode + 1),
@@ -451,8 +577,8 @@ pub trait SceneModel: OdeSystem + Send {
         }
     }
     /// A reader's name for state component `component`, for messages: the link, the mode and
-    /// whether it is the coordinate `eta` or its rate (see [`Self::component_place`]).
-    fn component_name(&self, component: usize) -> String {
+    /// whether it is the coordinate `eta` or its rate (see [`component_place`](#method.component_place)).
+    pub fn component_name(&self, component: usize) -> String {
         match self.component_place(component) {
             Some((link, mode, rate)) => format!(
                 "{} of link {}, mode {}",
@@ -469,18 +595,39 @@ pub trait SceneModel: OdeSystem + Send {
     }
 }
 
+/// [`SceneModel::component_place`](trait.SceneModel.html#method.component_place) for any
+/// model, also a sized one.
+pub(crate) fn component_place<M: SceneModel + ?Sized>(
+    model: &M,
+    component: usize,
+) -> Option<(usize, usize, bool)> {
+    let modes = model.modes();
+    let (index, rate) = if component < modes {
+        (component, false)
+    } else if component < 2 * modes {
+        (component - modes, true)
+    } else {
+        return None;
+    };
+    (0..3).find_map(|link| {
+        let range = model.link_range(link);
+        range
+            .contains(&index)
+            .then(|| (link, index - range.start, rate))
+    })
+}
+
 /// Checks a point force's link and position.
 ///
 /// # Errors
 /// A link other than 0, 1, 2 or a position outside `[0, 1]` or a non-finite force.
 pub(crate) fn check_point_force(p: &PointForce) -> Result<(), DynamicsError> {
     if p.link > 2 || !(0.0..=1.0).contains(&p.xi) || !p.force.is_finite() {
-        return Err(DynamicsError::Inconsistent(format!(
-            "a point force needs link 1, 2 or 3, xi in [0, 1] and a finite force; got link {}, xi {}, force {}",
-            p.link + 1,
-            p.xi,
-            p.force
-        )));
+        return Err(DynamicsError::PointForce {
+            link: p.link + 1,
+            xi: p.xi,
+            force: p.force,
+        });
     }
     Ok(())
 }

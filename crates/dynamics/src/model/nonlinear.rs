@@ -4,7 +4,9 @@
 
 use flexprr_integrators::{OdeSystem, Solution};
 
-use crate::model::{force_table, platform_deviation_table};
+use crate::model::{
+    ControlLaws, LinearHints, LoadInput, PatchReadout, force_table, platform_deviation_table,
+};
 use crate::{
     Column, DynamicsError, Machine, MachineSnapshot, ModelCounters, ModelEnergies, NonlinearSystem,
     Quantity as Q, SceneModel, SliderMotion, Table,
@@ -64,93 +66,28 @@ impl SceneModel for NonlinearSystem {
     fn deflection(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
         self.deflection_at(t, link, xi, y)
     }
-    fn linear_deflection(&self) -> bool {
-        false
-    }
-    fn platform_follows_links(&self) -> bool {
-        true
-    }
-    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
-        NonlinearSystem::patch_states(self, t, y)
-    }
-    /// At rest without actuation or patches: the tangents leave out only terms that vanish
-    /// there (the platform's centripetal acceleration, the damping forces' change with the
-    /// element rotations, the inertia forces' derivatives at zero acceleration), while the
-    /// actuators' derivatives are differences of the control law and the patches' feedback
-    /// is not in them (crates/dynamics/src/nonlinear/tangent.rs).
-    fn exact_mechanical_form(&mut self, t: f64, y: &[f64]) -> bool {
-        let n = self.coordinates();
-        if self.actuation().is_some() || y.len() != 2 * n {
-            return false;
-        }
-        if y[n..].iter().any(|v| *v != 0.0) {
-            return false;
-        }
-        let motion = self.trajectory().motion(t);
-        if motion
-            .velocity
-            .iter()
-            .chain(motion.acceleration.iter())
-            .any(|v| *v != 0.0)
-        {
-            return false;
-        }
-        self.patch_states(t, y).is_ok_and(|p| p.is_empty())
-    }
-    fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
-        NonlinearSystem::set_loads(self, loads)
-    }
     /// The slope of the deflection from the chord, by the derivative of the element's
     /// cubic Hermite centre line ([`NonlinearSystem::slope_at`]).
     fn slope(&self, t: f64, link: usize, xi: f64, y: &[f64]) -> Result<f64, DynamicsError> {
         self.slope_at(t, link, xi, y)
     }
-    fn actuation(&self) -> Option<&crate::Actuation> {
-        NonlinearSystem::actuation(self)
+    fn patches(&mut self) -> Option<&mut dyn PatchReadout> {
+        Some(self)
     }
-    fn patch_count(&self) -> usize {
-        NonlinearSystem::patch_count(self)
+    fn loads(&mut self) -> Option<&mut dyn LoadInput> {
+        Some(self)
     }
-    fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
-        NonlinearSystem::sampled_laws(self, t)
+    fn linear_hints(&self) -> Option<&dyn LinearHints> {
+        Some(self)
     }
-    fn law_sample(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        slider_states: &[f64],
-    ) -> Result<crate::LawSample, DynamicsError> {
-        NonlinearSystem::law_sample(self, t, y, slider_states)
+    fn linear_hints_mut(&mut self) -> Option<&mut dyn LinearHints> {
+        Some(self)
     }
-    /// The platform's `x`, `y`, `phi`; each link's nodal coordinates (the first node's
-    /// angle, the inner nodes' `x`, `y`, angle, the last node's angle); the sliders.
-    fn coordinate_label(&self, k: usize) -> (String, String) {
-        if k < 3 {
-            let axis = ["x", "y", "phi"][k];
-            return (format!("platform {axis}"), format!("platform_{axis}"));
-        }
-        for link in 0..3 {
-            let range = NonlinearSystem::link_range(self, link);
-            if range.contains(&k) {
-                let j = k - range.start;
-                let last = range.len() - 1;
-                let (node, what) = match j {
-                    0 => (0, "angle"),
-                    j if j == last => (j.div_ceil(3), "angle"),
-                    j => ((j - 1) / 3 + 1, ["x", "y", "angle"][(j - 1) % 3]),
-                };
-                let short = if what == "angle" { "theta" } else { what };
-                return (
-                    format!("link {}, node {node} {what}", link + 1),
-                    format!("{short}_{}_{node}", link + 1),
-                );
-            }
-        }
-        let i = k.saturating_sub(self.coordinates() - 3);
-        (
-            format!("position of slider {}", i + 1),
-            format!("rho_{}", i + 1),
-        )
+    fn control(&self) -> Option<&dyn ControlLaws> {
+        Some(self)
+    }
+    fn control_mut(&mut self) -> Option<&mut dyn ControlLaws> {
+        Some(self)
     }
     /// The kinetic energy of the nodes and the platform, the strain energy of each link.
     fn energies(&mut self, t: f64, y: &[f64]) -> Result<ModelEnergies, DynamicsError> {
@@ -176,5 +113,102 @@ impl SceneModel for NonlinearSystem {
         let mut forces = force_table("nonlinear_forces", &solution.t, &snapshots);
         forces.push(Column::of(Q::TypeIIMeasure), measure);
         Ok(vec![pose, forces])
+    }
+}
+
+impl PatchReadout for NonlinearSystem {
+    fn patch_count(&self) -> usize {
+        NonlinearSystem::patch_count(self)
+    }
+    fn patch_states(&mut self, t: f64, y: &[f64]) -> Result<Vec<crate::PatchState>, DynamicsError> {
+        NonlinearSystem::patch_states(self, t, y)
+    }
+}
+
+impl LoadInput for NonlinearSystem {
+    fn set_loads(&mut self, loads: &crate::ExternalLoads) -> Result<(), DynamicsError> {
+        NonlinearSystem::set_loads(self, loads)
+    }
+}
+
+/// Nodal coordinates: the deflection needs the time, the platform follows the links, the
+/// tangents are exact at rest.
+impl LinearHints for NonlinearSystem {
+    /// At rest without actuation or patches: the tangents leave out only terms that vanish
+    /// there (the platform's centripetal acceleration, the damping forces' change with the
+    /// element rotations, the inertia forces' derivatives at zero acceleration), while the
+    /// actuators' derivatives are differences of the control law and the patches' feedback
+    /// is not in them (crates/dynamics/src/nonlinear/tangent.rs).
+    fn exact_mechanical_form(&mut self, t: f64, y: &[f64]) -> bool {
+        let n = self.coordinates();
+        if NonlinearSystem::actuation(self).is_some() || y.len() != 2 * n {
+            return false;
+        }
+        if y[n..].iter().any(|v| *v != 0.0) {
+            return false;
+        }
+        let motion = self.trajectory().motion(t);
+        if motion
+            .velocity
+            .iter()
+            .chain(motion.acceleration.iter())
+            .any(|v| *v != 0.0)
+        {
+            return false;
+        }
+        NonlinearSystem::patch_states(self, t, y).is_ok_and(|p| p.is_empty())
+    }
+    fn linear_deflection(&self) -> bool {
+        false
+    }
+    fn platform_follows_links(&self) -> bool {
+        true
+    }
+    /// The platform's `x`, `y`, `phi`; each link's nodal coordinates (the first node's
+    /// angle, the inner nodes' `x`, `y`, angle, the last node's angle); the sliders.
+    fn coordinate_label(&self, k: usize) -> Option<(String, String)> {
+        if k < 3 {
+            let axis = ["x", "y", "phi"][k];
+            return Some((format!("platform {axis}"), format!("platform_{axis}")));
+        }
+        for link in 0..3 {
+            let range = NonlinearSystem::link_range(self, link);
+            if range.contains(&k) {
+                let j = k - range.start;
+                let last = range.len() - 1;
+                let (node, what) = match j {
+                    0 => (0, "angle"),
+                    j if j == last => (j.div_ceil(3), "angle"),
+                    j => ((j - 1) / 3 + 1, ["x", "y", "angle"][(j - 1) % 3]),
+                };
+                let short = if what == "angle" { "theta" } else { what };
+                return Some((
+                    format!("link {}, node {node} {what}", link + 1),
+                    format!("{short}_{}_{node}", link + 1),
+                ));
+            }
+        }
+        let i = k.saturating_sub(self.coordinates() - 3);
+        Some((
+            format!("position of slider {}", i + 1),
+            format!("rho_{}", i + 1),
+        ))
+    }
+}
+
+impl ControlLaws for NonlinearSystem {
+    fn actuation(&self) -> Option<&crate::Actuation> {
+        NonlinearSystem::actuation(self)
+    }
+    fn sampled_laws(&self, t: f64) -> crate::SampledLaws {
+        NonlinearSystem::sampled_laws(self, t)
+    }
+    fn law_sample(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<crate::LawSample, DynamicsError> {
+        NonlinearSystem::law_sample(self, t, y, slider_states)
     }
 }

@@ -285,11 +285,9 @@ impl NonlinearSystem {
     /// # Errors
     /// A mass matrix that is not positive definite (a bug or a non-finite state).
     pub(super) fn solve_equations(&mut self, t: f64, acc: &mut [f64]) -> Result<(), DynamicsError> {
-        self.mass.factor().map_err(|_| {
-            DynamicsError::Inconsistent(format!(
-                "at t = {t} s the generalized mass matrix is not positive definite"
-            ))
-        })?;
+        self.mass
+            .factor()
+            .map_err(|_| DynamicsError::MassNotPositive { t })?;
         let links = 3 * self.per_link;
         acc.copy_from_slice(&self.generalized[..acc.len()]);
         let k = self.mass.border_size();

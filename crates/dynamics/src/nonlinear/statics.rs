@@ -164,15 +164,19 @@ impl PlanarBeam {
     ) -> Result<StaticSolution, DynamicsError> {
         let n = self.dofs();
         if guess.len() != n {
-            return Err(DynamicsError::Inconsistent(format!(
-                "static guess has {} coordinates, the beam {n}",
-                guess.len()
-            )));
+            return Err(DynamicsError::Dimension {
+                what: "static guess",
+                unit: "coordinates",
+                model: "beam",
+                found: guess.len(),
+                expected: n,
+            });
         }
         if let Some((i, _)) = constrained.iter().chain(loads).find(|(i, _)| *i >= n) {
-            return Err(DynamicsError::Inconsistent(format!(
-                "coordinate index {i} out of range (the beam has {n})"
-            )));
+            return Err(DynamicsError::CoordinateIndex {
+                index: *i,
+                count: n,
+            });
         }
         let increments = increments.max(1);
         let mut fixed = vec![false; n];
@@ -207,11 +211,10 @@ impl PlanarBeam {
                 let k = self.tangent(&q);
                 let kff = DMatrix::from_fn(free.len(), free.len(), |a, b| k[(free[a], free[b])]);
                 let rhs = DVector::from_iterator(free.len(), free.iter().map(|i| -f[*i]));
-                let dq = kff.lu().solve(&rhs).ok_or_else(|| {
-                    DynamicsError::Inconsistent(format!(
-                        "static beam: singular tangent stiffness at increment {step} of {increments}"
-                    ))
-                })?;
+                let dq = kff
+                    .lu()
+                    .solve(&rhs)
+                    .ok_or(DynamicsError::StaticSingular { step, increments })?;
                 for (a, i) in free.iter().enumerate() {
                     q[*i] += dq[a];
                 }
@@ -224,10 +227,12 @@ impl PlanarBeam {
                 }
             }
             if !converged {
-                return Err(DynamicsError::Inconsistent(format!(
-                    "static beam: Newton did not converge at increment {step} of {increments} \
-                     (residual {worst:.3e} after {NEWTON_ITERATIONS} iterations)"
-                )));
+                return Err(DynamicsError::StaticNewton {
+                    step,
+                    increments,
+                    residual: worst,
+                    iterations: NEWTON_ITERATIONS,
+                });
             }
         }
         self.internal_force(&q, &mut f);

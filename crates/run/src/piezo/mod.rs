@@ -4,7 +4,7 @@
 //! deflection, the `_uncontrolled` deflection columns), the `vibration_control` section of
 //! `summary.json`, the warnings when a patch saturates, and `piezo.svg`.
 //!
-//! Everything reads the integrated model through [`SceneModel::patch_states`] and
+//! Everything reads the integrated model through [`flexprr_dynamics::PatchReadout::patch_states`] and
 //! [`SceneModel::deflection`]; nothing here asks which model ran.
 
 mod report;
