@@ -458,14 +458,16 @@ impl Quantity {
                      docs/piezo.md)"
                 )
             }),
-            Quantity::LowestFrequency => (scene.coupling.name() == "ked").then(|| {
-                "quantity f_machine_lowest_Hz needs a model of the whole machine \
+            Quantity::LowestFrequency => {
+                (!scene.coupling.capabilities().free_platform).then(|| {
+                    "quantity f_machine_lowest_Hz needs a model of the whole machine \
                  (model.coupling = \"coupled\" or \"nonlinear\"): the KED model prescribes the \
                  platform and the sliders"
-                    .into()
-            }),
+                        .into()
+                })
+            }
             Quantity::Collapse => {
-                if scene.coupling.name() == "ked" {
+                if !scene.coupling.capabilities().free_platform {
                     Some(
                         "quantity collapses needs a coupled or nonlinear model (model.coupling): \
                          a KED model follows the rigid motion and cannot collapse"

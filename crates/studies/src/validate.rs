@@ -496,14 +496,15 @@ pub(crate) fn check_map(
     let Some(scene) = study.cases.first().and_then(|c| study.case_scene(c).ok()) else {
         return Ok(());
     };
-    if scene.coupling.name() == "ked" {
+    if !scene.coupling.capabilities().free_platform {
         return Err(context.at.input(
             "map",
             format!(
                 "{} needs a model of the whole machine, and the base scene's model.coupling is \
-                 \"ked\", which prescribes the platform and the sliders: set model.coupling = \
+                 \"{}\", which prescribes the platform and the sliders: set model.coupling = \
                  \"coupled\" or \"nonlinear\" (in [set.model] or in the base scene)",
-                map.quantity.name()
+                map.quantity.name(),
+                scene.coupling.name()
             ),
         ));
     }
