@@ -213,6 +213,30 @@ fn check_schedule(
         .map_err(|e| e.to_string())
 }
 
+/// The flexible check of `outcome`'s plan, and with `[plan] deflection_limit` the plan slowed
+/// until the flexible model meets it (checked again on the slowed plan).
+fn flexible_stage(
+    scene: &Scene,
+    outcome: &mut PlanOutcome,
+    retiming: &Retiming<'_>,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(), PlanError> {
+    let check = vibration::flexible_check(scene, outcome, progress)?;
+    let Some(limit) = outcome.spec.deflection_limit else {
+        outcome.flexible = Some(check);
+        return Ok(());
+    };
+    let peak = deflection::peak_deflection(&check.planned_run);
+    let search = deflection::meet_limit(outcome, limit, peak, retiming, progress)?;
+    outcome.flexible = Some(if search.binds() {
+        vibration::flexible_check(scene, outcome, progress)?
+    } else {
+        check
+    });
+    outcome.deflection = Some(search);
+    Ok(())
+}
+
 /// Plans `scene` by its `[plan]` section (docs/planning.md): the path its trajectory sweeps,
 /// the orientation search (with `phi` other than `fixed`), the time-optimal motion within
 /// every limit, checked between grid points, shaped on the machine's lowest modes when
@@ -395,23 +419,11 @@ pub fn plan_scene(
     };
     apply(&mut outcome, plan)?;
     if options.flexible_check {
-        let check = vibration::flexible_check(scene, &outcome, progress)?;
-        if let Some(limit) = outcome.spec.deflection_limit {
-            let peak = deflection::peak_deflection(&check.planned_run);
-            let retiming = Retiming {
-                planner: &oriented_planner,
-                apply: &apply,
-            };
-            let search = deflection::meet_limit(&mut outcome, limit, peak, &retiming, progress)?;
-            if search.binds() {
-                outcome.flexible = Some(vibration::flexible_check(scene, &outcome, progress)?);
-            } else {
-                outcome.flexible = Some(check);
-            }
-            outcome.deflection = Some(search);
-        } else {
-            outcome.flexible = Some(check);
-        }
+        let retiming = Retiming {
+            planner: &oriented_planner,
+            apply: &apply,
+        };
+        flexible_stage(scene, &mut outcome, &retiming, progress)?;
     }
     outcome.wall_time_s = clock.elapsed().as_secs_f64();
     Ok(outcome)
