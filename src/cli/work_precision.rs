@@ -142,7 +142,7 @@ fn model_named(option: &str, name: &str) -> Result<ModelChoice, Failure> {
     ModelChoice::parse(name.trim()).ok_or_else(|| {
         Failure::bad_input(format!(
             "{option}: unknown model {name:?} (expected one of {})",
-            ModelChoice::NAMES
+            ModelChoice::names(&Registry::default())
         ))
     })
 }
@@ -183,7 +183,7 @@ fn config_of(args: &WorkPrecisionArgs, scene: &Scene) -> Result<WorkPrecisionCon
         .measured_models(scene)
         .into_iter()
         .chain([config.reference_model(scene)])
-        .any(|m| matches!(m, ModelChoice::Nonlinear(_)));
+        .any(|m| m.in_elements());
     match &args.tolerances {
         Some(tolerances) => config.tolerances.clone_from(tolerances),
         None if nonlinear => config.tolerances = NONLINEAR_TOLERANCES.to_vec(),

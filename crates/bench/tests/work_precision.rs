@@ -49,6 +49,11 @@ plots = false
     Scene::from_text("work_precision.toml", "work_precision", text).expect("valid scene")
 }
 
+/// The built-in model `name`.
+fn model(name: &str) -> ModelChoice {
+    ModelChoice::parse(name).unwrap_or_else(|| panic!("{name} is a built-in model"))
+}
+
 fn config() -> WorkPrecisionConfig {
     WorkPrecisionConfig {
         tolerances: vec![1e-4, 1e-6, 1e-8],
@@ -428,7 +433,7 @@ fn the_nonlinear_reference_agrees_with_its_check_and_with_a_tighter_third_run() 
         ErrorMeasure::Deflection
     );
     let plan = config.reference_plan(&scene).expect("plan");
-    assert_eq!(plan, default_reference("nonlinear"));
+    assert_eq!(plan, default_reference(scene.coupling.capabilities()));
     let reference = Reference::compute(&scene, &config).expect("reference");
     assert_eq!(reference.model, "nonlinear:4");
     assert_ne!(reference.method, reference.check_method);
@@ -473,15 +478,12 @@ fn models_side_by_side_share_one_reference_and_floor_at_their_model_error() {
     let config = WorkPrecisionConfig {
         tolerances: vec![1e-5, 1e-7],
         methods: vec![builtin("abm")],
-        models: vec![ModelChoice::Ked, ModelChoice::Nonlinear(Some(4))],
+        models: vec![model("ked"), model("nonlinear:4")],
         warmup: 0,
         repeats: 1,
         ..WorkPrecisionConfig::default()
     };
-    assert_eq!(
-        config.reference_model(&scene),
-        ModelChoice::Nonlinear(Some(4))
-    );
+    assert_eq!(config.reference_model(&scene), model("nonlinear:4"));
     let reference = Reference::compute(&scene, &config).expect("reference");
     let (rows, failures) = measure(&scene, &reference, &config, &mut |_| {}).expect("measures");
     assert!(failures.is_empty(), "{failures:?}");
@@ -499,7 +501,7 @@ fn models_side_by_side_share_one_reference_and_floor_at_their_model_error() {
     // The KED rows floor at KED's model error: the difference of a KED reference (computed
     // on its own, RK45 at 1e-14 checked by ABM) from the nonlinear one, found directly.
     let ked_config = WorkPrecisionConfig {
-        models: vec![ModelChoice::Ked],
+        models: vec![model("ked")],
         error: Some(ErrorMeasure::Deflection),
         ..config.clone()
     };
@@ -539,9 +541,7 @@ fn choices_that_do_not_apply_are_refused_with_the_setting() {
 
     // The paper formulation cannot carry the coupled model.
     let paper = short_scene();
-    let err = ModelChoice::Coupled
-        .apply(&paper)
-        .expect_err("paper + coupled");
+    let err = model("coupled").apply(&paper).expect_err("paper + coupled");
     assert!(err.to_string().contains("consistent"), "{err}");
 
     // A reference tolerance not below the ladder is refused naming it.
@@ -552,19 +552,29 @@ fn choices_that_do_not_apply_are_refused_with_the_setting() {
     let err = loose.reference_plan(&scene).expect_err("1e-10 above 1e-11");
     assert!(err.to_string().contains("reference_rtol"), "{err}");
 
-    for (name, parsed) in [
-        ("ked", Some(ModelChoice::Ked)),
-        ("coupled", Some(ModelChoice::Coupled)),
-        ("nonlinear", Some(ModelChoice::Nonlinear(None))),
-        ("nonlinear:16", Some(ModelChoice::Nonlinear(Some(16)))),
+    // Each accepted name reads back as itself, on its registered kind; the rest are refused.
+    for (name, kind) in [
+        ("ked", Some("ked")),
+        ("coupled", Some("coupled")),
+        ("nonlinear", Some("nonlinear")),
+        ("nonlinear:16", Some("nonlinear")),
         ("nonlinear:15", None),
         ("nonlinear:0", None),
         ("nonlinear:1024", None),
+        ("coupled:4", None),
         ("linear", None),
     ] {
-        assert_eq!(ModelChoice::parse(name), parsed, "{name}");
+        let parsed = ModelChoice::parse(name);
+        assert_eq!(parsed.as_ref().map(|m| m.kind().name()), kind, "{name}");
+        if let Some(parsed) = parsed {
+            assert_eq!(parsed.name(), name);
+        }
     }
-    assert_eq!(ModelChoice::Nonlinear(None).label(&scene), "nonlinear:4");
+    assert_eq!(
+        ModelChoice::names(&flexprr_scene::Registry::default()),
+        "ked, coupled, nonlinear, nonlinear:N (N even, 2 to 512)"
+    );
+    assert_eq!(model("nonlinear").label(&scene), "nonlinear:4");
 }
 
 /// A shipped stress scene (`configs/stress/`).
@@ -668,7 +678,7 @@ fn a_method_model_or_tolerance_named_twice_is_refused() {
         ),
         (
             WorkPrecisionConfig {
-                models: vec![ModelChoice::Ked, ModelChoice::Ked],
+                models: vec![model("ked"), model("ked")],
                 ..config()
             },
             "models",
@@ -689,10 +699,7 @@ fn a_method_model_or_tolerance_named_twice_is_refused() {
     // The same nonlinear model under two names: refused when measured on the scene.
     let f30 = scene_f30("coupling = \"nonlinear\"\nelements = 4", 0.002);
     let twice = WorkPrecisionConfig {
-        models: vec![
-            ModelChoice::Nonlinear(None),
-            ModelChoice::Nonlinear(Some(4)),
-        ],
+        models: vec![model("nonlinear"), model("nonlinear:4")],
         error: Some(ErrorMeasure::Deflection),
         ..config()
     };
@@ -703,4 +710,81 @@ fn a_method_model_or_tolerance_named_twice_is_refused() {
             .contains("models: nonlinear:4 is named twice"),
         "{err}"
     );
+}
+
+/// The KED modal equations under a kind registered by a program, declared not linear in its
+/// state (as in `examples/custom_model.rs`).
+struct GeneralKed;
+
+impl flexprr_scene::ModelKind for GeneralKed {
+    fn capabilities(&self) -> flexprr_scene::ModelCapabilities {
+        flexprr_scene::ModelCapabilities {
+            assumed_modes: true,
+            ..flexprr_scene::ModelCapabilities::default()
+        }
+    }
+
+    fn build(
+        &self,
+        scene: &Scene,
+    ) -> Result<Box<dyn flexprr_dynamics::SceneModel>, flexprr_dynamics::DynamicsError> {
+        Ok(Box::new(scene.build_ked(false)?))
+    }
+}
+
+#[test]
+fn a_registered_model_kind_is_measured_by_name_beside_the_builtin_one() {
+    let mut registry = flexprr_scene::Registry::default();
+    registry.register_model_kind("ked-general", std::sync::Arc::new(GeneralKed));
+    assert!(ModelChoice::parse("ked-general").is_none(), "not built in");
+    assert!(ModelChoice::parse_in(&registry, "ked-general:4").is_none());
+    assert!(
+        ModelChoice::names(&registry).starts_with("ked, coupled, ked-general, nonlinear"),
+        "{}",
+        ModelChoice::names(&registry)
+    );
+    let general = ModelChoice::parse_in(&registry, "ked-general").expect("registered");
+    let scene = short_scene();
+    assert_eq!(general.label(&scene), "ked-general (paper)");
+    let config = WorkPrecisionConfig {
+        tolerances: vec![1e-5, 1e-7],
+        methods: vec![builtin("abm")],
+        models: vec![model("ked"), general.clone()],
+        warmup: 0,
+        repeats: 1,
+        ..WorkPrecisionConfig::default()
+    };
+    config
+        .validate()
+        .expect("a registered kind is a valid choice");
+    // Not linear in its state: the more faithful by its capabilities, so the reference, and
+    // measured in deflections (the state measure is KED's).
+    assert_eq!(config.reference_model(&scene), general);
+    assert_eq!(
+        config.error_measure(&scene).expect("measure"),
+        ErrorMeasure::Deflection
+    );
+    let reference = Reference::compute(&scene, &config).expect("reference");
+    assert_eq!(reference.model, "ked-general (paper)");
+    let (rows, failures) = measure(&scene, &reference, &config, &mut |_| {}).expect("measures");
+    assert!(failures.is_empty(), "{failures:?}");
+    let labels: Vec<String> = rows.iter().map(WorkPrecisionRow::series_label).collect();
+    assert_eq!(
+        labels,
+        [
+            "ked (paper) abm",
+            "ked (paper) abm",
+            "ked-general (paper) abm",
+            "ked-general (paper) abm"
+        ]
+    );
+    // The same equations under two names, integrated by the same method at the same
+    // tolerance: the same error, and one that falls as the tolerance tightens.
+    for (ked, other) in rows[..2].iter().zip(&rows[2..]) {
+        assert!(
+            (ked.max_error - other.max_error).abs() <= 1e-9 * ked.max_error,
+            "{ked:?} vs {other:?}"
+        );
+    }
+    assert!(rows[1].max_error < rows[0].max_error, "{rows:?}");
 }

@@ -2,115 +2,181 @@
 //! tolerance ladder, the error measure and how the reference is computed.
 
 use flexprr_dynamics::Formulation;
-use flexprr_scene::{MethodHandle, ScenarioError, Scene};
+use flexprr_scene::{
+    MethodHandle, ModelCapabilities, ModelKindHandle, Registry, ScenarioError, Scene,
+};
 
 use super::{DEFAULT_TOLERANCES, ErrorMeasure};
 
-/// A model to measure: the scene with `model.coupling` (and, for the nonlinear model,
-/// `model.elements`) replaced.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ModelChoice {
-    /// Kineto-elasto-dynamics with the scene's formulation (`"ked"`).
-    Ked,
-    /// The coupled rigid-flexible model (`"coupled"`; consistent formulation only).
-    Coupled,
-    /// Co-rotational nonlinear links (`"nonlinear"` with the scene's `model.elements`, or
-    /// `"nonlinear:N"` with `N` elements per link, even, 2 to 512).
-    Nonlinear(Option<usize>),
+/// A model to measure: a registered model kind ([`flexprr_scene::Registry::model_kind`])
+/// replacing the scene's `model.coupling`, and for a kind whose links are co-rotational
+/// elements, optionally the elements per link replacing `model.elements`.
+///
+/// Everything the bench asks of a model (its label, how faithful it is, the formulation it
+/// needs, the default reference) follows from the kind's [`ModelCapabilities`], never from
+/// its name, so a kind registered by a program is measured like the built-in `ked`,
+/// `coupled` and `nonlinear`:
+///
+/// ```
+/// use flexprr_bench::work_precision::ModelChoice;
+/// use flexprr_dynamics::{DynamicsError, SceneModel};
+/// use flexprr_scene::{ModelCapabilities, ModelKind, Registry, Scene};
+/// use std::sync::Arc;
+///
+/// struct Renamed;
+/// impl ModelKind for Renamed {
+///     fn capabilities(&self) -> ModelCapabilities {
+///         ModelCapabilities { linear_in_state: true, assumed_modes: true, ..Default::default() }
+///     }
+///     fn build(&self, scene: &Scene) -> Result<Box<dyn SceneModel>, DynamicsError> {
+///         Ok(Box::new(scene.build_ked(false)?))
+///     }
+/// }
+/// let mut registry = Registry::default();
+/// registry.register_model_kind("renamed", Arc::new(Renamed));
+/// let choice = ModelChoice::parse_in(&registry, "renamed").unwrap();
+/// assert_eq!(choice.name(), "renamed");
+/// assert!(ModelChoice::parse("renamed").is_none()); // not a built-in kind
+/// assert!(ModelChoice::names(&registry).contains("renamed"));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelChoice {
+    /// The registered model kind.
+    kind: ModelKindHandle,
+    /// Elements per link (kinds in co-rotational elements only); `None`: the scene's own.
+    elements: Option<usize>,
 }
 
-impl ModelChoice {
-    /// The names [`ModelChoice::parse`] accepts, for messages.
-    pub const NAMES: &'static str = "ked, coupled, nonlinear, nonlinear:N (N even, 2 to 512)";
+/// The elements per link a `<kind>:N` name may ask for: even, 2 to 512 (`model.elements`).
+const ELEMENTS: std::ops::RangeInclusive<usize> = 2..=512;
 
-    /// The model named `name` (`ked`, `coupled`, `nonlinear`, `nonlinear:16`), if any.
+impl ModelChoice {
+    /// The built-in model kind `name` of [`Registry::default`] (`ked`, `coupled`,
+    /// `nonlinear`, `nonlinear:16`), if any: [`Self::parse_in`] on the default registry.
     pub fn parse(name: &str) -> Option<Self> {
-        match name {
-            "ked" => Some(Self::Ked),
-            "coupled" => Some(Self::Coupled),
-            "nonlinear" => Some(Self::Nonlinear(None)),
-            _ => {
-                let n: usize = name.strip_prefix("nonlinear:")?.parse().ok()?;
-                ((2..=512).contains(&n) && n % 2 == 0).then_some(Self::Nonlinear(Some(n)))
+        Self::parse_in(&Registry::default(), name)
+    }
+
+    /// The model named `name` in `registry`: a registered model kind, or `<kind>:N` for a
+    /// kind whose links are co-rotational elements, with `N` elements per link (even, 2 to
+    /// 512).
+    pub fn parse_in(registry: &Registry, name: &str) -> Option<Self> {
+        if let Some(kind) = registry.model_kind(name) {
+            return Some(Self {
+                kind,
+                elements: None,
+            });
+        }
+        let (kind, count) = name.split_once(':')?;
+        let kind = registry.model_kind(kind)?;
+        if kind.capabilities().assumed_modes {
+            return None;
+        }
+        let n: usize = count.parse().ok()?;
+        (ELEMENTS.contains(&n) && n % 2 == 0).then_some(Self {
+            kind,
+            elements: Some(n),
+        })
+    }
+
+    /// The names [`Self::parse_in`] accepts in `registry`, for messages, from the least to
+    /// the most faithful kind ([`Self::fidelity`]): on the default registry `ked, coupled,
+    /// nonlinear, nonlinear:N (N even, 2 to 512)`.
+    pub fn names(registry: &Registry) -> String {
+        let mut kinds: Vec<ModelKindHandle> = registry
+            .model_kind_names()
+            .into_iter()
+            .filter_map(|name| registry.model_kind(name))
+            .collect();
+        kinds.sort_by_key(|kind| rank(kind.capabilities()));
+        let mut names = Vec::new();
+        for kind in kinds {
+            names.push(kind.name().to_string());
+            if !kind.capabilities().assumed_modes {
+                names.push(format!(
+                    "{}:N (N even, {} to {})",
+                    kind.name(),
+                    ELEMENTS.start(),
+                    ELEMENTS.end()
+                ));
             }
         }
+        names.join(", ")
     }
 
-    /// The name [`ModelChoice::parse`] reads back (`ked`, `nonlinear`, `nonlinear:16`).
-    pub fn name(self) -> String {
-        match self {
-            Self::Ked => "ked".to_string(),
-            Self::Coupled => "coupled".to_string(),
-            Self::Nonlinear(None) => "nonlinear".to_string(),
-            Self::Nonlinear(Some(n)) => format!("nonlinear:{n}"),
+    /// The name [`Self::parse_in`] reads back (`ked`, `nonlinear`, `nonlinear:16`).
+    pub fn name(&self) -> String {
+        match self.elements {
+            None => self.kind.name().to_string(),
+            Some(n) => format!("{}:{n}", self.kind.name()),
         }
     }
 
-    /// The scene's own model, by its capabilities: linear in its state (KED), links in
-    /// co-rotational elements (nonlinear), or links in assumed modes on a free platform
-    /// (coupled).
+    /// The scene's own model: its model kind, with its elements per link when its links are
+    /// co-rotational elements.
     pub fn of(scene: &Scene) -> Self {
-        let caps = scene.coupling.capabilities();
-        if caps.linear_in_state {
-            Self::Ked
-        } else if !caps.assumed_modes {
-            Self::Nonlinear(Some(scene.large_deflection.elements))
-        } else {
-            Self::Coupled
+        Self {
+            kind: scene.coupling.clone(),
+            elements: (!scene.coupling.capabilities().assumed_modes)
+                .then_some(scene.large_deflection.elements),
         }
     }
 
-    /// The elements per link of a nonlinear choice on `scene`.
-    fn elements(self, scene: &Scene) -> Option<usize> {
-        match self {
-            Self::Nonlinear(n) => Some(n.unwrap_or(scene.large_deflection.elements)),
-            _ => None,
+    /// The model kind.
+    pub fn kind(&self) -> &ModelKindHandle {
+        &self.kind
+    }
+
+    /// What the model can do.
+    pub fn capabilities(&self) -> ModelCapabilities {
+        self.kind.capabilities()
+    }
+
+    /// Whether the links are co-rotational elements (`model.elements` sets the model's size;
+    /// their axial modes make the model stiff).
+    pub fn in_elements(&self) -> bool {
+        !self.capabilities().assumed_modes
+    }
+
+    /// The elements per link of a model in elements on `scene`.
+    fn elements(&self, scene: &Scene) -> Option<usize> {
+        self.in_elements()
+            .then(|| self.elements.unwrap_or(scene.large_deflection.elements))
+    }
+
+    /// The row label on `scene`: the kind's name, with the elements per link when its links
+    /// are elements (`nonlinear:16`), else with the scene's formulation unless the kind is
+    /// built on the consistent one only (`ked (paper)`, `ked (consistent)`, `coupled`).
+    pub fn label(&self, scene: &Scene) -> String {
+        let caps = self.capabilities();
+        match self.elements(scene) {
+            Some(n) => format!("{}:{n}", self.kind.name()),
+            None if caps.consistent_only => self.kind.name().to_string(),
+            None => format!("{} ({})", self.kind.name(), scene.formulation.name()),
         }
     }
 
-    /// The row label on `scene`: `ked (paper)`, `ked (consistent)`, `coupled`,
-    /// `nonlinear:16`.
-    pub fn label(self, scene: &Scene) -> String {
-        match self {
-            Self::Ked => format!("ked ({})", scene.formulation.name()),
-            Self::Coupled => "coupled".to_string(),
-            Self::Nonlinear(_) => format!("nonlinear:{}", self.elements(scene).unwrap_or(0)),
-        }
-    }
-
-    /// The registered name of the model kind (`model.coupling`).
-    pub fn kind(self) -> &'static str {
-        match self {
-            Self::Ked => "ked",
-            Self::Coupled => "coupled",
-            Self::Nonlinear(_) => "nonlinear",
-        }
-    }
-
-    /// How faithful the model is, for the default reference: KED below coupled below
-    /// nonlinear, and more elements above fewer (the mesh convergence of docs/coupled.md).
-    pub fn fidelity(self, scene: &Scene) -> usize {
-        match self {
-            Self::Ked => 0,
-            Self::Coupled => 1,
-            Self::Nonlinear(_) => 2 + self.elements(scene).unwrap_or(0),
-        }
+    /// How faithful the model is, for the default reference, from its capabilities: linear
+    /// in its state (KED) below a free platform on assumed modes (coupled) below links in
+    /// co-rotational elements (nonlinear), and more elements above fewer (the mesh
+    /// convergence of docs/coupled.md).
+    pub fn fidelity(&self, scene: &Scene) -> usize {
+        rank(self.capabilities()) + self.elements(scene).unwrap_or(0)
     }
 
     /// `scene` with this model.
     ///
     /// # Errors
-    /// [`ScenarioError::Input`] at key `models` if the coupled or nonlinear model is asked of
-    /// a scene whose formulation is not the consistent one (they are built on it).
-    pub fn apply(self, scene: &Scene) -> Result<Scene, ScenarioError> {
+    /// [`ScenarioError::Input`] at key `models` if a kind built on the consistent equations
+    /// only (coupled, nonlinear) is asked of a scene whose formulation is not the consistent
+    /// one.
+    pub fn apply(&self, scene: &Scene) -> Result<Scene, ScenarioError> {
         let mut out = scene.clone();
-        out.coupling = flexprr_scene::Registry::default()
-            .model_kind(self.kind())
-            .unwrap_or_else(|| unreachable!("{} is a built-in model kind", self.kind()));
+        out.coupling = self.kind.clone();
         if let Some(n) = self.elements(scene) {
             out.large_deflection.elements = n;
         }
-        if self != Self::Ked && scene.formulation != Formulation::consistent() {
+        if self.capabilities().consistent_only && scene.formulation != Formulation::consistent() {
             return Err(ScenarioError::Input {
                 location: None,
                 key: "models".to_string(),
@@ -126,30 +192,45 @@ impl ModelChoice {
     }
 }
 
+/// The fidelity class of a model kind: 0 linear in its state (KED), 1 other models on
+/// assumed modes (coupled), 2 links in co-rotational elements (nonlinear).
+fn rank(caps: ModelCapabilities) -> usize {
+    if caps.linear_in_state {
+        0
+    } else if caps.assumed_modes {
+        1
+    } else {
+        2
+    }
+}
+
 /// How the reference of a model kind is computed by default: the method, its check, the
 /// relative tolerance and the accepted disagreement (in the error measure used).
 ///
-/// * KED: `rk45` at `1e-14` checked by `abm` at the same tolerance (a
+/// The plan follows the kind's capabilities, so a registered kind gets the plan of the
+/// built-in kind it resembles:
+///
+/// * KED (linear in its state): `rk45` at `1e-14` checked by `abm` at the same tolerance (a
 ///   one-step Runge-Kutta pair against a multistep Adams code, so their errors are
 ///   independent); agreement below `1e-9`.
-/// * Coupled (and any other kind): `abm` at `1e-14` checked by `rk45` at the same tolerance;
+/// * Coupled (and any other kind on assumed modes): `abm` at `1e-14` checked by `rk45` at the same tolerance;
 ///   agreement below `1e-9` (the 0.2 s coupled scene at 20 Hz: `8.7e-12` in deflections).
-/// * Nonlinear: `abm` at `1e-10` checked by `rk45` at the same
+/// * Nonlinear (links in co-rotational elements): `abm` at `1e-10` checked by `rk45` at the same
 ///   tolerance; agreement below `1e-8`. Tighter costs minutes per run: the elements' axial
 ///   modes hold both methods to small steps already at loose tolerances, and from `1e-10`
 ///   on the steps become accuracy-limited on top (32 elements over 20 ms: 376 000 ABM steps
 ///   at `1e-10`, 1 003 000 at `1e-11`; RK45 193 000 steps of six right-hand sides each at
 ///   `1e-10`).
-pub fn default_reference(kind: &str) -> ReferencePlan {
-    match kind {
-        "ked" => ReferencePlan {
+pub fn default_reference(capabilities: ModelCapabilities) -> ReferencePlan {
+    match rank(capabilities) {
+        0 => ReferencePlan {
             method: builtin("rk45"),
             check_method: builtin("abm"),
             rtol: 1e-14,
             check_factor: 1.0,
             agreement_limit: 1e-9,
         },
-        "nonlinear" => ReferencePlan {
+        2 => ReferencePlan {
             method: builtin("abm"),
             check_method: builtin("rk45"),
             rtol: 1e-10,
@@ -311,7 +392,7 @@ impl WorkPrecisionConfig {
     /// The model of the reference on `scene`: [`Self::reference_model`], or the most
     /// faithful measured model ([`ModelChoice::fidelity`]).
     pub fn reference_model(&self, scene: &Scene) -> ModelChoice {
-        self.reference_model.unwrap_or_else(|| {
+        self.reference_model.clone().unwrap_or_else(|| {
             self.measured_models(scene)
                 .into_iter()
                 .max_by_key(|m| m.fidelity(scene))
@@ -327,7 +408,8 @@ impl WorkPrecisionConfig {
     pub fn error_measure(&self, scene: &Scene) -> Result<ErrorMeasure, ScenarioError> {
         let mut all = self.measured_models(scene);
         all.push(self.reference_model(scene));
-        let other = all.iter().find(|m| **m != ModelChoice::Ked);
+        // The state measure compares the KED modal states: models linear in their state.
+        let other = all.iter().find(|m| !m.capabilities().linear_in_state);
         match (self.error, other) {
             (Some(ErrorMeasure::State), Some(model)) => Err(ScenarioError::Input {
                 location: None,
@@ -353,7 +435,7 @@ impl WorkPrecisionConfig {
     /// below the tightest ladder tolerance.
     pub fn reference_plan(&self, scene: &Scene) -> Result<ReferencePlan, ScenarioError> {
         let model = self.reference_model(scene);
-        let mut plan = default_reference(model.kind());
+        let mut plan = default_reference(model.capabilities());
         if let Some(rtol) = self.reference_rtol {
             plan.rtol = rtol;
         }
