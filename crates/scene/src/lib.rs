@@ -40,7 +40,7 @@ pub use input::{
     InputKind, MAX_DATA_BYTES, MAX_INPUT_BYTES, MAX_NAME_LEN, check_input_file, read_input_file,
     sanitize_name, unsafe_name_reason,
 };
-pub use locate::{line_column, locate};
+pub use locate::{line_column, locate, locate_value};
 pub use model::{CoupledKind, KedKind, NonlinearKind};
 pub use model_kind::{ModelCapabilities, ModelKind, ModelKindHandle};
 pub use parse::{parse_scene, parse_toml};

@@ -1,10 +1,9 @@
 //! The study file as written: the serde schema (`docs/studies.md`, "Study files"). Every
 //! choice is a serde enum and every table denies unknown fields, so the parser itself names
-//! a bad value with its file, line, column and key.
+//! a bad value with its file, line, column and key; the quantities are read by their
+//! registered kinds afterwards, with the same locations.
 
 use serde::{Deserialize, Serialize};
-
-use crate::quantity::Quantity;
 
 /// The study file as written.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
@@ -31,9 +30,11 @@ pub struct StudyFile {
     /// Sweep axes.
     #[serde(default)]
     pub axis: Vec<AxisConfig>,
-    /// Derived quantities, one or more columns each.
+    /// Derived quantities, one or more columns each: tables with a `kind`, read by the
+    /// registered quantity kinds ([`crate::quantity::QuantityRegistry`]) once the file is
+    /// parsed.
     #[serde(default)]
-    pub quantities: Vec<Quantity>,
+    pub quantities: Vec<toml::Value>,
     /// Plots of the results table written next to `results.csv`.
     #[serde(default)]
     pub plot: Vec<PlotConfig>,

@@ -11,7 +11,7 @@ pub mod keys;
 pub mod map;
 mod map_figure;
 mod plot;
-mod quantity;
+pub mod quantity;
 mod record;
 mod runner;
 pub mod search;

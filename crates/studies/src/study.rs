@@ -22,6 +22,7 @@
 use std::fmt::Write as _;
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
+use std::sync::Arc;
 
 use flexprr_run::{Collapse, RunResult, run_registered};
 use flexprr_scene::{ScenarioError, Scene, locate, parse_toml};
@@ -29,7 +30,10 @@ use flexprr_scene::{ScenarioError, Scene, locate, parse_toml};
 pub use crate::error::{MAX_INPUT_BYTES, StudyError, read_input_file};
 pub use crate::file::{AxisConfig, Combine, PlotConfig, RangeConfig, Spacing, StudyFile};
 pub use crate::plot::write_plots;
-pub use crate::quantity::{Column, ColumnValues, OutputQuantity, Quantity};
+pub use crate::quantity::{
+    CaseRun, Column, ColumnValues, OutputQuantity, Quantity, QuantityKind, QuantityParams,
+    QuantityRegistry,
+};
 pub use crate::record::{
     CaseFailure, CaseRecord, CaseStatus, FailureKind, classify_run_failure, format_value,
     read_case_records, results_csv,
@@ -74,8 +78,8 @@ pub struct Study {
     pub axes: Vec<Axis>,
     /// Cases in id order.
     pub cases: Vec<Case>,
-    /// Quantities.
-    pub quantities: Vec<Quantity>,
+    /// Quantities, each read by its registered kind.
+    pub quantities: Vec<Arc<dyn Quantity>>,
     /// Plots.
     pub plots: Vec<PlotConfig>,
     /// FNV-1a hash of everything that determines the table (base scene, axes, quantities).
@@ -92,14 +96,17 @@ pub struct Study {
 }
 
 /// The registries a study loads its scenes and runs its cases with: the scene layer's named
-/// parts and the run's output producers (whose quantities a study reaches by name,
-/// [`Quantity::Output`]). The built-in ones by default.
+/// parts, the run's output producers (whose quantities a study reaches by name,
+/// [`crate::quantity::output::Output`]) and the quantity kinds. The built-in ones by
+/// default.
 #[derive(Debug, Clone, Default)]
 pub struct Plugins {
     /// Named parts of scenes (models, bases, laws, declared outputs).
     pub scenes: flexprr_scene::Registry,
     /// Output producers.
     pub outputs: flexprr_run::OutputRegistry,
+    /// Quantity kinds (`quantities = [{ kind = "..." }]`).
+    pub quantities: QuantityRegistry,
 }
 
 /// Deep merge: tables merge key by key, anything else replaces.
@@ -214,14 +221,16 @@ impl Study {
         text: &str,
         dir: &Path,
     ) -> Result<Self, StudyError> {
-        let mut raw: StudyFile =
+        let raw: StudyFile =
             parse_toml(file, text).map_err(|e| StudyError::from_study_parse(file, e))?;
         let at = Locator { file, text };
+        let quantities = plugins
+            .quantities
+            .parse_all(&raw.quantities, &plugins.outputs, &at)?;
         let (mut base, source) = load_base(&raw, dir, &at)?;
         merge_into(&mut base, &raw.set);
         let axes = expand_axes(&raw.axis, &base, &at)?;
         let cases = combine_cases(raw.combine, &axes, &at)?;
-        check_quantities(&mut raw.quantities, &plugins.outputs, &at)?;
         let search = match &raw.search {
             None => None,
             Some(config) => {
@@ -262,7 +271,7 @@ impl Study {
             base,
             axes,
             cases,
-            quantities: raw.quantities.clone(),
+            quantities,
             plots: raw.plot.clone(),
             fingerprint: String::new(),
             search,
@@ -372,7 +381,7 @@ impl Study {
     pub fn columns(&self) -> Vec<String> {
         let mut columns = vec!["case".to_string()];
         columns.extend(self.axes.iter().map(|a| a.key.clone()));
-        columns.extend(self.quantities.iter().flat_map(Quantity::columns));
+        columns.extend(self.quantities.iter().flat_map(|q| q.columns()));
         columns.push("status".into());
         columns.push("error".into());
         columns
@@ -382,7 +391,7 @@ impl Study {
     pub fn quantity_column_specs(&self) -> Vec<Column> {
         self.quantities
             .iter()
-            .flat_map(Quantity::column_specs)
+            .flat_map(|q| q.column_specs())
             .collect()
     }
 
@@ -490,14 +499,14 @@ impl Study {
         if let Some(why) = self.quantities.iter().find_map(|q| q.unavailable(&scene)) {
             return Err(CaseFailure::new(FailureKind::Quantity, None, &why));
         }
-        if self.quantities.contains(&Quantity::Plan) {
+        if self.quantities.iter().any(|q| q.planned()) {
             return self.plan_case(scene);
         }
         let outputs = &self.plugins.outputs;
         let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| {
             run_registered(&scene, outputs, &mut |_| {})
         }));
-        let wants_collapse = self.quantities.contains(&Quantity::Collapse);
+        let wants_collapse = self.quantities.iter().any(|q| q.keeps_collapse());
         let (result, collapse) = match outcome {
             Ok(Ok(r)) => (r, None),
             Ok(Err(failure)) if wants_collapse && failure.error.collapse().is_some() => {
@@ -568,10 +577,14 @@ impl Study {
         collapse: Option<&Collapse>,
     ) -> Result<Vec<String>, CaseFailure> {
         let mut values = Vec::with_capacity(self.quantity_columns());
+        let run = CaseRun {
+            scene,
+            result,
+            collapse,
+        };
         for q in &self.quantities {
             let derived = q
-                .derive_from_scene(scene)
-                .unwrap_or_else(|| q.derive_outcome(result, collapse))
+                .derive(&run)
                 .map_err(|m| CaseFailure::new(FailureKind::Quantity, None, &m))?;
             for (value, column) in derived.into_iter().zip(q.column_specs()) {
                 if !column.accepts(&value) {
@@ -855,50 +868,6 @@ fn combine_cases(
                 .collect())
         }
     }
-}
-
-/// Links are 1-3 and modes start at 1; a quantity of an output is one its producers offer
-/// (its output, unit and label are filled in from them).
-fn check_quantities(
-    quantities: &mut [Quantity],
-    outputs: &flexprr_run::OutputRegistry,
-    at: &Locator<'_>,
-) -> Result<(), StudyError> {
-    let offered = outputs.quantities();
-    for (k, q) in quantities.iter_mut().enumerate() {
-        if let Quantity::Output { name, about } = q {
-            let Some((output, found)) = offered.iter().find(|(_, o)| o.name == name) else {
-                let names: Vec<String> = offered
-                    .iter()
-                    .map(|(_, o)| format!("`{}`", o.name))
-                    .collect();
-                let known = if names.is_empty() {
-                    "no output offers quantities".to_string()
-                } else {
-                    format!("expected one of {}", names.join(", "))
-                };
-                return Err(at.input(
-                    &format!("quantities.{k}.name"),
-                    format!("unknown output quantity `{name}`, {known}"),
-                ));
-            };
-            *about = crate::quantity::OutputQuantity {
-                output,
-                unit: found.unit,
-                label: found.label,
-            };
-        }
-        if let Some(link) = q.link().filter(|l| !(1..=3).contains(l)) {
-            return Err(at.input(
-                &format!("quantities.{k}.link"),
-                format!("link must be 1, 2 or 3, got {link}"),
-            ));
-        }
-        if q.mode() == Some(0) {
-            return Err(at.input(&format!("quantities.{k}.mode"), "modes are numbered from 1"));
-        }
-    }
-    Ok(())
 }
 
 /// A case's scene error without its place in the generated scene text (which is in no

@@ -262,3 +262,39 @@ fn an_unknown_output_quantity_is_located_at_its_name_with_the_names_offered() {
         "unknown output quantity `tip_speed`, no output offers quantities",
     );
 }
+
+#[test]
+fn a_quantity_parameter_is_refused_at_its_key_or_value() {
+    // A value of the wrong type: at the value, with the parameter's key.
+    let body = "quantities = [{ kind = \"buckling\", link = \"a\" }]\n";
+    assert_located(
+        &error(body),
+        &at(body, "\"a\"", 0),
+        "quantities.0.link",
+        "invalid type: string \"a\", expected usize",
+    );
+    // A missing parameter: at its table.
+    let body = "quantities = [{ kind = \"frequency_range\", link = 1 }]\n";
+    assert_located(
+        &error(body),
+        &at(body, "{", 0),
+        "quantities.0",
+        "missing field `mode`",
+    );
+    // A key the kind does not take, also on a kind without parameters.
+    let body = "quantities = [{ kind = \"patch_voltage\", link = 1 }]\n";
+    assert_located(
+        &error(body),
+        &at(body, "link", 0),
+        "quantities.0.link",
+        "unknown field `link`, there are no fields",
+    );
+    // An unknown kind lists the registered ones.
+    let body = "quantities = [{ kind = \"peak_speed\" }]\n";
+    assert_located(
+        &error(body),
+        &at(body, "\"peak_speed\"", 0),
+        "quantities.0.kind",
+        "unknown variant `peak_speed`, expected one of `frequency_range`, `stiffness_ratio`",
+    );
+}

@@ -203,15 +203,16 @@ fn piezo_without_patches_is_refused_at_its_request() {
 
 #[test]
 fn the_study_quantities_are_the_runs_reduction_and_voltage() {
-    use flexprr_studies::study::Quantity;
+    use flexprr_studies::quantity::piezo::{DeflectionReduction, PatchVoltage};
+    use flexprr_studies::study::{CaseRun, Quantity};
     let scene = scene(3e-3, 100.0, r#"["deflections"]"#);
     let result = run(&scene, &mut |_| {}).unwrap();
     let summary = summary_json(&scene, &result, None);
     let section = &summary["vibration_control"];
     for link in 1..=3 {
-        let q = Quantity::DeflectionReduction { link };
+        let q = DeflectionReduction { link };
         assert!(q.unavailable(&scene).is_none());
-        let values = q.derive(&result).unwrap();
+        let values = q.derive(&CaseRun::finished(&scene, &result)).unwrap();
         let l = &section["links"][link - 1];
         for (value, key) in values
             .iter()
@@ -221,7 +222,9 @@ fn the_study_quantities_are_the_runs_reduction_and_voltage() {
             assert!((value.parse::<f64>().unwrap() - expect).abs() <= 1e-9 * expect.abs().max(1.0));
         }
     }
-    let values = Quantity::PatchVoltage.derive(&result).unwrap();
+    let values = PatchVoltage
+        .derive(&CaseRun::finished(&scene, &result))
+        .unwrap();
     // At a 100 V limit the 3 ms gain saturates link 1's patch (its command reaches 161 V).
     assert_eq!(values[0], "100");
     assert_eq!(values[1], "yes");
@@ -232,14 +235,10 @@ fn the_study_quantities_are_the_runs_reduction_and_voltage() {
     );
     // Without the law there is no reduction to report; without patches no voltage.
     let free = scene.without_vibration_control();
-    assert!(
-        Quantity::DeflectionReduction { link: 1 }
-            .unavailable(&free)
-            .is_some()
-    );
+    assert!(DeflectionReduction { link: 1 }.unavailable(&free).is_some());
     let path = Path::new(WORKSPACE).join("configs/paper_f20.toml");
     let paper = Scene::load(&path).unwrap();
-    let why = Quantity::PatchVoltage.unavailable(&paper).unwrap();
+    let why = PatchVoltage.unavailable(&paper).unwrap();
     assert!(why.contains("[[links.patches]]"), "{why}");
 }
 
