@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use flexprr_bench::work_precision::{
     ErrorMeasure, ModelChoice, NONLINEAR_TOLERANCES, Reference, WorkPrecisionConfig,
-    WorkPrecisionRow, csv_text, markdown_at_error, markdown_models, markdown_rows, measure,
+    WorkPrecisionError, WorkPrecisionRow, csv_text, markdown_at_error, markdown_models, markdown_rows, measure,
     method_applies, read_csv, write_svg,
 };
 use flexprr_scene::{Registry, ScenarioError, Scene};
@@ -93,7 +93,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
     let out = out_dir.open().map_err(|e| failure(e.into()))?;
     reference
         .write_csv(&out.join("reference.csv"))
-        .map_err(failure)?;
+        .map_err(measure_failure)?;
     let (mut rows, mut failures) = measure_printed(&scene, &reference, &config)?;
     if !args.compare.is_empty() {
         label_with_scene(&mut rows, &scene);
@@ -127,7 +127,7 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         &out.join("work_precision.svg"),
         &format!("Work-precision: {}", scene.name),
     )
-    .map_err(failure)?;
+    .map_err(measure_failure)?;
     println!("\n{}", markdown_at_error(&rows, args.target_error));
     println!(
         "{} rows written to {}",
@@ -135,6 +135,15 @@ pub fn run(args: WorkPrecisionArgs) -> Result<(), Failure> {
         out.join("work_precision.csv").display()
     );
     Ok(())
+}
+
+/// A failed measurement: bad input (exit 2) for the scene layer's input errors, a failed run
+/// (exit 1) for the rest (a failed or unconfirmed reference, a file that cannot be written).
+fn measure_failure(e: WorkPrecisionError) -> Failure {
+    match e {
+        WorkPrecisionError::Scene(e) => failure(e),
+        other => Failure::run(other),
+    }
 }
 
 /// The model named `name` after `option` (`--models`, `--reference-model`).
@@ -294,7 +303,7 @@ fn reference_of(
     let clock = std::time::Instant::now();
     let reference = match &args.reference {
         Some(path) => Reference::read_csv(path).map_err(failure)?,
-        None => Reference::compute(scene, config).map_err(failure)?,
+        None => Reference::compute(scene, config).map_err(measure_failure)?,
     };
     let reference_s = clock.elapsed().as_secs_f64();
     let line = reference.agreement.map(|a| {
@@ -340,7 +349,7 @@ fn measure_printed(
             r.max_error
         );
     })
-    .map_err(failure)?;
+    .map_err(measure_failure)?;
     for f in &failures {
         eprintln!("failed: {f}");
     }
@@ -368,7 +377,7 @@ impl Report<'_> {
             std::fs::write(&path, text)
                 .map_err(|e| Failure::run(format!("{}: {e}", path.display())))
         };
-        write("work_precision.csv", &csv_text(self.rows).map_err(failure)?)?;
+        write("work_precision.csv", &csv_text(self.rows).map_err(measure_failure)?)?;
         write("work_precision.md", &self.markdown())
     }
 

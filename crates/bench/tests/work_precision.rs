@@ -600,7 +600,13 @@ fn a_diverged_reference_is_refused_where_the_run_layer_sees_the_divergence() {
     let err = Reference::compute(&scene, &config).expect_err("diverged reference refused");
     let text = err.to_string();
     assert!(
-        matches!(err, flexprr_scene::ScenarioError::Run(_)),
+        matches!(
+            err,
+            flexprr_bench::work_precision::WorkPrecisionError::Reference {
+                role: "pilot run",
+                ..
+            }
+        ),
         "{text}"
     );
     assert!(!text.contains('\n'), "{text}");

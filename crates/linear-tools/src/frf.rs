@@ -125,7 +125,10 @@ fn bad(key: &str, message: impl Into<String>) -> RunError {
 fn numerics(e: LinearError) -> RunError {
     match e {
         LinearError::Model(e) => RunError::Model(e),
-        other => RunError::Scene(ScenarioError::Run(other.to_string())),
+        source => RunError::Analysis {
+            analysis: None,
+            source,
+        },
     }
 }
 
@@ -758,7 +761,10 @@ pub fn write_frf(
     let svg = |figure: Figure| {
         figure
             .to_svg()
-            .map_err(|m| ScenarioError::Run(format!("bode.svg: {m}")))
+            .map_err(|message| ScenarioError::Write {
+                path: "bode.svg".to_string(),
+                message,
+            })
     };
     put("bode.svg", &svg(bode_figure(scene, frf))?)?;
     if let Some(Ok(identified)) = &frf.identified {

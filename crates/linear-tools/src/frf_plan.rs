@@ -189,7 +189,10 @@ impl FrfPlan {
         let stem = path
             .file_stem()
             .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-        let generated = toml::to_string(&table).map_err(|e| ScenarioError::Run(e.to_string()))?;
+        let generated = toml::to_string(&table).map_err(|e| ScenarioError::Write {
+            path: origin.clone(),
+            message: format!("cannot be written back as TOML: {e}"),
+        })?;
         Scene::from_text_for_analysis(&origin, &stem, &generated).map_err(|e| unlocated(&origin, e))
     }
 

@@ -235,7 +235,10 @@ pub fn linear_error(scene: &Scene, e: flexprr_linear::LinearError) -> RunError {
             key: scene.coupling.capabilities().size_key().into(),
             message: e.to_string(),
         }),
-        other => RunError::Scene(ScenarioError::Run(other.to_string())),
+        source => RunError::Analysis {
+            analysis: None,
+            source,
+        },
     }
 }
 

@@ -37,11 +37,9 @@ pub fn slider_loop_margins(scene: &Scene, pose: Option<Pose>) -> Result<Vec<Slid
     (0..3)
         .map(|i| {
             let mut at = operating_point(scene, OperatingPoint::Rest(pose))?;
-            let failed = |e: flexprr_linear::LinearError| {
-                RunError::Scene(ScenarioError::Run(format!(
-                    "margins: slider {}: {e}",
-                    i + 1
-                )))
+            let failed = |source: flexprr_linear::LinearError| RunError::Analysis {
+                analysis: Some(format!("margins: slider {}", i + 1)),
+                source,
             };
             let lin = linearize(
                 at.model.as_mut(),

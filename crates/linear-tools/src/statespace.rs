@@ -183,9 +183,13 @@ pub fn state_space_series(
             &request.settings,
         )
         .map_err(|e| match linear_error(scene, e) {
-            RunError::Scene(ScenarioError::Run(m)) => {
-                RunError::Scene(ScenarioError::Run(format!("at t = {t} s: {m}")))
-            }
+            RunError::Analysis {
+                analysis: None,
+                source,
+            } => RunError::Analysis {
+                analysis: Some(format!("at t = {t} s")),
+                source,
+            },
             other => other,
         })?;
         let scale = models.first().map(|m| m.scale.clone());
@@ -442,14 +446,13 @@ pub fn series_json(scene: &Scene, series: &StateSpaceSeries) -> Value {
 ///
 /// # Errors
 /// [`ScenarioError::Io`] when a file cannot be written, [`ScenarioError::Input`] when the
-/// directory was taken meanwhile, [`ScenarioError::Run`] for an archive over 4 GiB.
+/// directory was taken meanwhile, [`ScenarioError::Write`] for an archive over 4 GiB.
 pub fn write_statespace(
     scene: &Scene,
     ss: &StateSpace,
     dir: &flexprr_outdir::OutputDir,
 ) -> Result<Vec<String>, ScenarioError> {
-    let archive =
-        statespace_npz(ss).map_err(|m| ScenarioError::Run(format!("statespace.npz: {m}")))?;
+    let archive = statespace_npz(ss).map_err(npz_error)?;
     write_pair(dir, &archive, &statespace_json(scene, ss))
 }
 
@@ -462,9 +465,16 @@ pub fn write_series(
     series: &StateSpaceSeries,
     dir: &flexprr_outdir::OutputDir,
 ) -> Result<Vec<String>, ScenarioError> {
-    let archive =
-        series_npz(series).map_err(|m| ScenarioError::Run(format!("statespace.npz: {m}")))?;
+    let archive = series_npz(series).map_err(npz_error)?;
     write_pair(dir, &archive, &series_json(scene, series))
+}
+
+/// The error of an archive that cannot be made.
+fn npz_error(message: String) -> ScenarioError {
+    ScenarioError::Write {
+        path: "statespace.npz".to_string(),
+        message,
+    }
 }
 
 fn write_pair(

@@ -91,9 +91,31 @@ pub enum RunError {
         /// Why, in words.
         reason: String,
     },
+    /// A linear analysis of the scene (its modes, frequency response or loop margins at an
+    /// operating point) failed numerically: what was analysed, where it says more, and why.
+    #[error("run failed: {}{source}", analysis_prefix(.analysis))]
+    Analysis {
+        /// What was analysed, e.g. `margins: slider 2`.
+        analysis: Option<String>,
+        /// Why the linearisation or its eigenvalue problem failed.
+        #[source]
+        source: LinearError,
+    },
+    /// The lowest mode of a linear model was asked for and it has none of non-zero
+    /// frequency.
+    #[error("run failed: the linear model has no mode of non-zero frequency")]
+    NoMode,
     /// Reading or writing outputs, or bad input met while running.
     #[error(transparent)]
     Scene(#[from] ScenarioError),
+}
+
+/// `<analysis>: ` when the analysis is named.
+fn analysis_prefix(analysis: &Option<String>) -> String {
+    analysis
+        .as_ref()
+        .map(|a| format!("{a}: "))
+        .unwrap_or_default()
 }
 
 impl RunError {
@@ -116,7 +138,9 @@ impl RunError {
                 IntegratorError::Stiff { .. } => "stiff",
                 _ => "integrator",
             },
-            RunError::Linear { .. } => "linearisation",
+            RunError::Linear { .. } | RunError::Analysis { .. } | RunError::NoMode => {
+                "linearisation"
+            }
             RunError::Figure { .. } => "figure",
             RunError::Output { .. } => "output",
             RunError::Scene(ScenarioError::Io { .. }) => "io",

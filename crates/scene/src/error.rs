@@ -36,9 +36,16 @@ pub enum ScenarioError {
         /// What is wrong and what was expected.
         message: String,
     },
-    /// The run started but failed (integrator, buckling divergence, ...). Exit code 1.
-    #[error("run failed: {0}")]
-    Run(String),
+    /// A file whose content cannot be produced (a figure that cannot be drawn, an archive
+    /// over its format's limit, a generated scene that cannot be written back as TOML).
+    /// Exit code 1: the work was done, its file was not.
+    #[error("{path}: {message}")]
+    Write {
+        /// The file (its name in the output directory), or what was being written.
+        path: String,
+        /// Why.
+        message: String,
+    },
     /// Reading or writing files.
     #[error("{path}: {source}")]
     Io {

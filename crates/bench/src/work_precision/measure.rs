@@ -6,6 +6,8 @@ use std::time::Instant as Clock;
 use flexprr_dynamics::SceneModel;
 use flexprr_integrators::{Options, Solution};
 use flexprr_scene::{MethodHandle, ScenarioError, Scene};
+
+use super::WorkPrecisionError;
 use serde::{Deserialize, Serialize};
 
 use super::config::first_repeat;
@@ -130,18 +132,18 @@ pub struct WorkPrecision {
 ///
 /// # Errors
 /// [`ScenarioError::Input`] for a bad configuration or a reference of another measure,
-/// [`ScenarioError::Run`] if a model cannot be built. A point whose integration fails is
+/// [`WorkPrecisionError::Model`] if a model cannot be built. A point whose integration fails is
 /// listed in the failures instead.
 pub fn measure(
     scene: &Scene,
     reference: &Reference,
     config: &WorkPrecisionConfig,
     progress: &mut dyn FnMut(&WorkPrecisionRow),
-) -> Result<(Vec<WorkPrecisionRow>, Vec<String>), ScenarioError> {
+) -> Result<(Vec<WorkPrecisionRow>, Vec<String>), WorkPrecisionError> {
     config.validate()?;
     let measure = config.error_measure(scene)?;
     if reference.measure != measure {
-        return Err(ScenarioError::Input {
+        return Err(WorkPrecisionError::Scene(ScenarioError::Input {
             location: None,
             key: "reference".to_string(),
             message: format!(
@@ -149,16 +151,16 @@ pub fn measure(
                 reference.measure.name(),
                 measure.name()
             ),
-        });
+        }));
     }
     let models = config.measured_models(scene);
     let labels: Vec<String> = models.iter().map(|m| m.label(scene)).collect();
     if let Some(twice) = first_repeat(&labels, |a, b| a == b) {
-        return Err(ScenarioError::Input {
+        return Err(WorkPrecisionError::Scene(ScenarioError::Input {
             location: None,
             key: "models".to_string(),
             message: format!("{twice} is named twice (on scene {:?})", scene.name),
-        });
+        }));
     }
     let (mut rows, mut failures) = (Vec::new(), Vec::new());
     for choice in models {
@@ -280,7 +282,7 @@ pub fn work_precision(
     scene: &Scene,
     config: &WorkPrecisionConfig,
     progress: &mut dyn FnMut(&WorkPrecisionRow),
-) -> Result<WorkPrecision, ScenarioError> {
+) -> Result<WorkPrecision, WorkPrecisionError> {
     let reference = Reference::compute(scene, config)?;
     let (rows, failures) = measure(scene, &reference, config, progress)?;
     Ok(WorkPrecision {

@@ -43,10 +43,12 @@
 //! Markdown tables and the diagram). Everything is re-exported here.
 
 pub mod config;
+mod error;
 pub mod measure;
 pub mod reference;
 pub mod report;
 
+pub use error::WorkPrecisionError;
 pub use config::{ModelChoice, ReferencePlan, WorkPrecisionConfig, builtin, default_reference};
 pub use measure::{
     Timing, WorkPrecision, WorkPrecisionRow, measure, method_applies, time_runs, work_precision,
@@ -58,7 +60,7 @@ pub use report::{
 };
 
 use flexprr_dynamics::SceneModel;
-use flexprr_scene::{ScenarioError, Scene};
+use flexprr_scene::Scene;
 
 /// The default tolerance ladder, `1e-3` down to `1e-12` (one per decade).
 pub const DEFAULT_TOLERANCES: [f64; 10] = [
@@ -104,8 +106,11 @@ impl ErrorMeasure {
 }
 
 /// The scene's model from its one builder.
-pub(crate) fn build(scene: &Scene) -> Result<Box<dyn SceneModel>, ScenarioError> {
+pub(crate) fn build(scene: &Scene) -> Result<Box<dyn SceneModel>, WorkPrecisionError> {
     scene
         .build_model()
-        .map_err(|e| ScenarioError::Run(format!("scene {:?}: {e}", scene.name)))
+        .map_err(|source| WorkPrecisionError::Model {
+            scene: scene.name.clone(),
+            source,
+        })
 }

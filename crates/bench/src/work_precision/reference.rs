@@ -7,6 +7,8 @@ use flexprr_dynamics::SceneModel;
 use flexprr_integrators::{Options, Solution};
 use flexprr_scene::{MethodHandle, ScenarioError, Scene};
 
+use super::WorkPrecisionError;
+
 use super::{DEFLECTION_XI, ErrorMeasure, WorkPrecisionConfig, build};
 
 /// An achieved error, relative to the solution's size (see the module documentation).
@@ -61,16 +63,16 @@ pub struct Reference {
 /// in the error (`pilot run`, `reference`, `check`).
 ///
 /// A reference that diverged or failed is never measured against: its failure comes back
-/// as [`ScenarioError::Run`] naming the scene, the model, the integration, the reason and
-/// the time.
+/// as [`WorkPrecisionError::Reference`] naming the scene, the model, the integration, the
+/// reason and the time.
 fn solve_reference(
     scene: &Scene,
     label: &str,
-    role: &str,
+    role: &'static str,
     model: &mut dyn SceneModel,
     method: &MethodHandle,
     options: Options,
-) -> Result<Solution, ScenarioError> {
+) -> Result<Solution, WorkPrecisionError> {
     let _ = model.take_failure();
     let rtol = options.rtol;
     let integration = flexprr_run::integrate_model(
@@ -82,18 +84,16 @@ fn solve_reference(
     match integration.failure {
         None => Ok(integration.solution),
         Some(failure) => {
-            let reason = failure.to_string();
             // Every failure names its time in its own words; added where one does not.
-            let when = match failure.time() {
-                Some(t) if !reason.contains("t = ") => format!(" at t = {t} s"),
-                _ => String::new(),
-            };
-            Err(ScenarioError::Run(format!(
-                "scene {:?}, reference model {label}: the {role} ({} at rtol {rtol:e}) failed{when}: \
-                 {reason}; a failed reference is not measured against",
-                scene.name,
-                method.name(),
-            )))
+            Err(WorkPrecisionError::Reference {
+                scene: scene.name.clone(),
+                model: label.to_string(),
+                role,
+                method: method.name().to_string(),
+                rtol,
+                time: failure.time(),
+                reason: failure.to_string(),
+            })
         }
     }
 }
@@ -104,33 +104,37 @@ fn solve_reference(
 /// the deflected link). These are the values of `deflections.csv` at `xi = 0.5`.
 ///
 /// # Errors
-/// [`ScenarioError::Run`] naming the time and link if a deflection cannot be computed or is
-/// not finite.
+/// [`WorkPrecisionError::Deflection`] or [`WorkPrecisionError::NotFinite`] naming the time and
+/// link if a deflection cannot be computed or is not finite.
 pub fn midpoint_deflections(
     model: &mut dyn SceneModel,
     solution: &Solution,
-) -> Result<Vec<f64>, ScenarioError> {
+) -> Result<Vec<f64>, WorkPrecisionError> {
     let n = solution.t.len();
     let kind = model.kind();
     let mut w = Vec::with_capacity(3 * n);
     for k in 0..n {
         let (t, y) = (solution.t[k], solution.y(k));
         for i in 0..3 {
-            w.push(model.deflection(t, i, DEFLECTION_XI, y).map_err(|e| {
-                ScenarioError::Run(format!(
-                    "mid-point deflection of link {} at t = {t} s ({kind} model): {e}",
-                    i + 1
-                ))
-            })?);
+            w.push(
+                model
+                    .deflection(t, i, DEFLECTION_XI, y)
+                    .map_err(|source| WorkPrecisionError::Deflection {
+                        link: i + 1,
+                        t,
+                        model: kind.to_string(),
+                        source,
+                    })?,
+            );
         }
     }
     if let Some(j) = w.iter().position(|v| !v.is_finite()) {
-        return Err(ScenarioError::Run(format!(
-            "mid-point deflection of link {} at t = {} s ({kind} model) is not finite ({})",
-            j % 3 + 1,
-            solution.t[j / 3],
-            w[j]
-        )));
+        return Err(WorkPrecisionError::NotFinite {
+            what: format!("mid-point deflection of link {}", j % 3 + 1),
+            t: solution.t[j / 3],
+            model: Some(kind.to_string()),
+            value: w[j],
+        });
     }
     Ok(w)
 }
@@ -140,7 +144,8 @@ pub fn midpoint_deflections(
 /// maximum over the rows.
 ///
 /// # Errors
-/// [`ScenarioError::Run`] naming the value (`name(i)`) and time of the first non-finite one.
+/// [`WorkPrecisionError::NotFinite`] naming the value (`name(i)`) and time of the first
+/// non-finite one.
 fn max_row_error(
     values: &[f64],
     reference: &[f64],
@@ -148,7 +153,7 @@ fn max_row_error(
     t: &[f64],
     size: impl Fn(usize) -> f64,
     name: impl Fn(usize) -> String,
-) -> Result<AchievedError, ScenarioError> {
+) -> Result<AchievedError, WorkPrecisionError> {
     let (mut max, mut row_error) = (0.0_f64, 0.0_f64);
     for (k, (row, reference)) in values
         .chunks_exact(width)
@@ -158,11 +163,12 @@ fn max_row_error(
         row_error = 0.0;
         for (i, (v, v_ref)) in row.iter().zip(reference).enumerate() {
             if !v.is_finite() {
-                return Err(ScenarioError::Run(format!(
-                    "{} at t = {} s is not finite ({v})",
-                    name(i),
-                    t[k]
-                )));
+                return Err(WorkPrecisionError::NotFinite {
+                    what: name(i),
+                    t: t[k],
+                    model: None,
+                    value: *v,
+                });
             }
             row_error = row_error.max((v - v_ref).abs() / size(i));
         }
@@ -285,12 +291,14 @@ impl Reference {
         measure: ErrorMeasure,
         model: &mut dyn SceneModel,
         solution: Solution,
-    ) -> Result<Self, ScenarioError> {
+    ) -> Result<Self, WorkPrecisionError> {
         match measure {
-            ErrorMeasure::State => Self::from_states(solution.t, solution.states, model.modes()),
+            ErrorMeasure::State => {
+                Ok(Self::from_states(solution.t, solution.states, model.modes())?)
+            }
             ErrorMeasure::Deflection => {
                 let w = midpoint_deflections(model, &solution)?;
-                Self::from_deflections(solution.t, w)
+                Ok(Self::from_deflections(solution.t, w)?)
             }
         }
     }
@@ -302,9 +310,11 @@ impl Reference {
     /// A pilot run (ABM at `1e-8`) gives the size for the absolute tolerance.
     ///
     /// # Errors
-    /// [`ScenarioError::Input`] for a bad configuration, [`ScenarioError::Run`] if an
+    /// [`ScenarioError::Input`] (in [`WorkPrecisionError::Scene`]) for a bad configuration,
+    /// [`WorkPrecisionError::Reference`], [`WorkPrecisionError::InModel`] or
+    /// [`WorkPrecisionError::Unconfirmed`] if an
     /// integration fails or the two disagree by more than the plan's limit.
-    pub fn compute(scene: &Scene, config: &WorkPrecisionConfig) -> Result<Self, ScenarioError> {
+    pub fn compute(scene: &Scene, config: &WorkPrecisionConfig) -> Result<Self, WorkPrecisionError> {
         config.validate()?;
         let measure = config.error_measure(scene)?;
         let plan = config.reference_plan(scene)?;
@@ -312,7 +322,14 @@ impl Reference {
         let label = choice.label(scene);
         let model_scene = choice.apply(scene)?;
         let mut system = build(&model_scene)?;
-        let in_model = |e: String| ScenarioError::Run(format!("reference model {label}: {e}"));
+        let in_model = |stage: &'static str| {
+            let model = label.clone();
+            move |e: WorkPrecisionError| WorkPrecisionError::InModel {
+                model,
+                stage,
+                source: Box::new(e),
+            }
+        };
         let pilot_rtol = 1e-8;
         let pilot = solve_reference(
             &model_scene,
@@ -323,7 +340,7 @@ impl Reference {
             model_scene.options.clone().rtol(pilot_rtol),
         )?;
         let pilot = Self::from_solution(measure, system.as_mut(), pilot)
-            .map_err(|e| in_model(format!("pilot run for the reference: {e}")))?;
+            .map_err(in_model("pilot run for the reference"))?;
         let size = pilot.displacement_size;
         let options = |rtol: f64| Options::default().rtol(rtol).atol(rtol * size);
         let check_rtol = plan.rtol * plan.check_factor;
@@ -344,21 +361,20 @@ impl Reference {
             options(check_rtol),
         )?;
         let mut reference = Self::from_solution(measure, system.as_mut(), main)
-            .map_err(|e| in_model(format!("reference: {e}")))?;
+            .map_err(in_model("reference"))?;
         let agreement = reference.errors_of(system.as_mut(), &check)?;
         if agreement.max.is_nan() || agreement.max > plan.agreement_limit {
-            return Err(ScenarioError::Run(format!(
-                "reference model {label}: the reference ({} at rtol {:e}) and its check ({} at \
-                 rtol {check_rtol:e}) disagree by {:e} (end) / {:e} (max) in the {} measure, \
-                 above the limit {:e}",
-                plan.method.name(),
-                plan.rtol,
-                plan.check_method.name(),
-                agreement.end,
-                agreement.max,
-                measure.name(),
-                plan.agreement_limit
-            )));
+            return Err(WorkPrecisionError::Unconfirmed {
+                model: label,
+                method: plan.method.name().to_string(),
+                rtol: plan.rtol,
+                check_method: plan.check_method.name().to_string(),
+                check_rtol,
+                end: agreement.end,
+                max: agreement.max,
+                measure: measure.name(),
+                limit: plan.agreement_limit,
+            });
         }
         reference.model = label;
         reference.method = plan.method.name().to_string();
@@ -378,7 +394,7 @@ impl Reference {
         &self,
         model: &mut dyn SceneModel,
         solution: &Solution,
-    ) -> Result<AchievedError, ScenarioError> {
+    ) -> Result<AchievedError, WorkPrecisionError> {
         match self.measure {
             ErrorMeasure::State => self.errors(&solution.states),
             ErrorMeasure::Deflection => {
@@ -392,23 +408,23 @@ impl Reference {
     /// time and the maximum over the times.
     ///
     /// # Errors
-    /// [`ScenarioError::Run`] if this is not a deflection reference, the shape differs or a
+    /// [`WorkPrecisionError::WrongMeasure`] if this is not a deflection reference,
+    /// [`WorkPrecisionError::Shape`] if the shape differs, [`WorkPrecisionError::NotFinite`] if a
     /// value is not finite (naming the link and time).
-    pub fn deflection_errors(&self, w: &[f64]) -> Result<AchievedError, ScenarioError> {
+    pub fn deflection_errors(&self, w: &[f64]) -> Result<AchievedError, WorkPrecisionError> {
         if self.measure != ErrorMeasure::Deflection {
-            return Err(ScenarioError::Run(
-                "the reference holds modal states, not deflections: compute it with the \
-                 deflection measure"
-                    .to_string(),
-            ));
+            return Err(WorkPrecisionError::WrongMeasure {
+                reference: self.measure,
+            });
         }
         if w.len() != self.deflections.len() {
-            return Err(ScenarioError::Run(format!(
-                "{} deflections cannot be compared with the reference's {} ({} times x 3 links)",
-                w.len(),
-                self.deflections.len(),
-                self.t.len()
-            )));
+            return Err(WorkPrecisionError::Shape {
+                measure: ErrorMeasure::Deflection,
+                given: w.len(),
+                expected: self.deflections.len(),
+                times: self.t.len(),
+                width: 3,
+            });
         }
         max_row_error(
             w,
@@ -435,25 +451,24 @@ impl Reference {
     /// size: `|y_i - y_ref_i| / s_i` with `s_i` the displacement or velocity size.
     ///
     /// # Errors
-    /// [`ScenarioError::Run`] if this is not a state reference, the shape differs or a
+    /// [`WorkPrecisionError::WrongMeasure`] if this is not a state reference,
+    /// [`WorkPrecisionError::Shape`] if the shape differs, [`WorkPrecisionError::NotFinite`] if a
     /// value is not finite.
-    pub fn errors(&self, states: &[f64]) -> Result<AchievedError, ScenarioError> {
+    pub fn errors(&self, states: &[f64]) -> Result<AchievedError, WorkPrecisionError> {
         if self.measure != ErrorMeasure::State {
-            return Err(ScenarioError::Run(
-                "the reference holds mid-point deflections, not modal states: measure in \
-                 deflections"
-                    .to_string(),
-            ));
+            return Err(WorkPrecisionError::WrongMeasure {
+                reference: self.measure,
+            });
         }
         let dim = self.dim();
         if states.len() != self.states.len() {
-            return Err(ScenarioError::Run(format!(
-                "a solution with {} values cannot be compared with the reference's {} \
-                 ({} times x {dim})",
-                states.len(),
-                self.states.len(),
-                self.t.len()
-            )));
+            return Err(WorkPrecisionError::Shape {
+                measure: ErrorMeasure::State,
+                given: states.len(),
+                expected: self.states.len(),
+                times: self.t.len(),
+                width: dim,
+            });
         }
         max_row_error(
             states,
@@ -476,10 +491,14 @@ impl Reference {
     /// reference, the columns of `deflections.csv`).
     ///
     /// # Errors
-    /// [`ScenarioError::Io`] or [`ScenarioError::Run`] if the file cannot be written.
-    pub fn write_csv(&self, path: &Path) -> Result<(), ScenarioError> {
+    /// [`WorkPrecisionError::Write`] naming the file if it cannot be written.
+    pub fn write_csv(&self, path: &Path) -> Result<(), WorkPrecisionError> {
         let mut w = csv::Writer::from_writer(Vec::new());
-        let csv_err = |e: csv::Error| ScenarioError::Run(format!("{}: {e}", path.display()));
+        let write_err = |e: &dyn std::fmt::Display| WorkPrecisionError::Write {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        };
+        let csv_err = |e: csv::Error| write_err(&e);
         let mut header = vec!["t_s".to_string()];
         let (values, width) = match self.measure {
             ErrorMeasure::State => {
@@ -500,11 +519,8 @@ impl Reference {
         }
         let bytes = w
             .into_inner()
-            .map_err(|e| ScenarioError::Run(format!("{}: {e}", path.display())))?;
-        std::fs::write(path, bytes).map_err(|source| ScenarioError::Io {
-            path: path.display().to_string(),
-            source,
-        })
+            .map_err(|e| write_err(&e))?;
+        std::fs::write(path, bytes).map_err(|e| write_err(&e))
     }
 
     /// Reads a reference written by [`Reference::write_csv`]: a deflection reference when

@@ -6,25 +6,28 @@ use std::path::Path;
 
 use flexprr_scene::ScenarioError;
 
+use super::WorkPrecisionError;
+
 use super::{PACKAGE, WorkPrecisionRow};
 
 /// The rows as CSV (header included).
 ///
 /// # Errors
-/// [`ScenarioError::Run`] if serialisation fails.
-pub fn csv_text(rows: &[WorkPrecisionRow]) -> Result<String, ScenarioError> {
+/// [`WorkPrecisionError::Write`] if serialisation fails.
+pub fn csv_text(rows: &[WorkPrecisionRow]) -> Result<String, WorkPrecisionError> {
+    let failed = |e: &dyn std::fmt::Display| WorkPrecisionError::Write {
+        path: "work-precision CSV".to_string(),
+        message: e.to_string(),
+    };
     let mut w = csv::Writer::from_writer(Vec::new());
     for row in rows {
-        w.serialize(row)
-            .map_err(|e| ScenarioError::Run(format!("work-precision CSV: {e}")))?;
+        w.serialize(row).map_err(|e| failed(&e))?;
     }
     if rows.is_empty() {
         return Ok(String::new());
     }
-    let bytes = w
-        .into_inner()
-        .map_err(|e| ScenarioError::Run(format!("work-precision CSV: {e}")))?;
-    String::from_utf8(bytes).map_err(|e| ScenarioError::Run(format!("work-precision CSV: {e}")))
+    let bytes = w.into_inner().map_err(|e| failed(&e))?;
+    String::from_utf8(bytes).map_err(|e| failed(&e))
 }
 
 /// Reads rows (e.g. a peers file) in the [`WorkPrecisionRow`] format: at least one row,
@@ -249,8 +252,13 @@ pub fn markdown_rows(rows: &[WorkPrecisionRow]) -> String {
 /// left out; the diagram is an error if no point is left.
 ///
 /// # Errors
-/// [`ScenarioError::Run`] if there is nothing to draw or the file cannot be written.
-pub fn write_svg(rows: &[WorkPrecisionRow], path: &Path, title: &str) -> Result<(), ScenarioError> {
+/// [`WorkPrecisionError::NothingToDraw`] if there is nothing to draw,
+/// [`WorkPrecisionError::Write`] if the file cannot be written.
+pub fn write_svg(
+    rows: &[WorkPrecisionRow],
+    path: &Path,
+    title: &str,
+) -> Result<(), WorkPrecisionError> {
     use flexprr_run::plot::{Axis, Dash, Figure, Marker, Panel, Series, Style};
     let positive = |v: &f64| v.is_finite() && *v > 0.0;
     let mut panel = Panel::new(Axis::log("max relative error", ""));
@@ -275,15 +283,17 @@ pub fn write_svg(rows: &[WorkPrecisionRow], path: &Path, title: &str) -> Result<
         ));
     }
     if panel.series.iter().all(|s| s.x.is_empty()) {
-        return Err(ScenarioError::Run(format!(
-            "plot {}: no positive times and errors to draw",
-            path.display()
-        )));
+        return Err(WorkPrecisionError::NothingToDraw {
+            path: path.display().to_string(),
+        });
     }
     Figure::new(Axis::log("median wall time", "s"))
         .title(title)
         .description("flexprr work-precision diagram")
         .panel(panel)
         .write_svg(path)
-        .map_err(ScenarioError::Run)
+        .map_err(|message| WorkPrecisionError::Write {
+            path: path.display().to_string(),
+            message,
+        })
 }

@@ -19,7 +19,7 @@ use flexprr_kinematics::Pose;
 use flexprr_linear::{
     Axis, Complex, Input, LinearError, Output, Settings, linearize, linearize_with_settings, modes,
 };
-use flexprr_scene::{ScenarioError, Scene};
+use flexprr_scene::Scene;
 
 use crate::linear::{OperatingPoint, operating_point};
 use flexprr_outdir::Products;
@@ -222,7 +222,10 @@ fn shape_outputs(points: usize) -> (Vec<Output>, Vec<f64>) {
 fn linear_error(e: LinearError) -> RunError {
     match e {
         LinearError::Model(e) => RunError::Model(e),
-        other => RunError::Scene(ScenarioError::Run(other.to_string())),
+        source => RunError::Analysis {
+            analysis: None,
+            source,
+        },
     }
 }
 
@@ -354,11 +357,7 @@ pub fn lowest_frequency(scene: &Scene, at: OperatingPoint) -> Result<(f64, f64),
     let lin = linearize(point.model.as_mut(), point.t, &point.state, &[], &[])
         .map_err(|e| crate::linear::linear_error(scene, e))?;
     let found = modes(&lin).map_err(linear_error)?;
-    let first = found.first().ok_or_else(|| {
-        RunError::Scene(ScenarioError::Run(
-            "the linear model has no mode of non-zero frequency".into(),
-        ))
-    })?;
+    let first = found.first().ok_or(RunError::NoMode)?;
     Ok((first.frequency_hz, first.damping_ratio))
 }
 
