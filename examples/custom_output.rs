@@ -195,7 +195,11 @@ fn main() {
     let study_text = "name = \"custom_output_study\"\nbase = \"scene.toml\"\n\
         quantities = [{ kind = \"output\", name = \"slider_power_peak_W\" }]\n\n\
         [[axis]]\nkey = \"trajectory.frequency\"\nvalues = [10.0, 20.0]\n";
-    let plugins = Plugins { scenes, outputs };
+    let plugins = Plugins {
+        scenes,
+        outputs,
+        ..Plugins::default()
+    };
     let study = Study::from_text_with(plugins, "study.toml", "study", study_text, dir.path())
         .unwrap_or_else(|e| panic!("study rejected: {e}"));
     for case in &study.cases {

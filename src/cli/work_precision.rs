@@ -6,8 +6,8 @@ use std::path::PathBuf;
 
 use flexprr_bench::work_precision::{
     ErrorMeasure, ModelChoice, NONLINEAR_TOLERANCES, Reference, WorkPrecisionConfig,
-    WorkPrecisionError, WorkPrecisionRow, csv_text, markdown_at_error, markdown_models, markdown_rows, measure,
-    method_applies, read_csv, write_svg,
+    WorkPrecisionError, WorkPrecisionRow, csv_text, markdown_at_error, markdown_models,
+    markdown_rows, measure, method_applies, read_csv, write_svg,
 };
 use flexprr_scene::{Registry, ScenarioError, Scene};
 
@@ -377,7 +377,10 @@ impl Report<'_> {
             std::fs::write(&path, text)
                 .map_err(|e| Failure::run(format!("{}: {e}", path.display())))
         };
-        write("work_precision.csv", &csv_text(self.rows).map_err(measure_failure)?)?;
+        write(
+            "work_precision.csv",
+            &csv_text(self.rows).map_err(measure_failure)?,
+        )?;
         write("work_precision.md", &self.markdown())
     }
 

@@ -57,6 +57,24 @@ pub enum Failure {
         /// The dynamics error.
         source: DynamicsError,
     },
+    /// The method does not integrate the scene's model (a linear-only method on a model
+    /// that is not linear in its state, ...), in the registry's words.
+    Method {
+        /// The scene's name.
+        scene: String,
+        /// Why, and what to use instead.
+        message: String,
+    },
+    /// The run failed for another reason (a non-finite state, an output that cannot be
+    /// made): the run layer's kind, time and message.
+    Run {
+        /// [`RunError::kind`].
+        kind: &'static str,
+        /// [`RunError::time`].
+        time: Option<f64>,
+        /// The run layer's message.
+        message: String,
+    },
 }
 
 impl fmt::Display for Failure {
@@ -84,6 +102,8 @@ impl fmt::Display for Failure {
                 link + 1
             ),
             Failure::Model { source } => write!(f, "{source}"),
+            Failure::Method { scene, message } => write!(f, "{scene}: {message}"),
+            Failure::Run { message, .. } => f.write_str(message),
         }
     }
 }
@@ -219,8 +239,10 @@ impl From<RunError> for Failure {
                 error: source,
                 stiffness_detected_at: None,
             },
-            other => Failure::Model {
-                source: DynamicsError::Inconsistent(other.to_string()),
+            other => Failure::Run {
+                kind: other.kind(),
+                time: other.time(),
+                message: other.to_string(),
             },
         }
     }
@@ -231,10 +253,10 @@ impl From<RunError> for Failure {
 /// the failure is in [`Attempt::result`].
 pub fn attempt(scene: &Scene, method: &MethodHandle) -> Attempt {
     let clock = Clock::now();
-    let failed = |resolved: &str, source: DynamicsError| Attempt {
+    let failed = |resolved: &str, failure: Failure| Attempt {
         method: method.clone(),
         resolved: resolved.to_string(),
-        result: Err(Failure::Model { source }),
+        result: Err(failure),
         stats: Stats::default(),
         max_deflection_m: 0.0,
         wall_time_s: clock.elapsed().as_secs_f64(),
@@ -242,7 +264,7 @@ pub fn attempt(scene: &Scene, method: &MethodHandle) -> Attempt {
     };
     let mut model = match scene.build_model() {
         Ok(m) => m,
-        Err(source) => return failed(method.name(), source),
+        Err(source) => return failed(method.name(), Failure::Model { source }),
     };
     // The method a scene naming `method` would run on this model.
     let linear = model.linear_form().is_some();
@@ -255,7 +277,10 @@ pub fn attempt(scene: &Scene, method: &MethodHandle) -> Attempt {
         Err(message) => {
             return failed(
                 method.name(),
-                DynamicsError::Inconsistent(format!("{}: {message}", scene.name)),
+                Failure::Method {
+                    scene: scene.name.clone(),
+                    message,
+                },
             );
         }
     };

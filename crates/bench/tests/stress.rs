@@ -208,8 +208,8 @@ fn classification_resolves_methods_like_a_scene() {
     let m = attempt(&coupled, &builtin("magnus6"));
     assert_eq!(m.resolved, "magnus6");
     match &m.result {
-        Err(Failure::Model { source }) => {
-            let message = source.to_string();
+        Err(failure @ Failure::Method { .. }) => {
+            let message = failure.to_string();
             assert!(
                 message.contains("needs a linear (KED) model") && message.contains("use abm"),
                 "{message}"

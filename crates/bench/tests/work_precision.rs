@@ -602,10 +602,8 @@ fn a_diverged_reference_is_refused_where_the_run_layer_sees_the_divergence() {
     assert!(
         matches!(
             err,
-            flexprr_bench::work_precision::WorkPrecisionError::Reference {
-                role: "pilot run",
-                ..
-            }
+            flexprr_bench::work_precision::WorkPrecisionError::Reference(ref failed)
+                if failed.role == "pilot run"
         ),
         "{text}"
     );

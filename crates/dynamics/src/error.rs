@@ -192,6 +192,9 @@ pub enum DynamicsError {
     /// stepped).
     #[error("the nonlinear model needs uniform links (one bending stiffness)")]
     NonUniformLinks,
+    /// Patches, their modal velocity law or a model's patch states that do not fit.
+    #[error(transparent)]
+    Patch(Box<crate::patches::PatchError>),
     /// Inconsistent model set-up, for the control laws' set-up checks (their messages say
     /// what to change).
     #[error("{0}")]

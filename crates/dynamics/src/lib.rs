@@ -52,6 +52,6 @@ pub use model::{
     force_table, platform_deviation_table,
 };
 pub use nonlinear::{NonlinearOptions, NonlinearOutput, NonlinearSystem};
-pub use patches::{Patch, PatchControl, PatchState, modal_velocity_law};
+pub use patches::{Patch, PatchControl, PatchError, PatchState, modal_velocity_law};
 
 pub use flexprr_beam::{AxialLoad, Coupling};

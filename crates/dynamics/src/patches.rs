@@ -400,6 +400,106 @@ impl PatchLoop {
     }
 }
 
+/// Why a modal velocity law does not fit the scene's patches and links, or a model gives no
+/// patch states (docs/piezo.md): each message says what to change. Modes and links are
+/// 1-based in the fields, as in the messages.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PatchError {
+    /// The targeted modes and the damping ratios do not pair up (or there are none).
+    #[error(
+        "modal velocity control needs one damping ratio per targeted mode: {modes} modes, \
+         {ratios} ratios"
+    )]
+    Ratios {
+        /// Targeted modes.
+        modes: usize,
+        /// Damping ratios.
+        ratios: usize,
+    },
+    /// A targeted mode the link does not have.
+    #[error("modal velocity control targets mode {mode} of link {link}, which has {modes} modes")]
+    NoSuchMode {
+        /// The mode.
+        mode: usize,
+        /// The link.
+        link: usize,
+        /// The link's modes.
+        modes: usize,
+    },
+    /// More targeted modes than patches on a link.
+    #[error(
+        "modal velocity control targets {} modes ({}) on link {link}, which has {patches} \
+         patch{} ({spans}): a link's patches sense at most as many modes as there are \
+         patches; add patches on link {link} or target fewer modes",
+        .modes.len(),
+        list(.modes),
+        if *.patches == 1 { "" } else { "es" }
+    )]
+    TooFewPatches {
+        /// The targeted modes.
+        modes: Vec<usize>,
+        /// The link.
+        link: usize,
+        /// Its patches.
+        patches: usize,
+        /// Their spans, `[xi_start, xi_end], ...`.
+        spans: String,
+    },
+    /// A targeted mode none of the link's patches bends.
+    #[error(
+        "modal velocity control targets mode {mode} of link {link}, which its patches \
+         ({spans}) cannot see: the mode's slope is the same at both ends of each patch, so it \
+         bends none of them (a patch placed symmetrically about a node of the mode's \
+         curvature); move a patch or leave mode {mode} out"
+    )]
+    UnseenMode {
+        /// The mode.
+        mode: usize,
+        /// The link.
+        link: usize,
+        /// The link's patches' spans.
+        spans: String,
+    },
+    /// The modal filter of the law cannot be built.
+    #[error(
+        "modal velocity control of modes {} on the patches of links {}: {source}",
+        list(.modes),
+        list(.links)
+    )]
+    Filter {
+        /// The targeted modes.
+        modes: Vec<usize>,
+        /// The links with patches.
+        links: Vec<usize>,
+        /// Why.
+        source: flexprr_control::ControlError,
+    },
+    /// A model that reports no state for the scene's patches.
+    #[error("the {model} model reports no state for the scene's {patches} patches")]
+    NoPatchStates {
+        /// The model's kind.
+        model: String,
+        /// The scene's patches.
+        patches: usize,
+    },
+}
+
+impl From<PatchError> for DynamicsError {
+    fn from(e: PatchError) -> Self {
+        DynamicsError::Patch(Box::new(e))
+    }
+}
+
+/// `1, 2, 3`.
+fn list(values: &[usize]) -> String {
+    values
+        .iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The modal velocity law (`kind = "modal_velocity"`) for `patches` on `machine`: each
 /// link carrying patches has its modes `modes` (0-based) targeted, each given the damping
 /// ratio `damping_ratios[k]` of `modes[k]` through the modal gain `g = 2 zeta m_j omega_j`
@@ -418,11 +518,11 @@ pub fn modal_velocity_law(
     period: f64,
 ) -> Result<flexprr_control::ModalVelocity, DynamicsError> {
     if modes.len() != damping_ratios.len() || modes.is_empty() {
-        return Err(DynamicsError::Inconsistent(format!(
-            "modal velocity control needs one damping ratio per targeted mode: {} modes, {} ratios",
-            modes.len(),
-            damping_ratios.len()
-        )));
+        return Err(PatchError::Ratios {
+            modes: modes.len(),
+            ratios: damping_ratios.len(),
+        }
+        .into());
     }
     for patch in patches {
         patch.validated()?;
@@ -436,12 +536,12 @@ pub fn modal_velocity_law(
         let model = &machine.links[link];
         for (&j, &zeta) in modes.iter().zip(damping_ratios) {
             if j >= model.modes() {
-                return Err(DynamicsError::Inconsistent(format!(
-                    "modal velocity control targets mode {} of link {}, which has {} modes",
-                    j + 1,
-                    link + 1,
-                    model.modes()
-                )));
+                return Err(PatchError::NoSuchMode {
+                    mode: j + 1,
+                    link: link + 1,
+                    modes: model.modes(),
+                }
+                .into());
             }
             let (m, k) = (
                 model.integrals.mass[(j, j)],
@@ -482,21 +582,13 @@ pub fn modal_velocity_law(
             .collect::<Vec<_>>()
             .join(", ");
         if modes.len() > on_link.len() {
-            return Err(DynamicsError::Inconsistent(format!(
-                "modal velocity control targets {} modes ({}) on link {}, which has {} patch{} \
-                 ({spans}): a link's patches sense at most as many modes as there are \
-                 patches; add patches on link {} or target fewer modes",
-                modes.len(),
-                modes
-                    .iter()
-                    .map(|j| (j + 1).to_string())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                link + 1,
-                on_link.len(),
-                if on_link.len() == 1 { "" } else { "es" },
-                link + 1
-            )));
+            return Err(PatchError::TooFewPatches {
+                modes: modes.iter().map(|j| j + 1).collect(),
+                link: link + 1,
+                patches: on_link.len(),
+                spans,
+            }
+            .into());
         }
         for &j in modes {
             let seen = on_link
@@ -504,15 +596,12 @@ pub fn modal_velocity_law(
                 .map(|p| slope(p, j).abs() * machine.links[link].length())
                 .fold(0.0_f64, f64::max);
             if seen <= 1e-9 {
-                return Err(DynamicsError::Inconsistent(format!(
-                    "modal velocity control targets mode {} of link {}, which its patches \
-                     ({spans}) cannot see: the mode's slope is the same at both ends of each \
-                     patch, so it bends none of them (a patch placed symmetrically about a \
-                     node of the mode's curvature); move a patch or leave mode {} out",
-                    j + 1,
-                    link + 1,
-                    j + 1
-                )));
+                return Err(PatchError::UnseenMode {
+                    mode: j + 1,
+                    link: link + 1,
+                    spans,
+                }
+                .into());
             }
         }
     }
@@ -531,19 +620,12 @@ pub fn modal_velocity_law(
                 .collect()
         })
         .collect();
-    flexprr_control::ModalVelocity::new(&sensing, &forcing, &gains, period).map_err(|e| {
-        DynamicsError::Inconsistent(format!(
-            "modal velocity control of modes {} on the patches of links {}: {e}",
-            modes
-                .iter()
-                .map(|j| (j + 1).to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-            links
-                .iter()
-                .map(|l| (l + 1).to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
+    flexprr_control::ModalVelocity::new(&sensing, &forcing, &gains, period).map_err(|source| {
+        PatchError::Filter {
+            modes: modes.iter().map(|j| j + 1).collect(),
+            links: links.iter().map(|l| l + 1).collect(),
+            source,
+        }
+        .into()
     })
 }

@@ -759,12 +759,10 @@ pub fn write_frf(
         &(serde_json::to_string_pretty(&json).unwrap_or_else(|_| json.to_string()) + "\n"),
     )?;
     let svg = |figure: Figure| {
-        figure
-            .to_svg()
-            .map_err(|message| ScenarioError::Write {
-                path: "bode.svg".to_string(),
-                message,
-            })
+        figure.to_svg().map_err(|message| ScenarioError::Write {
+            path: "bode.svg".to_string(),
+            message,
+        })
     };
     put("bode.svg", &svg(bode_figure(scene, frf))?)?;
     if let Some(Ok(identified)) = &frf.identified {

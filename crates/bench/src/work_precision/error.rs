@@ -29,27 +29,8 @@ pub enum WorkPrecisionError {
     /// An integration of the reference failed (the run layer's divergence guard, an
     /// integrator failure, the model's own cause such as a collapse): a failed reference is
     /// never measured against.
-    #[error(
-        "run failed: scene {scene:?}, reference model {model}: the {role} ({method} at rtol \
-         {rtol:e}) failed{}: {reason}; a failed reference is not measured against",
-        when(.time, .reason)
-    )]
-    Reference {
-        /// The scene's name.
-        scene: String,
-        /// The reference model's label.
-        model: String,
-        /// Which integration: `pilot run`, `reference` or `check`.
-        role: &'static str,
-        /// The method.
-        method: String,
-        /// Its relative tolerance.
-        rtol: f64,
-        /// When it failed, if known.
-        time: Option<f64>,
-        /// Why, in the run layer's words.
-        reason: String,
-    },
+    #[error("{0}")]
+    Reference(Box<FailedReference>),
     /// A step of the reference model's computation failed (`stage`: e.g. `pilot run for the
     /// reference`).
     #[error("run failed: reference model {model}: {stage}: {source}")]
@@ -62,33 +43,12 @@ pub enum WorkPrecisionError {
         source: Box<WorkPrecisionError>,
     },
     /// The reference and its check disagree by more than the plan's limit.
-    #[error(
-        "run failed: reference model {model}: the reference ({method} at rtol {rtol:e}) and its \
-         check ({check_method} at rtol {check_rtol:e}) disagree by {end:e} (end) / {max:e} \
-         (max) in the {measure} measure, above the limit {limit:e}"
-    )]
-    Unconfirmed {
-        /// The reference model's label.
-        model: String,
-        /// The reference's method.
-        method: String,
-        /// Its relative tolerance.
-        rtol: f64,
-        /// The check's method.
-        check_method: String,
-        /// Its relative tolerance.
-        check_rtol: f64,
-        /// Their disagreement at the end time.
-        end: f64,
-        /// Their largest disagreement.
-        max: f64,
-        /// The error measure's name.
-        measure: &'static str,
-        /// The accepted disagreement.
-        limit: f64,
-    },
+    #[error("{0}")]
+    Unconfirmed(Box<Disagreement>),
     /// A link's mid-point deflection cannot be computed.
-    #[error("run failed: mid-point deflection of link {link} at t = {t} s ({model} model): {source}")]
+    #[error(
+        "run failed: mid-point deflection of link {link} at t = {t} s ({model} model): {source}"
+    )]
     Deflection {
         /// Link (1-based).
         link: usize,
@@ -148,6 +108,91 @@ pub enum WorkPrecisionError {
         /// The diagram's file.
         path: String,
     },
+}
+
+/// A failed integration of a reference: which (scene, model, role, method and tolerance),
+/// when and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailedReference {
+    /// The scene's name.
+    pub scene: String,
+    /// The reference model's label.
+    pub model: String,
+    /// Which integration: `pilot run`, `reference` or `check`.
+    pub role: &'static str,
+    /// The method.
+    pub method: String,
+    /// Its relative tolerance.
+    pub rtol: f64,
+    /// When it failed, if known.
+    pub time: Option<f64>,
+    /// Why, in the run layer's words.
+    pub reason: String,
+}
+
+impl std::fmt::Display for FailedReference {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Self {
+            scene,
+            model,
+            role,
+            method,
+            rtol,
+            time,
+            reason,
+        } = self;
+        write!(
+            f,
+            "run failed: scene {scene:?}, reference model {model}: the {role} ({method} at \
+             rtol {rtol:e}) failed{}: {reason}; a failed reference is not measured against",
+            when(time, reason)
+        )
+    }
+}
+
+/// A reference and its check that disagree by more than the accepted limit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Disagreement {
+    /// The reference model's label.
+    pub model: String,
+    /// The reference's method.
+    pub method: String,
+    /// Its relative tolerance.
+    pub rtol: f64,
+    /// The check's method.
+    pub check_method: String,
+    /// Its relative tolerance.
+    pub check_rtol: f64,
+    /// Their disagreement at the end time.
+    pub end: f64,
+    /// Their largest disagreement.
+    pub max: f64,
+    /// The error measure's name.
+    pub measure: &'static str,
+    /// The accepted disagreement.
+    pub limit: f64,
+}
+
+impl std::fmt::Display for Disagreement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Self {
+            model,
+            method,
+            rtol,
+            check_method,
+            check_rtol,
+            end,
+            max,
+            measure,
+            limit,
+        } = self;
+        write!(
+            f,
+            "run failed: reference model {model}: the reference ({method} at rtol {rtol:e}) and \
+             its check ({check_method} at rtol {check_rtol:e}) disagree by {end:e} (end) / \
+             {max:e} (max) in the {measure} measure, above the limit {limit:e}"
+        )
+    }
 }
 
 /// ` at t = <t> s` when the reason does not name its time itself.

@@ -48,8 +48,8 @@ pub mod measure;
 pub mod reference;
 pub mod report;
 
-pub use error::WorkPrecisionError;
 pub use config::{ModelChoice, ReferencePlan, WorkPrecisionConfig, builtin, default_reference};
+pub use error::{Disagreement, FailedReference, WorkPrecisionError};
 pub use measure::{
     Timing, WorkPrecision, WorkPrecisionRow, measure, method_applies, time_runs, work_precision,
 };

@@ -8,6 +8,7 @@ use flexprr_integrators::{Options, Solution};
 use flexprr_scene::{MethodHandle, ScenarioError, Scene};
 
 use super::WorkPrecisionError;
+use super::error::{Disagreement, FailedReference};
 
 use super::{DEFLECTION_XI, ErrorMeasure, WorkPrecisionConfig, build};
 
@@ -85,7 +86,7 @@ fn solve_reference(
         None => Ok(integration.solution),
         Some(failure) => {
             // Every failure names its time in its own words; added where one does not.
-            Err(WorkPrecisionError::Reference {
+            Err(WorkPrecisionError::Reference(Box::new(FailedReference {
                 scene: scene.name.clone(),
                 model: label.to_string(),
                 role,
@@ -93,7 +94,7 @@ fn solve_reference(
                 rtol,
                 time: failure.time(),
                 reason: failure.to_string(),
-            })
+            })))
         }
     }
 }
@@ -116,16 +117,14 @@ pub fn midpoint_deflections(
     for k in 0..n {
         let (t, y) = (solution.t[k], solution.y(k));
         for i in 0..3 {
-            w.push(
-                model
-                    .deflection(t, i, DEFLECTION_XI, y)
-                    .map_err(|source| WorkPrecisionError::Deflection {
-                        link: i + 1,
-                        t,
-                        model: kind.to_string(),
-                        source,
-                    })?,
-            );
+            w.push(model.deflection(t, i, DEFLECTION_XI, y).map_err(|source| {
+                WorkPrecisionError::Deflection {
+                    link: i + 1,
+                    t,
+                    model: kind.to_string(),
+                    source,
+                }
+            })?);
         }
     }
     if let Some(j) = w.iter().position(|v| !v.is_finite()) {
@@ -293,9 +292,11 @@ impl Reference {
         solution: Solution,
     ) -> Result<Self, WorkPrecisionError> {
         match measure {
-            ErrorMeasure::State => {
-                Ok(Self::from_states(solution.t, solution.states, model.modes())?)
-            }
+            ErrorMeasure::State => Ok(Self::from_states(
+                solution.t,
+                solution.states,
+                model.modes(),
+            )?),
             ErrorMeasure::Deflection => {
                 let w = midpoint_deflections(model, &solution)?;
                 Ok(Self::from_deflections(solution.t, w)?)
@@ -314,7 +315,10 @@ impl Reference {
     /// [`WorkPrecisionError::Reference`], [`WorkPrecisionError::InModel`] or
     /// [`WorkPrecisionError::Unconfirmed`] if an
     /// integration fails or the two disagree by more than the plan's limit.
-    pub fn compute(scene: &Scene, config: &WorkPrecisionConfig) -> Result<Self, WorkPrecisionError> {
+    pub fn compute(
+        scene: &Scene,
+        config: &WorkPrecisionConfig,
+    ) -> Result<Self, WorkPrecisionError> {
         config.validate()?;
         let measure = config.error_measure(scene)?;
         let plan = config.reference_plan(scene)?;
@@ -360,11 +364,11 @@ impl Reference {
             &plan.check_method,
             options(check_rtol),
         )?;
-        let mut reference = Self::from_solution(measure, system.as_mut(), main)
-            .map_err(in_model("reference"))?;
+        let mut reference =
+            Self::from_solution(measure, system.as_mut(), main).map_err(in_model("reference"))?;
         let agreement = reference.errors_of(system.as_mut(), &check)?;
         if agreement.max.is_nan() || agreement.max > plan.agreement_limit {
-            return Err(WorkPrecisionError::Unconfirmed {
+            return Err(WorkPrecisionError::Unconfirmed(Box::new(Disagreement {
                 model: label,
                 method: plan.method.name().to_string(),
                 rtol: plan.rtol,
@@ -374,7 +378,7 @@ impl Reference {
                 max: agreement.max,
                 measure: measure.name(),
                 limit: plan.agreement_limit,
-            });
+            })));
         }
         reference.model = label;
         reference.method = plan.method.name().to_string();
@@ -517,9 +521,7 @@ impl Reference {
             record.extend(row.iter().map(|v| format!("{v:.17e}")));
             w.write_record(&record).map_err(csv_err)?;
         }
-        let bytes = w
-            .into_inner()
-            .map_err(|e| write_err(&e))?;
+        let bytes = w.into_inner().map_err(|e| write_err(&e))?;
         std::fs::write(path, bytes).map_err(|e| write_err(&e))
     }
 

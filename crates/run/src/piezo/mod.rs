@@ -49,11 +49,11 @@ pub(crate) fn produce(
         .first()
         .is_none_or(|s| s.len() != scene.patches.len())
     {
-        return Err(DynamicsError::Inconsistent(format!(
-            "the {} model reports no state for the scene's {} patches",
-            model.kind(),
-            scene.patches.len()
-        )));
+        return Err(flexprr_dynamics::PatchError::NoPatchStates {
+            model: model.kind().to_string(),
+            patches: scene.patches.len(),
+        }
+        .into());
     }
     if scene.outputs.contains(&OutputKind::Piezo) {
         result.tables.push(table(scene, &solution.t, &states));
