@@ -11,6 +11,8 @@
 //!
 //! Run: `cargo run --release --example custom_integrator`
 
+mod common;
+
 use std::sync::Arc;
 
 use flexprr_integrators::{Integrator, IntegratorError, OdeSystem, Options, Stats, Stepper};
@@ -159,64 +161,13 @@ impl Stepper for Rk4Stepper {
     }
 }
 
-/// The paper's scene at 20 Hz over 0.05 s, deflections only, with the method `method`.
-fn scene_text(method: &str) -> String {
-    format!(
-        r#"name = "custom_integrator_{method}"
-
-[links]
-length = 0.2
-modes = 3
-material = {{ youngs_modulus = 7.3e10, density = 2770.0 }}
-section = {{ kind = "uniform", thickness = 0.002, height = 0.03 }}
-basis = {{ kind = "sine" }}
-
-[trajectory]
-kind = "circle"
-frequency = 20.0
-
-[model]
-formulation = "paper"
-
-[integrator]
-method = "{method}"
-rtol = 1e-10
-atol = 1e-14
-
-[time]
-end = 0.05
-output_step = 0.0005
-
-[output]
-requests = ["deflections"]
-plots = false
-"#
-    )
-}
-
-/// Link 1's mid-point deflections of a run of `text` loaded through `registry`.
-fn deflections(registry: &Registry, text: &str) -> Vec<f64> {
-    let scene = Scene::from_text_with(registry, "custom_integrator.toml", "custom", text)
+/// Link 1's mid-point deflections of the paper's scene integrated by `method` (loaded
+/// through `registry`).
+fn deflections(registry: &Registry, method: &str) -> Vec<f64> {
+    let text = common::paper_scene_text(&format!("custom_integrator_{method}"), "ked", method);
+    let scene = Scene::from_text_with(registry, "custom_integrator.toml", "custom", &text)
         .unwrap_or_else(|e| panic!("scene rejected: {e}"));
-    let result = flexprr_run::run(&scene, &mut |_| {}).unwrap_or_else(|e| panic!("run: {e}"));
-    let table = result
-        .tables
-        .iter()
-        .find(|t| t.name == "deflections")
-        .expect("a deflections table");
-    let header = table
-        .headers()
-        .into_iter()
-        .find(|c| c.starts_with("w_1_"))
-        .expect("a link 1 column");
-    table.column(&header).expect("the column").to_vec()
-}
-
-fn max_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
+    common::link1_deflections(&scene)
 }
 
 fn main() {
@@ -224,13 +175,13 @@ fn main() {
     for (name, h) in [("rk4", 2.5e-6), ("rk4_coarse", 5e-6)] {
         registry.register_integrator(name, Arc::new(move |options| Box::new(Rk4 { options, h })));
     }
-    let reference = deflections(&registry, &scene_text("abm"));
-    let fine = deflections(&registry, &scene_text("rk4"));
-    let coarse = deflections(&registry, &scene_text("rk4_coarse"));
+    let reference = deflections(&registry, "abm");
+    let fine = deflections(&registry, "rk4");
+    let coarse = deflections(&registry, "rk4_coarse");
     let peak = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let (e_fine, e_coarse) = (
-        max_difference(&fine, &reference),
-        max_difference(&coarse, &reference),
+        common::max_difference(&fine, &reference),
+        common::max_difference(&coarse, &reference),
     );
     println!("link 1 mid-point deflection, 0.05 s of the paper's 20 Hz circle:");
     println!("  peak |w| (abm, rtol 1e-10)       {peak:.6e} m");

@@ -12,6 +12,8 @@
 //!
 //! Run: `cargo run --release --example custom_model`
 
+mod common;
+
 use std::sync::Arc;
 
 use flexprr_dynamics::{DynamicsError, SceneModel};
@@ -40,40 +42,12 @@ impl ModelKind for GeneralKed {
     }
 }
 
-/// The paper's scene at 20 Hz over 0.05 s, deflections only, with the model kind `coupling` and
-/// the method `method`.
+/// The paper's scene with the model kind `coupling` and the method `method`.
 fn scene_text(coupling: &str, method: &str) -> String {
-    format!(
-        r#"name = "custom_model_{coupling}_{method}"
-
-[links]
-length = 0.2
-modes = 3
-material = {{ youngs_modulus = 7.3e10, density = 2770.0 }}
-section = {{ kind = "uniform", thickness = 0.002, height = 0.03 }}
-basis = {{ kind = "sine" }}
-
-[trajectory]
-kind = "circle"
-frequency = 20.0
-
-[model]
-formulation = "paper"
-coupling = "{coupling}"
-
-[integrator]
-method = "{method}"
-rtol = 1e-10
-atol = 1e-14
-
-[time]
-end = 0.05
-output_step = 0.0005
-
-[output]
-requests = ["deflections"]
-plots = false
-"#
+    common::paper_scene_text(
+        &format!("custom_model_{coupling}_{method}"),
+        coupling,
+        method,
     )
 }
 
@@ -81,29 +55,6 @@ plots = false
 fn load(registry: &Registry, text: &str) -> Scene {
     Scene::from_text_with(registry, "custom_model.toml", "custom", text)
         .unwrap_or_else(|e| panic!("scene rejected: {e}"))
-}
-
-/// Link 1's mid-point deflections of a run of `scene`.
-fn deflections(scene: &Scene) -> Vec<f64> {
-    let result = flexprr_run::run(scene, &mut |_| {}).unwrap_or_else(|e| panic!("run: {e}"));
-    let table = result
-        .tables
-        .iter()
-        .find(|t| t.name == "deflections")
-        .expect("a deflections table");
-    let header = table
-        .headers()
-        .into_iter()
-        .find(|c| c.starts_with("w_1_"))
-        .expect("a link 1 column");
-    table.column(&header).expect("the column").to_vec()
-}
-
-fn max_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
 }
 
 fn main() {
@@ -132,9 +83,12 @@ fn main() {
     println!("magnus6 on ked-general: {refused}");
     assert!(refused.to_string().contains("needs a linear"), "{refused}");
 
-    let (reference, general) = (deflections(&builtin), deflections(&custom));
+    let (reference, general) = (
+        common::link1_deflections(&builtin),
+        common::link1_deflections(&custom),
+    );
     let peak = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let difference = max_difference(&general, &reference);
+    let difference = common::max_difference(&general, &reference);
     println!("link 1 mid-point deflection, 0.05 s of the paper's 20 Hz circle:");
     println!("  peak |w| (ked, magnus6)                {peak:.6e} m");
     println!("  max |ked-general (abm) - ked (magnus6)| {difference:.3e} m");

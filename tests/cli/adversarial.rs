@@ -4,13 +4,9 @@
 //! command now does, and checks numbers against a second method (a direct `flexprr run`, the
 //! Euler buckling load) where there are numbers.
 
-use crate::common::{flexprr, read_csv, stderr_of};
-use std::path::{Path, PathBuf};
+use crate::common::{TINY, configs, flexprr, read_csv, stderr_of};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
-
-fn configs() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
-}
 
 /// Runs `flexprr args...` in `dir`.
 fn run_in(dir: &Path, args: &[&str]) -> Output {
@@ -27,19 +23,6 @@ fn assert_bad_input(output: &Output, words: &[&str]) {
         assert!(errors[0].contains(word), "{word:?} not in {}", errors[0]);
     }
 }
-
-/// A KED scene that runs in milliseconds.
-const TINY: &str = r#"name = "tiny"
-[trajectory]
-kind = "circle"
-frequency = 10.0
-[time]
-end = 0.01
-output_step = 1e-3
-[output]
-requests = ["frequencies", "deflections"]
-plots = false
-"#;
 
 /// A temporary directory holding `scene.toml` (TINY) and the files given.
 fn sandbox(files: &[(&str, &str)]) -> tempfile::TempDir {

@@ -3,19 +3,13 @@
 //! and labelled SVG plots; `check` validates; bad input exits 2 and a failed run exits 1, each
 //! with one line on stderr; `kinematics` prints CSV.
 
-use crate::common::{flexprr, stderr_of};
+use crate::common::{check_ok, config, flexprr, stderr_of};
 use std::path::{Path, PathBuf};
 
 #[path = "margins.rs"]
 mod margins;
 #[path = "plan.rs"]
 mod plan;
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
 
 /// Writes `text` as `name` in `dir` and returns its path.
 fn scene_file(dir: &Path, name: &str, text: &str) -> PathBuf {
@@ -149,16 +143,9 @@ fn check_accepts_the_shipped_configs() {
         "clamped_free_links.toml",
         "fe_links.toml",
     ] {
-        let output = flexprr().arg("check").arg(config(name)).output().unwrap();
-        assert_eq!(
-            output.status.code(),
-            Some(0),
-            "{name}: {}",
-            stderr_of(&output)
-        );
-        let stdout = String::from_utf8_lossy(&output.stdout);
+        let (stdout, stderr) = check_ok(&config(name));
         assert!(stdout.contains(": ok ("), "{name}: {stdout}");
-        assert!(output.stderr.is_empty(), "{name}: {}", stderr_of(&output));
+        assert!(stderr.is_empty(), "{name}: {stderr}");
     }
 }
 

@@ -2,14 +2,7 @@
 //! writes the control outputs and figures, and a motor beyond its ratings is a warning on
 //! stderr (exit 0) while a bad control key is one located line (exit 2).
 
-use crate::common::{flexprr, stderr_of};
-use std::path::{Path, PathBuf};
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
+use crate::common::{check_ok, config, flexprr, stderr_of};
 
 #[test]
 fn check_names_the_actuated_model() {
@@ -27,14 +20,7 @@ fn check_names_the_actuated_model() {
             "coupled model, prescribed sliders (motor_ballscrew actuators: the motion is checked against their ratings)",
         ),
     ] {
-        let output = flexprr().arg("check").arg(config(name)).output().unwrap();
-        assert_eq!(
-            output.status.code(),
-            Some(0),
-            "{name}: {}",
-            stderr_of(&output)
-        );
-        let stdout = String::from_utf8_lossy(&output.stdout);
+        let (stdout, _) = check_ok(&config(name));
         assert!(stdout.contains(expected), "{name}: {stdout}");
         assert!(stdout.contains("abm integrator"), "{name}: {stdout}");
     }

@@ -10,16 +10,10 @@
 //! `sum_k -w^2 sin(k pi xi) sin(k pi xi_f) / ((rho A l / 2)(w_k^2 - w^2 + 2 i zeta w_k w))`
 //! (the three sine modes the model has).
 
-use crate::common::{flexprr, read_csv, stderr_of};
-use std::path::{Path, PathBuf};
+use crate::common::{config, flexprr, read_csv, stderr_of};
+use std::path::Path;
 
 use serde_json::Value;
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
 
 /// The paper's link (docs/model.md): E, rho, l, thickness, height.
 const E: f64 = 7.3e10;

@@ -9,57 +9,16 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+
+use crate::common::{TINY, flexprr, tree};
 
 use flexprr_studies::search::Window;
 use flexprr_studies::study::Study;
+use flexprr_testkit::fuzz::Lcg;
 
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> u64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        self.0 >> 33
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<'a>(&mut self, items: &[&'a str]) -> &'a str {
-        items[self.below(items.len())]
-    }
-}
-
-fn flexprr(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_flexprr"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-/// Every file under `root` with its contents.
-fn tree(root: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            let name = path.strip_prefix(root).unwrap().display().to_string();
-            let meta = std::fs::symlink_metadata(&path).unwrap();
-            if meta.is_dir() {
-                out.insert(format!("{name}/"), Vec::new());
-                stack.push(path);
-            } else if meta.is_file() {
-                out.insert(name, std::fs::read(&path).unwrap());
-            } else {
-                out.insert(name, Vec::new());
-            }
-        }
-    }
-    out
+fn flexprr_in(dir: &Path, args: &[&str]) -> Output {
+    flexprr().current_dir(dir).args(args).output().unwrap()
 }
 
 /// The laws every command obeys; `out` is the output directory (relative to `dir`) and
@@ -169,18 +128,6 @@ fn json_non_finite(value: &serde_json::Value) -> Option<String> {
         _ => None,
     }
 }
-
-const TINY: &str = r#"name = "tiny"
-[trajectory]
-kind = "circle"
-frequency = 10.0
-[time]
-end = 0.01
-output_step = 1e-3
-[output]
-requests = ["frequencies", "deflections"]
-plots = false
-"#;
 
 const SWEEP: &str = r#"name = "sweep"
 base = "scene.toml"
@@ -379,7 +326,7 @@ fn fuzz_study(seed: &str, mutants: usize, rng: &mut Lcg) -> (usize, usize) {
         std::fs::write(dir.join("s.toml"), &text).unwrap();
         let _ = std::fs::remove_dir_all(dir.join("o"));
         let before = tree(dir);
-        let output = flexprr(
+        let output = flexprr_in(
             dir,
             &["study", "s.toml", "--out", "o", "--quiet", "--threads", "1"],
         );
@@ -424,7 +371,7 @@ fn merges_of_damaged_shards_are_refused_or_complete() {
     std::fs::write(dir.join("s.toml"), SWEEP).unwrap();
     for k in ["1", "2"] {
         let (out, shard) = (format!("s{k}"), format!("{k}/2"));
-        let made = flexprr(
+        let made = flexprr_in(
             dir,
             &[
                 "study", "s.toml", "--out", &out, "--shard", &shard, "--quiet",
@@ -485,7 +432,7 @@ fn merges_of_damaged_shards_are_refused_or_complete() {
         std::fs::write(dir.join(file), &damaged).unwrap();
         let what = format!("merge mutant {m} ({file}):\n{damaged}");
         let before = tree(dir);
-        let output = flexprr(dir, &["merge", "s1", "s2", "--out", "m"]);
+        let output = flexprr_in(dir, &["merge", "s1", "s2", "--out", "m"]);
         check_laws(&what, dir, "m", &before, &output);
         if output.status.success() {
             merged += 1;
@@ -513,7 +460,7 @@ fn work_precision_with_random_options_obeys_the_laws() {
         "--out",
         "w0",
     ];
-    let made = flexprr(
+    let made = flexprr_in(
         dir,
         &[
             &fast[..],
@@ -575,7 +522,7 @@ fn work_precision_with_random_options_obeys_the_laws() {
         let _ = std::fs::remove_dir_all(dir.join("w"));
         let before = tree(dir);
         let refs: Vec<&str> = args.iter().map(String::as_str).collect();
-        let output = flexprr(dir, &refs);
+        let output = flexprr_in(dir, &refs);
         let what = format!("work-precision mutant {m}: {args:?}");
         check_laws(&what, dir, "w", &before, &output);
         codes[output.status.code().unwrap_or(0) as usize] += 1;

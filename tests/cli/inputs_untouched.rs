@@ -2,36 +2,8 @@
 //! nothing outside its output: the whole working tree is hashed before and after each
 //! command, succeeding or refused, and compared file by file.
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn configs() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
-}
-
-/// Every file and directory under `root` (relative paths) with its contents; directories
-/// map to an empty content and a `/` suffix.
-fn tree(root: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![root.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            let name = path.strip_prefix(root).unwrap().display().to_string();
-            let meta = std::fs::symlink_metadata(&path).unwrap();
-            if meta.is_dir() {
-                out.insert(format!("{name}/"), Vec::new());
-                stack.push(path);
-            } else if meta.is_file() {
-                out.insert(name, std::fs::read(&path).unwrap());
-            } else {
-                out.insert(name, b"<special>".to_vec());
-            }
-        }
-    }
-    out
-}
+use crate::common::{TINY, configs, flexprr, tree};
+use std::path::Path;
 
 /// One command: its arguments (run in `dir`, relative to the work tree), the paths it may
 /// write (prefixes relative to the work tree), the files that must stay even inside those,
@@ -53,18 +25,6 @@ fn step<'a>(args: &[&'a str], outputs: &[&'a str], code: i32) -> Step<'a> {
         code,
     }
 }
-
-const TINY: &str = r#"name = "tiny"
-[trajectory]
-kind = "circle"
-frequency = 10.0
-[time]
-end = 0.01
-output_step = 1e-3
-[output]
-requests = ["frequencies", "deflections"]
-plots = false
-"#;
 
 const STUDY: &str = r#"name = "sweep"
 base = "scene.toml"
@@ -297,7 +257,7 @@ fn no_command_touches_an_input_or_a_foreign_file() {
     let steps: Vec<Step> = run_steps().into_iter().chain(study_steps()).collect();
     for s in &steps {
         let before = tree(&root);
-        let output = Command::new(env!("CARGO_BIN_EXE_flexprr"))
+        let output = flexprr()
             .current_dir(root.join(s.dir))
             .args(&s.args)
             .output()

@@ -2,14 +2,8 @@
 //! grid pose is what `flexprr modes --pose` gives there, its files and summary, and the
 //! options a map refuses.
 
-use crate::common::flexprr;
+use crate::common::{config, flexprr};
 use std::path::{Path, PathBuf};
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
 
 /// A 5 x 4 map of the servo scene at phi = 30 deg, written beside a copy of nothing: the
 /// base is the shipped servo scene by its absolute path.

@@ -2,16 +2,9 @@
 //! closed form, the JSON's shape and order, the files of `--out`, and every refusal (exit
 //! code 2, one line naming the option or the scene key and the rule).
 
-use crate::common::flexprr;
+use crate::common::{config, flexprr};
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
 use std::process::Output;
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
 
 fn modes(args: &[&str]) -> Output {
     flexprr().arg("modes").args(args).output().expect("runs")

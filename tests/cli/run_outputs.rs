@@ -3,15 +3,9 @@
 //! whole (no stale files); a directory that is not a flexprr output is refused unless
 //! `--force`; rigid-body modes are reported as rigid, never as `NaN %`.
 
-use crate::common::{flexprr, stderr_of};
-use std::path::{Path, PathBuf};
+use crate::common::{config, flexprr, stderr_of};
+use std::path::Path;
 use std::process::Output;
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
 
 fn run_into(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     flexprr()

@@ -9,8 +9,9 @@
 //! singular pose): sliders 2 and 3 carry no force and stay, and slider 1 moves `F / kp`.
 //! The static gain `-C A^-1 B + D` of `slider:1` per `slider_force:1` is `1 / kp`.
 
+use crate::common::config;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use flexprr_kinematics::Pose;
@@ -19,12 +20,6 @@ use flexprr_linear_tools::linear::{OperatingPoint, linear_model};
 use flexprr_scene::Scene;
 use nalgebra::DMatrix;
 use serde_json::Value;
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
 
 /// CRC-32 (ISO 3309), bit by bit.
 fn crc32_bitwise(bytes: &[u8]) -> u32 {

@@ -1,13 +1,9 @@
 //! `flexprr study` and `flexprr merge` as a user runs them: a study killed midway leaves only
 //! complete case records, and `--resume` completes it with the table of an uninterrupted run.
 
-use crate::common::flexprr;
+use crate::common::{configs, flexprr};
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
-
-fn configs() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs")
-}
 
 /// A study of `cases` frequencies-only cases of the paper's scene.
 fn write_study(dir: &Path, cases: usize) -> PathBuf {

@@ -14,6 +14,7 @@
 #[path = "../../crates/viewer/tests/chromium/mod.rs"]
 mod chromium;
 
+use crate::common::config;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -22,12 +23,6 @@ use chromium::{
     run_chromium, run_chromium_sized,
 };
 use flexprr_kinematics::{Circle, Geometry, Trajectory};
-
-fn config(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name)
-}
 
 /// Runs the shipped paper scene into `dir/paper_f20`.
 fn run_paper_scene(dir: &Path) -> PathBuf {

@@ -15,28 +15,10 @@ use flexprr_scene::link::{MaterialConfig, SectionConfig, check_link};
 use flexprr_scene::{
     BasisParams, BasisTable, ModeCount, Registry, ScenarioError, Scene, parse_toml,
 };
+use flexprr_testkit::fuzz::Lcg;
 
 /// Mutants per input file (about 20 files: well over 500 in all).
 const MUTANTS_PER_FILE: usize = 24;
-
-/// A small deterministic generator (64-bit LCG, Knuth's MMIX constants).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> u64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        self.0 >> 33
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<'a>(&mut self, items: &[&'a str]) -> &'a str {
-        items[self.below(items.len())]
-    }
-}
 
 const VALUES: &[&str] = &[
     "0",

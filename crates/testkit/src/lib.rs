@@ -5,6 +5,7 @@
 //!   itself, the implementation lives here once.
 //! - [`tolerance`]: relative errors and `assert_close`-style checks with a scaled tolerance
 //!   (`|a - b| <= atol + rtol |b|`), never `==` on floats.
+//! - [`fuzz`]: the deterministic generator of the fuzz tests' mutants.
 //! - [`paper`]: the paper's machine, link and trajectory constants (Zhang, Mills & Cleghorn,
 //!   the parameters of `docs/model.md`), the workspace's scene files and the independent
 //!   reference state at t = 0.2 s.
@@ -14,6 +15,7 @@
 
 pub mod alloc;
 pub mod csv;
+pub mod fuzz;
 pub mod paper;
 pub mod tolerance;
 
