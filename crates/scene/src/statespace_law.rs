@@ -2,6 +2,7 @@
 //! from an `.npz` file (arrays `A`, `B`, `C`, `D` and an optional `dt`), its measurements
 //! and commands named by the linear tools' channels, checked at its keys.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -46,129 +47,18 @@ impl ControllerFactory for StateSpaceFactory {
                 ),
             ));
         }
-        let path = Path::new(params.file())
-            .parent()
-            .unwrap_or(Path::new(""))
-            .join(&keys.file);
-        let bytes = std::fs::read(&path)
-            .map_err(|e| params.error("file", format!("cannot read {}: {e}", path.display())))?;
-        let arrays = crate::npz::read(&bytes)
-            .map_err(|e| params.error("file", format!("{}: {e}", path.display())))?;
+        let arrays = read_arrays(params, &keys.file)?;
         let at_file = |message: String| params.error("file", format!("{}: {message}", keys.file));
-        let (p, m) = (measurements.len(), commands.len());
-        if !arrays.contains_key("D") {
-            return Err(at_file(
-                "no array D (the feedthrough, commands x measurements)".into(),
-            ));
-        }
-        let n = arrays
-            .get("A")
-            .map_or(0, |a| a.shape.first().copied().unwrap_or(0));
-        let mut matrices = StateSpaceMatrices {
-            a: Vec::new(),
-            b: Vec::new(),
-            c: Vec::new(),
-            d: Vec::new(),
-            states: n,
-        };
-        for (name, rows, cols, what) in [
-            ("A", n, n, "states x states"),
-            ("B", n, p, "states x measurements"),
-            ("C", m, n, "commands x states"),
-            ("D", m, p, "commands x measurements"),
-        ] {
-            let array = match arrays.get(name) {
-                Some(array) => array,
-                None if n == 0 && name != "D" => continue,
-                None => return Err(at_file(format!("no array {name} ({what})"))),
-            };
-            let empty = rows * cols == 0 && array.data.is_empty();
-            if !empty && array.shape != [rows, cols] {
-                return Err(at_file(format!(
-                    "{name} is {}, expected {rows} x {cols} ({what}: {n} states, {p} measurements, {m} commands)",
-                    shape_text(&array.shape)
-                )));
-            }
-            if let Some(k) = array.data.iter().position(|x| !x.is_finite()) {
-                return Err(at_file(format!(
-                    "{name}[{}, {}] = {}: every entry must be finite",
-                    k / cols.max(1),
-                    k % cols.max(1),
-                    crate::error::number(array.data[k])
-                )));
-            }
-            let data = array.data.clone();
-            match name {
-                "A" => matrices.a = data,
-                "B" => matrices.b = data,
-                "C" => matrices.c = data,
-                _ => matrices.d = data,
-            }
-        }
-        let dt = match arrays.get("dt") {
-            None => None,
-            Some(a) if a.data.len() == 1 && a.shape.iter().all(|s| *s == 1) => Some(a.data[0]),
-            Some(a) => {
-                return Err(at_file(format!(
-                    "dt is {}, expected a scalar (the law's sample period, s)",
-                    shape_text(&a.shape)
-                )));
-            }
-        };
-        let mut warnings = Vec::new();
-        match dt {
-            Some(dt) if !(dt.is_finite() && dt > 0.0) => {
-                return Err(at_file(format!(
-                    "dt = {}: a discrete law's sample period must be finite and > 0",
-                    crate::error::number(dt)
-                )));
-            }
-            Some(dt) if keys.period <= 0.0 => {
-                return Err(params.error(
-                    "period",
-                    format!(
-                        "{} holds a discrete-time law (dt = {dt} s): set period = {dt} (a discrete law is sampled)",
-                        keys.file
-                    ),
-                ));
-            }
-            Some(dt) if (dt - keys.period).abs() > 1e-9 * dt => {
-                return Err(params.error(
-                    "period",
-                    format!(
-                        "{} holds a discrete-time law with dt = {dt} s, but period = {} s: they must be equal",
-                        keys.file, keys.period
-                    ),
-                ));
-            }
-            Some(_) => {
-                if let Some(r) = spectral_radius(&matrices.a, n).filter(|r| *r > 1.0 + 1e-9) {
-                    warnings.push(format!(
-                        "control.file: the discrete law of {} is unstable on its own (largest |eigenvalue| of A {r:.6} > 1); the loop may still be stable",
-                        keys.file
-                    ));
-                }
-            }
-            None => {
-                if let Some(s) = largest_real(&matrices.a, n).filter(|s| *s > 1e-9) {
-                    warnings.push(format!(
-                        "control.file: the law of {} is unstable on its own (an eigenvalue of A has real part {s:.6e} 1/s > 0); the loop may still be stable",
-                        keys.file
-                    ));
-                }
-                if keys.period > 0.0 && n > 0 {
-                    // A continuous law sampled: its zero-order-hold discretisation.
-                    let (ad, bd) = zero_order_hold(&matrices.a, &matrices.b, n, p, keys.period)
-                        .ok_or_else(|| {
-                            at_file(
-                                "the zero-order hold of A, B at the period is not finite".into(),
-                            )
-                        })?;
-                    matrices.a = ad;
-                    matrices.b = bd;
-                }
-            }
-        }
+        let mut matrices = matrices(&arrays, measurements.len(), commands.len(), &at_file)?;
+        let dt = sample_period(&arrays, &at_file)?;
+        let warnings = fit_period(
+            params,
+            &keys,
+            dt,
+            &mut matrices,
+            measurements.len(),
+            &at_file,
+        )?;
         let law = StateSpaceLaw::new(
             matrices,
             measurements,
@@ -180,6 +70,162 @@ impl ControllerFactory for StateSpaceFactory {
         .with_warnings(warnings);
         Ok(Arc::new(law))
     }
+}
+
+/// The arrays of the law's `.npz` file (`file`, relative to the scene file).
+fn read_arrays(
+    params: &TableParams<'_>,
+    file: &str,
+) -> Result<BTreeMap<String, crate::npz::Array>, ScenarioError> {
+    let path = Path::new(params.file())
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join(file);
+    let bytes = std::fs::read(&path)
+        .map_err(|e| params.error("file", format!("cannot read {}: {e}", path.display())))?;
+    crate::npz::read(&bytes).map_err(|e| params.error("file", format!("{}: {e}", path.display())))
+}
+
+/// The law's `A`, `B`, `C`, `D` for `p` measurements and `m` commands (the states from `A`;
+/// without states only `D`), each of its shape and finite.
+fn matrices(
+    arrays: &BTreeMap<String, crate::npz::Array>,
+    p: usize,
+    m: usize,
+    at_file: &dyn Fn(String) -> ScenarioError,
+) -> Result<StateSpaceMatrices, ScenarioError> {
+    if !arrays.contains_key("D") {
+        return Err(at_file(
+            "no array D (the feedthrough, commands x measurements)".into(),
+        ));
+    }
+    let n = arrays
+        .get("A")
+        .map_or(0, |a| a.shape.first().copied().unwrap_or(0));
+    let mut matrices = StateSpaceMatrices {
+        a: Vec::new(),
+        b: Vec::new(),
+        c: Vec::new(),
+        d: Vec::new(),
+        states: n,
+    };
+    for (name, rows, cols, what) in [
+        ("A", n, n, "states x states"),
+        ("B", n, p, "states x measurements"),
+        ("C", m, n, "commands x states"),
+        ("D", m, p, "commands x measurements"),
+    ] {
+        let array = match arrays.get(name) {
+            Some(array) => array,
+            None if n == 0 && name != "D" => continue,
+            None => return Err(at_file(format!("no array {name} ({what})"))),
+        };
+        let empty = rows * cols == 0 && array.data.is_empty();
+        if !empty && array.shape != [rows, cols] {
+            return Err(at_file(format!(
+                "{name} is {}, expected {rows} x {cols} ({what}: {n} states, {p} measurements, {m} commands)",
+                shape_text(&array.shape)
+            )));
+        }
+        if let Some(k) = array.data.iter().position(|x| !x.is_finite()) {
+            return Err(at_file(format!(
+                "{name}[{}, {}] = {}: every entry must be finite",
+                k / cols.max(1),
+                k % cols.max(1),
+                crate::error::number(array.data[k])
+            )));
+        }
+        let data = array.data.clone();
+        match name {
+            "A" => matrices.a = data,
+            "B" => matrices.b = data,
+            "C" => matrices.c = data,
+            _ => matrices.d = data,
+        }
+    }
+    Ok(matrices)
+}
+
+/// The file's sample period `dt` (a scalar), if it holds a discrete-time law.
+fn sample_period(
+    arrays: &BTreeMap<String, crate::npz::Array>,
+    at_file: &dyn Fn(String) -> ScenarioError,
+) -> Result<Option<f64>, ScenarioError> {
+    match arrays.get("dt") {
+        None => Ok(None),
+        Some(a) if a.data.len() == 1 && a.shape.iter().all(|s| *s == 1) => Ok(Some(a.data[0])),
+        Some(a) => Err(at_file(format!(
+            "dt is {}, expected a scalar (the law's sample period, s)",
+            shape_text(&a.shape)
+        ))),
+    }
+}
+
+/// The law against the scene's `period`: a discrete law (`dt`) must be sampled at its own
+/// period; a continuous law sampled at `period` is replaced by its zero-order hold. Returns
+/// the warnings of a law unstable on its own.
+fn fit_period(
+    params: &TableParams<'_>,
+    keys: &Keys,
+    dt: Option<f64>,
+    matrices: &mut StateSpaceMatrices,
+    p: usize,
+    at_file: &dyn Fn(String) -> ScenarioError,
+) -> Result<Vec<String>, ScenarioError> {
+    let n = matrices.states;
+    let mut warnings = Vec::new();
+    match dt {
+        Some(dt) if !(dt.is_finite() && dt > 0.0) => {
+            return Err(at_file(format!(
+                "dt = {}: a discrete law's sample period must be finite and > 0",
+                crate::error::number(dt)
+            )));
+        }
+        Some(dt) if keys.period <= 0.0 => {
+            return Err(params.error(
+                "period",
+                format!(
+                    "{} holds a discrete-time law (dt = {dt} s): set period = {dt} (a discrete law is sampled)",
+                    keys.file
+                ),
+            ));
+        }
+        Some(dt) if (dt - keys.period).abs() > 1e-9 * dt => {
+            return Err(params.error(
+                "period",
+                format!(
+                    "{} holds a discrete-time law with dt = {dt} s, but period = {} s: they must be equal",
+                    keys.file, keys.period
+                ),
+            ));
+        }
+        Some(_) => {
+            if let Some(r) = spectral_radius(&matrices.a, n).filter(|r| *r > 1.0 + 1e-9) {
+                warnings.push(format!(
+                    "control.file: the discrete law of {} is unstable on its own (largest |eigenvalue| of A {r:.6} > 1); the loop may still be stable",
+                    keys.file
+                ));
+            }
+        }
+        None => {
+            if let Some(s) = largest_real(&matrices.a, n).filter(|s| *s > 1e-9) {
+                warnings.push(format!(
+                    "control.file: the law of {} is unstable on its own (an eigenvalue of A has real part {s:.6e} 1/s > 0); the loop may still be stable",
+                    keys.file
+                ));
+            }
+            if keys.period > 0.0 && n > 0 {
+                // A continuous law sampled: its zero-order-hold discretisation.
+                let (ad, bd) = zero_order_hold(&matrices.a, &matrices.b, n, p, keys.period)
+                    .ok_or_else(|| {
+                        at_file("the zero-order hold of A, B at the period is not finite".into())
+                    })?;
+                matrices.a = ad;
+                matrices.b = bd;
+            }
+        }
+    }
+    Ok(warnings)
 }
 
 fn shape_text(shape: &[usize]) -> String {

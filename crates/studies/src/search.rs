@@ -579,13 +579,36 @@ pub fn section_search(
         probes: Vec::new(),
         verification: Verification::default(),
     };
-    // Runs `values` at once and appends the probes in the order of `values`.
-    let round = |values: &[f64], outcome: &mut SearchOutcome| -> Vec<Option<bool>> {
+    let probes = Prober { probe, on_probe };
+    let (mut low, mut high) = (search.low, search.high);
+    outcome.status = match probes.ends(k, low, high, &mut outcome) {
+        Some(status) => status,
+        None => probes.narrow(search, k, (&mut low, &mut high), &mut outcome),
+    };
+    if outcome.status == "bracketed" {
+        answer_bracketed(&mut outcome, low, high);
+    } else {
+        answer_unbracketed(&mut outcome);
+    }
+    outcome
+}
+
+/// The probe of a search and what sees each probe end.
+struct Prober<'a> {
+    probe: &'a (dyn Fn(f64) -> Probe + Sync),
+    on_probe: &'a (dyn Fn(&SearchOutcome, &Probe) + Sync),
+}
+
+impl Prober<'_> {
+    /// One round: runs `values` at once (in parallel when more than one) and appends the
+    /// probes to `outcome` in the order of `values`; whether each reached the limit (`None`:
+    /// it failed for another reason).
+    fn round(&self, values: &[f64], outcome: &mut SearchOutcome) -> Vec<Option<bool>> {
         use rayon::prelude::*;
         let before: &SearchOutcome = outcome;
         let run = |&v: &f64| {
-            let p = probe(v);
-            on_probe(before, &p);
+            let p = (self.probe)(v);
+            (self.on_probe)(before, &p);
             p
         };
         let probes: Vec<Probe> = if values.len() == 1 {
@@ -596,92 +619,120 @@ pub fn section_search(
         let reached = probes.iter().map(|p| p.reached).collect();
         outcome.probes.extend(probes);
         reached
-    };
-    let (mut low, mut high) = (search.low, search.high);
-    outcome.status = 'search: {
+    }
+
+    /// The ends: `high` must reach the limit, then `low` must not (one round when `k >= 2`,
+    /// `low` only after `high` reached it otherwise). The final status when they do not
+    /// bracket the threshold, `None` when they do.
+    fn ends(
+        &self,
+        k: usize,
+        low: f64,
+        high: f64,
+        outcome: &mut SearchOutcome,
+    ) -> Option<&'static str> {
         let ends: Vec<Option<bool>> = if k >= 2 {
-            round(&[high, low], &mut outcome)
+            self.round(&[high, low], outcome)
         } else {
-            let first = round(&[high], &mut outcome);
+            let first = self.round(&[high], outcome);
             if first[0] == Some(true) {
-                [first, round(&[low], &mut outcome)].concat()
+                [first, self.round(&[low], outcome)].concat()
             } else {
                 first
             }
         };
         for (reached, must_reach) in ends.into_iter().zip([true, false]) {
             let Some(reached) = reached else {
-                break 'search "failed";
+                return Some("failed");
             };
             if reached != must_reach {
-                break 'search if must_reach {
+                return Some(if must_reach {
                     "high-does-not-reach"
                 } else {
                     "low-reaches"
-                };
+                });
             }
         }
-        while high - low > search.tolerance {
-            let points = section_points(low, high, k);
+        None
+    }
+
+    /// Rounds of `k` probes inside the bracket `(low, high]` while it is wider than the
+    /// tolerance, keeping the first onset: `"bracketed"`, or `"failed"` when a probe fails.
+    fn narrow(
+        &self,
+        search: &Search,
+        k: usize,
+        (low, high): (&mut f64, &mut f64),
+        outcome: &mut SearchOutcome,
+    ) -> &'static str {
+        while *high - *low > search.tolerance {
+            let points = section_points(*low, *high, k);
             if points.is_empty() {
                 break;
             }
-            let reached = round(&points, &mut outcome);
+            let reached = self.round(&points, outcome);
             outcome.rounds += 1;
             if reached.contains(&None) {
-                break 'search "failed";
+                return "failed";
             }
             match reached.iter().position(|r| *r == Some(true)) {
                 Some(j) => {
-                    high = points[j];
+                    *high = points[j];
                     if j > 0 {
-                        low = points[j - 1];
+                        *low = points[j - 1];
                     }
                 }
-                None => low = points[points.len() - 1],
+                None => *low = points[points.len() - 1],
             }
         }
         "bracketed"
-    };
-    if outcome.status == "bracketed" {
-        (outcome.below, outcome.at_or_above) = (Some(low), Some(high));
-        let verification = Verification::of(&outcome.probes, Some((low, high)));
-        if !verification.monotone {
-            // The answer is the interval that holds every change of outcome seen.
-            outcome.status = "non-monotone";
-            outcome.below = verification
-                .transitions
-                .iter()
-                .map(|t| t.below)
-                .reduce(f64::min);
-            outcome.at_or_above = verification
-                .transitions
-                .iter()
-                .map(|t| t.above)
-                .reduce(f64::max);
-            outcome.verification = Verification {
-                first_onset: Some((low, high)),
-                ..verification
-            };
-        } else {
-            outcome.verification = verification;
-        }
-    } else {
-        outcome.below = outcome
-            .probes
-            .iter()
-            .filter(|p| p.reached == Some(false))
-            .map(|p| p.value)
-            .reduce(f64::max);
-        outcome.at_or_above = outcome
-            .probes
-            .iter()
-            .filter(|p| p.reached == Some(true))
-            .map(|p| p.value)
-            .reduce(f64::min);
-        outcome.verification = Verification::of(&outcome.probes, None);
     }
-    outcome
+}
+
+/// The answer of a bracketed search: `(low, high]`, checked against every decided probe; a
+/// non-monotone outcome widens it to the interval that holds every change seen, keeping the
+/// first onset in the verification.
+fn answer_bracketed(outcome: &mut SearchOutcome, low: f64, high: f64) {
+    (outcome.below, outcome.at_or_above) = (Some(low), Some(high));
+    let verification = Verification::of(&outcome.probes, Some((low, high)));
+    if !verification.monotone {
+        // The answer is the interval that holds every change of outcome seen.
+        outcome.status = "non-monotone";
+        outcome.below = verification
+            .transitions
+            .iter()
+            .map(|t| t.below)
+            .reduce(f64::min);
+        outcome.at_or_above = verification
+            .transitions
+            .iter()
+            .map(|t| t.above)
+            .reduce(f64::max);
+        outcome.verification = Verification {
+            first_onset: Some((low, high)),
+            ..verification
+        };
+    } else {
+        outcome.verification = verification;
+    }
+}
+
+/// What a search that did not bracket the threshold knows: the largest value that did not
+/// reach the limit and the smallest that did.
+fn answer_unbracketed(outcome: &mut SearchOutcome) {
+    outcome.below = outcome
+        .probes
+        .iter()
+        .filter(|p| p.reached == Some(false))
+        .map(|p| p.value)
+        .reduce(f64::max);
+    outcome.at_or_above = outcome
+        .probes
+        .iter()
+        .filter(|p| p.reached == Some(true))
+        .map(|p| p.value)
+        .reduce(f64::min);
+    outcome.verification = Verification::of(&outcome.probes, None);
 }
 
 /// A search's case: each axis key with its value as written in the table.
