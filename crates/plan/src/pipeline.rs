@@ -264,14 +264,7 @@ pub fn plan_scene(
             detail: "the limit is checked on the scene's flexible model, which --no-flexible-check (flexible_check = False) turns off: drop one or the other".into(),
         });
     }
-    let planning = |stage: &'static str| {
-        let name = name.clone();
-        move |source: PlanningError| PlanError::Planning {
-            scene: name,
-            stage,
-            source: Box::new(source),
-        }
-    };
+    let planning = |stage: &'static str| planning_error(&name, stage);
     let times = &scene.output_times;
     let span = (times[0], times[times.len() - 1]);
     let base_path =
@@ -283,85 +276,16 @@ pub fn plan_scene(
         })?;
     let length = base_path.length();
     let (schedule, scene_start, scene_end) = scene_schedule(&scene.file.trajectory, length, span);
-    let motor = flexprr_scene::motor_of(&scene.file);
-    let constraints = spec
-        .constraints(&scene.machine, motor.as_ref())
-        .map_err(planning("the limits"))?;
-    let mut planner = Planner::new(&scene.machine, &base_path, spec.settings())
-        .axial_model(scene.axial_model.as_ref());
-    for c in constraints {
-        planner = planner.boxed(c);
-    }
-    if let Some(rms) = spec
-        .rms(motor.as_ref())
-        .map_err(planning("the RMS limit"))?
-    {
-        planner = planner.rms(rms);
-    }
-    if let Some(jerk) = spec.slider_jerk {
-        planner = planner.jerk(jerk);
-    }
-
-    // The orientation.
-    let search = spec
-        .phi_search(Some(schedule.clone()))
-        .map_err(planning("the orientation"))?;
-    let (path, orientation) = match (spec.phi, search) {
-        (PhiMode::Fixed, _) | (_, None) => (base_path.clone(), None),
-        (mode, Some(search)) => {
-            progress("searching the best constant orientation");
-            let constant = planner
-                .best_constant_phi(&search)
-                .map_err(planning("the best constant orientation"))?;
-            let (law, found) = if mode == PhiMode::Free {
-                progress("searching a free orientation along the path");
-                let free = planner
-                    .free_phi(&search, &constant)
-                    .map_err(planning("the free orientation"))?;
-                (
-                    free.orientation.clone(),
-                    OrientationSearch::Free {
-                        constant: Box::new(constant),
-                        free: Box::new(free),
-                    },
-                )
-            } else {
-                (
-                    Orientation::constant(constant.phi),
-                    OrientationSearch::Constant(Box::new(constant)),
-                )
-            };
-            let oriented = law
-                .on(base_path.clone())
-                .map_err(|source| PlanError::Path {
-                    scene: name.clone(),
-                    source,
-                })?;
-            (GeometricPath::Oriented(Box::new(oriented)), Some(found))
-        }
-    };
+    let planner = limited_planner(scene, &spec, &base_path)?;
+    let (path, orientation) = orient(scene, &planner, &spec, &schedule, &base_path, progress)?;
 
     // The time-optimal plan, then the shaped one.
-    progress("planning the time-optimal motion");
     let oriented_planner = planner.on_path(&path, spec.settings());
-    let optimal = oriented_planner
-        .plan()
-        .map_err(planning("the time-optimal motion"))?;
+    let (plan, unshaped, shaping) =
+        plan_motion(scene, &spec, &planner, &oriented_planner, &path, progress)?;
     let start = match spec.boundary {
         Boundary::Periodic => span.0,
         Boundary::RestToRest => scene_start,
-    };
-    let (plan, unshaped, shaping) = if spec.shaping == flexprr_planning::Shaping::None {
-        (optimal, None, None)
-    } else {
-        progress("the machine's lowest modes along the path (linear model)");
-        let design = vibration::design_shaper(scene, &spec, &path)?;
-        let shaped = planner
-            .on_path(&path, spec.settings())
-            .shaper(design.impulses.clone())
-            .plan()
-            .map_err(planning("the shaped motion"))?;
-        (shaped, Some(optimal), Some(design))
     };
     // The scene's own timing against the same limits (on the scene's own path: the
     // orientation is the scene's there).
@@ -427,4 +351,123 @@ pub fn plan_scene(
     }
     outcome.wall_time_s = clock.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// The `PlanError::Planning` of scene `name` at `stage`.
+fn planning_error(name: &str, stage: &'static str) -> impl FnOnce(PlanningError) -> PlanError {
+    let name = name.to_string();
+    move |source: PlanningError| PlanError::Planning {
+        scene: name,
+        stage,
+        source: Box::new(source),
+    }
+}
+
+/// The planner of `scene`'s path under every limit of its `[plan]`: the boxed limits, the
+/// RMS limit of its motor and the slider jerk.
+fn limited_planner<'a>(
+    scene: &'a Scene,
+    spec: &PlanSpec,
+    base_path: &'a GeometricPath,
+) -> Result<Planner<'a>, PlanError> {
+    let planning = |stage: &'static str| planning_error(&scene.name, stage);
+    let motor = flexprr_scene::motor_of(&scene.file);
+    let constraints = spec
+        .constraints(&scene.machine, motor.as_ref())
+        .map_err(planning("the limits"))?;
+    let mut planner = Planner::new(&scene.machine, base_path, spec.settings())
+        .axial_model(scene.axial_model.as_ref());
+    for c in constraints {
+        planner = planner.boxed(c);
+    }
+    if let Some(rms) = spec
+        .rms(motor.as_ref())
+        .map_err(planning("the RMS limit"))?
+    {
+        planner = planner.rms(rms);
+    }
+    if let Some(jerk) = spec.slider_jerk {
+        planner = planner.jerk(jerk);
+    }
+    Ok(planner)
+}
+
+/// The orientation along the path: the scene's own with `phi = "fixed"` (or without a
+/// search), else the best constant orientation and, with `phi = "free"`, a free law from it.
+fn orient(
+    scene: &Scene,
+    planner: &Planner<'_>,
+    spec: &PlanSpec,
+    schedule: &Schedule,
+    base_path: &GeometricPath,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(GeometricPath, Option<OrientationSearch>), PlanError> {
+    let name = scene.name.clone();
+    let planning = |stage: &'static str| planning_error(&name, stage);
+    let search = spec
+        .phi_search(Some(schedule.clone()))
+        .map_err(planning("the orientation"))?;
+    Ok(match (spec.phi, search) {
+        (PhiMode::Fixed, _) | (_, None) => (base_path.clone(), None),
+        (mode, Some(search)) => {
+            progress("searching the best constant orientation");
+            let constant = planner
+                .best_constant_phi(&search)
+                .map_err(planning("the best constant orientation"))?;
+            let (law, found) = if mode == PhiMode::Free {
+                progress("searching a free orientation along the path");
+                let free = planner
+                    .free_phi(&search, &constant)
+                    .map_err(planning("the free orientation"))?;
+                (
+                    free.orientation.clone(),
+                    OrientationSearch::Free {
+                        constant: Box::new(constant),
+                        free: Box::new(free),
+                    },
+                )
+            } else {
+                (
+                    Orientation::constant(constant.phi),
+                    OrientationSearch::Constant(Box::new(constant)),
+                )
+            };
+            let oriented = law
+                .on(base_path.clone())
+                .map_err(|source| PlanError::Path {
+                    scene: name.clone(),
+                    source,
+                })?;
+            (GeometricPath::Oriented(Box::new(oriented)), Some(found))
+        }
+    })
+}
+
+/// The time-optimal motion along `path` (planned by `oriented`, the planner on that path)
+/// and, when `[plan] shaping` is set, the motion shaped on the machine's lowest modes along
+/// it: the plan, the unshaped plan and the shaper's design (the last two with shaping only).
+fn plan_motion(
+    scene: &Scene,
+    spec: &PlanSpec,
+    planner: &Planner<'_>,
+    oriented: &Planner<'_>,
+    path: &GeometricPath,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(Plan, Option<Plan>, Option<ShapingDesign>), PlanError> {
+    let planning = |stage: &'static str| planning_error(&scene.name, stage);
+    progress("planning the time-optimal motion");
+    let optimal = oriented
+        .plan()
+        .map_err(planning("the time-optimal motion"))?;
+    if spec.shaping == flexprr_planning::Shaping::None {
+        return Ok((optimal, None, None));
+    }
+    progress("the machine's lowest modes along the path (linear model)");
+    let design = vibration::design_shaper(scene, spec, path)?;
+    let shaped = planner
+        .on_path(path, spec.settings())
+        .shaper(design.impulses.clone())
+        .plan()
+        .map_err(planning("the shaped motion"))?;
+    Ok((shaped, Some(optimal), Some(design)))
 }

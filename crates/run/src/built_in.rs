@@ -81,7 +81,18 @@ macro_rules! requested {
 
 /// The built-in producers, in the order a run asks them.
 pub(crate) fn producers() -> Vec<SharedProducer> {
-    let all = [
+    [rigid_producers(), model_producers(), combined_producers()]
+        .into_iter()
+        .flatten()
+        .map(|b| Arc::new(b) as SharedProducer)
+        .collect()
+}
+
+/// The outputs of the rigid motion alone (inverse kinematics and dynamics at the
+/// output times) and of the scene's KED modes along it: kinematics, driving and axial forces,
+/// joint reactions, the machine drawing, the frequencies.
+fn rigid_producers() -> Vec<BuiltIn> {
+    vec![
         BuiltIn {
             name: "kinematics",
             wanted: requested!(Kinematics),
@@ -151,6 +162,14 @@ pub(crate) fn producers() -> Vec<SharedProducer> {
             },
             figures: fig::FREQUENCIES,
         },
+    ]
+}
+
+/// The outputs of the integrated model: the control outputs (from the shared samples
+/// when the scene has a control law), the model's own tables, the modes, the deflections
+/// (with the variant runs) and the patches.
+fn model_producers() -> Vec<BuiltIn> {
+    vec![
         BuiltIn {
             name: "control",
             wanted: |scene| {
@@ -222,6 +241,13 @@ pub(crate) fn producers() -> Vec<SharedProducer> {
             produce: piezo,
             figures: fig::PIEZO,
         },
+    ]
+}
+
+/// The outputs that read both the rigid motion and the integrated model: modal forces,
+/// energies, the viewer and snapshots, the whole machine's frequencies along the motion.
+fn combined_producers() -> Vec<BuiltIn> {
+    vec![
         BuiltIn {
             name: "modal_forces",
             wanted: requested!(ModalForces),
@@ -265,10 +291,7 @@ pub(crate) fn producers() -> Vec<SharedProducer> {
             produce: machine_frequencies,
             figures: fig::MACHINE_FREQUENCIES,
         },
-    ];
-    all.into_iter()
-        .map(|b| Arc::new(b) as SharedProducer)
-        .collect()
+    ]
 }
 
 /// The requests that make a run compute the shared samples (and so its control report).
