@@ -135,126 +135,26 @@ pub(crate) fn nelder_mead(
     settings: SimplexSettings,
 ) -> SimplexMinimum {
     let n = start.len();
-    let nf = n as f64;
-    let (expand, contract, shrink) = if n >= 2 {
-        (1.0 + 2.0 / nf, 0.75 - 0.5 / nf, 1.0 - 1.0 / nf)
-    } else {
-        (2.0, 0.5, 0.5)
-    };
-    let mut evaluations = 0;
-    let mut evaluate = |x: &[f64], evaluations: &mut usize| {
-        *evaluations += 1;
-        let v = f(x);
-        if v.is_nan() { f64::INFINITY } else { v }
-    };
+    let coefficients = Coefficients::of(n);
+    let mut f = Counted { f, evaluations: 0 };
     let mut best_x = start.to_vec();
-    let mut best = evaluate(&best_x, &mut evaluations);
+    let mut best = f.eval(&best_x);
     let mut scale = 1.0;
     let mut converged = false;
     let mut restarts = 0;
-    loop {
-        // A fresh simplex around the best point.
-        let mut points: Vec<Vec<f64>> = vec![best_x.clone()];
-        let mut values = vec![best];
-        for j in 0..n {
-            if evaluations >= settings.max_evaluations {
-                break;
-            }
-            let mut x = best_x.clone();
-            x[j] += scale * step[j];
-            values.push(evaluate(&x, &mut evaluations));
-            points.push(x);
-        }
-        if points.len() < n + 1 {
-            break;
-        }
+    // Rounds from a fresh simplex around the best point, while the budget lasts.
+    while let Some(mut simplex) =
+        Simplex::around(&best_x, best, scale, step, &mut f, settings.max_evaluations)
+    {
         let round_start = best;
-        converged = false;
-        let mut centroid = vec![0.0; n];
-        let mut trial = vec![0.0; n];
-        let mut second = vec![0.0; n];
-        while evaluations < settings.max_evaluations {
-            // Order the vertices (stable: ties keep the older vertex first).
-            let mut order: Vec<usize> = (0..=n).collect();
-            order.sort_by(|&i, &j| values[i].total_cmp(&values[j]));
-            points = order.iter().map(|&i| points[i].clone()).collect();
-            values = order.iter().map(|&i| values[i]).collect();
-            let (low, high) = (values[0], values[n]);
-            let width = (0..n)
-                .map(|j| {
-                    let (lo, hi) = points
-                        .iter()
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-                            (a.0.min(p[j]), a.1.max(p[j]))
-                        });
-                    hi - lo
-                })
-                .fold(0.0f64, f64::max);
-            if high - low <= settings.value_tolerance * low.abs().max(f64::MIN_POSITIVE)
-                && width <= settings.size_tolerance
-            {
-                converged = true;
-                break;
-            }
-            for (j, c) in centroid.iter_mut().enumerate() {
-                *c = points[..n].iter().map(|p| p[j]).sum::<f64>() / nf;
-            }
-            let along = |t: f64, out: &mut Vec<f64>| {
-                for j in 0..n {
-                    out[j] = centroid[j] + t * (points[n][j] - centroid[j]);
-                }
-            };
-            along(-1.0, &mut trial);
-            let reflected = evaluate(&trial, &mut evaluations);
-            if reflected < values[0] {
-                along(-expand, &mut second);
-                let expanded = evaluate(&second, &mut evaluations);
-                if expanded < reflected {
-                    points[n].clone_from(&second);
-                    values[n] = expanded;
-                } else {
-                    points[n].clone_from(&trial);
-                    values[n] = reflected;
-                }
-                continue;
-            }
-            if reflected < values[n - 1] {
-                points[n].clone_from(&trial);
-                values[n] = reflected;
-                continue;
-            }
-            // Contraction: outside when the reflection beats the worst, inside otherwise.
-            let outside = reflected < values[n];
-            along(if outside { -contract } else { contract }, &mut second);
-            let contracted = evaluate(&second, &mut evaluations);
-            if (outside && contracted <= reflected) || (!outside && contracted < values[n]) {
-                points[n].clone_from(&second);
-                values[n] = contracted;
-                continue;
-            }
-            // Shrink towards the best vertex.
-            let (first, rest) = points.split_at_mut(1);
-            for (k, point) in rest.iter_mut().enumerate() {
-                if evaluations >= settings.max_evaluations {
-                    break;
-                }
-                for (x, b) in point.iter_mut().zip(&first[0]) {
-                    *x = b + shrink * (*x - b);
-                }
-                values[k + 1] = evaluate(point, &mut evaluations);
-            }
-        }
-        let (k, value) =
-            values.iter().enumerate().fold(
-                (0, f64::INFINITY),
-                |a, (k, v)| if *v < a.1 { (k, *v) } else { a },
-            );
+        converged = simplex.minimise(&mut f, coefficients, settings);
+        let (k, value) = simplex.best();
         if value < best {
             best = value;
-            best_x.clone_from(&points[k]);
+            best_x.clone_from(&simplex.points[k]);
         }
         let improved = round_start - best > settings.value_tolerance * best.abs();
-        if !converged || evaluations >= settings.max_evaluations || (restarts > 0 && !improved) {
+        if !converged || f.evaluations >= settings.max_evaluations || (restarts > 0 && !improved) {
             break;
         }
         restarts += 1;
@@ -263,9 +163,205 @@ pub(crate) fn nelder_mead(
     SimplexMinimum {
         x: best_x,
         value: best,
-        evaluations,
+        evaluations: f.evaluations,
         converged,
         restarts,
+    }
+}
+
+/// The objective with a count of its evaluations; NaN reads as infinity (a point to leave).
+struct Counted<'f> {
+    f: &'f mut dyn FnMut(&[f64]) -> f64,
+    evaluations: usize,
+}
+
+impl Counted<'_> {
+    fn eval(&mut self, x: &[f64]) -> f64 {
+        self.evaluations += 1;
+        let v = (self.f)(x);
+        if v.is_nan() { f64::INFINITY } else { v }
+    }
+}
+
+/// Expansion, contraction and shrink coefficients (Gao and Han's for `n >= 2`, the
+/// classical 2, 1/2, 1/2 in one dimension).
+#[derive(Clone, Copy)]
+struct Coefficients {
+    expand: f64,
+    contract: f64,
+    shrink: f64,
+}
+
+impl Coefficients {
+    fn of(n: usize) -> Self {
+        let nf = n as f64;
+        let (expand, contract, shrink) = if n >= 2 {
+            (1.0 + 2.0 / nf, 0.75 - 0.5 / nf, 1.0 - 1.0 / nf)
+        } else {
+            (2.0, 0.5, 0.5)
+        };
+        Self {
+            expand,
+            contract,
+            shrink,
+        }
+    }
+}
+
+/// The `n + 1` vertices of a simplex and their values.
+struct Simplex {
+    points: Vec<Vec<f64>>,
+    values: Vec<f64>,
+}
+
+impl Simplex {
+    /// A fresh simplex around `x` (value `fx`): `x` and `x + scale step_j e_j`; `None` when
+    /// the evaluation budget runs out first.
+    fn around(
+        x: &[f64],
+        fx: f64,
+        scale: f64,
+        step: &[f64],
+        f: &mut Counted<'_>,
+        max_evaluations: usize,
+    ) -> Option<Self> {
+        let n = x.len();
+        let mut points: Vec<Vec<f64>> = vec![x.to_vec()];
+        let mut values = vec![fx];
+        for j in 0..n {
+            if f.evaluations >= max_evaluations {
+                break;
+            }
+            let mut p = x.to_vec();
+            p[j] += scale * step[j];
+            values.push(f.eval(&p));
+            points.push(p);
+        }
+        (points.len() == n + 1).then_some(Self { points, values })
+    }
+
+    /// Orders the vertices by value (stable: ties keep the older vertex first).
+    fn order(&mut self) {
+        let mut order: Vec<usize> = (0..self.values.len()).collect();
+        order.sort_by(|&i, &j| self.values[i].total_cmp(&self.values[j]));
+        self.points = order.iter().map(|&i| self.points[i].clone()).collect();
+        self.values = order.iter().map(|&i| self.values[i]).collect();
+    }
+
+    /// Whether the ordered simplex meets both tolerances: its values spread by at most the
+    /// value tolerance relative to the best, and it is at most the size tolerance wide in
+    /// every coordinate.
+    fn converged(&self, settings: SimplexSettings) -> bool {
+        let n = self.points.len() - 1;
+        let (low, high) = (self.values[0], self.values[n]);
+        let width = (0..n)
+            .map(|j| {
+                let (lo, hi) = self
+                    .points
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+                        (a.0.min(p[j]), a.1.max(p[j]))
+                    });
+                hi - lo
+            })
+            .fold(0.0f64, f64::max);
+        high - low <= settings.value_tolerance * low.abs().max(f64::MIN_POSITIVE)
+            && width <= settings.size_tolerance
+    }
+
+    /// Nelder-Mead steps until the tolerances are met (`true`) or the budget runs out.
+    fn minimise(
+        &mut self,
+        f: &mut Counted<'_>,
+        c: Coefficients,
+        settings: SimplexSettings,
+    ) -> bool {
+        let n = self.points.len() - 1;
+        let mut centroid = vec![0.0; n];
+        let mut trial = vec![0.0; n];
+        let mut second = vec![0.0; n];
+        while f.evaluations < settings.max_evaluations {
+            self.order();
+            if self.converged(settings) {
+                return true;
+            }
+            self.step(f, c, settings, [&mut centroid, &mut trial, &mut second]);
+        }
+        false
+    }
+
+    /// One step on the ordered simplex: reflect the worst vertex through the centroid of
+    /// the others, then expand, accept, contract (outside or inside) or shrink towards the
+    /// best vertex.
+    fn step(
+        &mut self,
+        f: &mut Counted<'_>,
+        c: Coefficients,
+        settings: SimplexSettings,
+        [centroid, trial, second]: [&mut Vec<f64>; 3],
+    ) {
+        let n = self.points.len() - 1;
+        let nf = n as f64;
+        let (points, values) = (&mut self.points, &mut self.values);
+        for (j, x) in centroid.iter_mut().enumerate() {
+            *x = points[..n].iter().map(|p| p[j]).sum::<f64>() / nf;
+        }
+        let along = |t: f64, points: &[Vec<f64>], out: &mut Vec<f64>| {
+            for j in 0..n {
+                out[j] = centroid[j] + t * (points[n][j] - centroid[j]);
+            }
+        };
+        along(-1.0, points, trial);
+        let reflected = f.eval(trial);
+        if reflected < values[0] {
+            along(-c.expand, points, second);
+            let expanded = f.eval(second);
+            if expanded < reflected {
+                points[n].clone_from(second);
+                values[n] = expanded;
+            } else {
+                points[n].clone_from(trial);
+                values[n] = reflected;
+            }
+            return;
+        }
+        if reflected < values[n - 1] {
+            points[n].clone_from(trial);
+            values[n] = reflected;
+            return;
+        }
+        // Contraction: outside when the reflection beats the worst, inside otherwise.
+        let outside = reflected < values[n];
+        along(
+            if outside { -c.contract } else { c.contract },
+            points,
+            second,
+        );
+        let contracted = f.eval(second);
+        if (outside && contracted <= reflected) || (!outside && contracted < values[n]) {
+            points[n].clone_from(second);
+            values[n] = contracted;
+            return;
+        }
+        // Shrink towards the best vertex.
+        let (first, rest) = points.split_at_mut(1);
+        for (k, point) in rest.iter_mut().enumerate() {
+            if f.evaluations >= settings.max_evaluations {
+                break;
+            }
+            for (x, b) in point.iter_mut().zip(&first[0]) {
+                *x = b + c.shrink * (*x - b);
+            }
+            values[k + 1] = f.eval(point);
+        }
+    }
+
+    /// The best vertex and its value (the first of equal values).
+    fn best(&self) -> (usize, f64) {
+        self.values.iter().enumerate().fold(
+            (0, f64::INFINITY),
+            |a, (k, v)| if *v < a.1 { (k, *v) } else { a },
+        )
     }
 }
 
