@@ -162,9 +162,15 @@ pub struct MotorRatings {
 /// An actuator of one slider.
 ///
 /// Required: the force on the slider for a force command at a slider velocity, and a name.
-/// Provided: no signals besides the force, no reflected mass, no limit, no ratings (an ideal
-/// force). A scene names an actuator through a factory registered in the scene layer
-/// (`flexprr_scene::ActuatorFactory`).
+/// Provided: no signals besides the force, no reflected mass, no limit, no ratings, no
+/// states of its own (an ideal force). A scene names an actuator through a factory
+/// registered in the scene layer (`flexprr_scene::ActuatorFactory`).
+///
+/// An actuator with dynamics of its own (a winding's current, a compliant screw's rotor)
+/// declares its states ([`Actuator::states`], [`Actuator::state_names`],
+/// [`Actuator::initial_states`]) and computes their rates in
+/// [`Actuator::apply_with_states`]: the model carries them in its ODE state after the
+/// control law's, and its linear models include them.
 ///
 /// ```
 /// use flexprr_control::{Actuator, ActuatorOutput, ActuatorSignal};
@@ -172,11 +178,16 @@ pub struct MotorRatings {
 /// /// The part of the command it clips (N), reported as a signal.
 /// const CLIPPED: [ActuatorSignal; 1] =
 ///     [ActuatorSignal { name: "clipped_force", header_unit: "N", symbol: "ΔF", unit: "N" }];
+/// /// Its one state: the force it delivers (N).
+/// const LAGGED: [ActuatorSignal; 1] =
+///     [ActuatorSignal { name: "lagged_force", header_unit: "N", symbol: "F", unit: "N" }];
 ///
-/// /// An ideal force that clips at 500 N.
+/// /// A force that clips at 500 N and follows the clipped command with a first-order lag
+/// /// of time constant `0.001` s (an amplifier's bandwidth).
 /// #[derive(Debug)]
 /// struct Clipped;
 /// impl Actuator for Clipped {
+///     /// In steady state the lag has settled: the clipped command.
 ///     fn apply(&self, command: f64, _velocity: f64) -> ActuatorOutput {
 ///         let force = command.clamp(-500.0, 500.0);
 ///         ActuatorOutput::with_signals(force, command.abs() > 500.0, &CLIPPED, &[command - force])
@@ -184,10 +195,30 @@ pub struct MotorRatings {
 ///     fn force_limit(&self) -> f64 { 500.0 }
 ///     fn name(&self) -> &'static str { "clipped" }
 ///     fn signals(&self) -> &'static [ActuatorSignal] { &CLIPPED }
+///     fn states(&self) -> usize { 1 }
+///     fn state_names(&self) -> &'static [ActuatorSignal] { &LAGGED }
+///     /// `F' = (clamp(F_c) - F) / T`; the force on the slider is the state `F`.
+///     fn apply_with_states(
+///         &self,
+///         command: f64,
+///         _velocity: f64,
+///         _friction_velocity: Option<f64>,
+///         states: &[f64],
+///         rates: &mut [f64],
+///     ) -> ActuatorOutput {
+///         let target = command.clamp(-500.0, 500.0);
+///         rates[0] = (target - states[0]) / 0.001;
+///         ActuatorOutput::with_signals(states[0], command.abs() > 500.0, &CLIPPED, &[command - target])
+///     }
 /// }
 /// let out = Clipped.apply(800.0, 0.0);
 /// assert!(out.saturated);
 /// assert_eq!(out.signal("clipped_force"), Some(300.0));
+/// // Started at rest, the lagged force rises towards the clipped command at 500 kN/s.
+/// let (mut state, mut rate) = ([0.0], [0.0]);
+/// Clipped.initial_states(0.0, &mut state);
+/// let out = Clipped.apply_with_states(800.0, 0.0, None, &state, &mut rate);
+/// assert_eq!((out.force, rate[0]), (0.0, 5.0e5));
 /// ```
 pub trait Actuator: std::fmt::Debug + Send + Sync {
     /// The force on the slider (and the motor's state) for the force command `command` (N)
@@ -200,7 +231,9 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
     fn signals(&self) -> &'static [ActuatorSignal] {
         &[]
     }
-    /// Mass the actuator adds to the slider along its guide (kg): the reflected rotor inertia.
+    /// The actuator's moving inertia reflected to the slider along its guide (kg): the rotor
+    /// inertia `J g^2`. What a motion's feedforward and feasibility add to the slider's mass;
+    /// the model adds [`Actuator::mass_on_slider`].
     fn reflected_mass(&self) -> f64 {
         0.0
     }
@@ -246,6 +279,47 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
     fn friction_is_non_smooth_at(&self, velocity: f64) -> bool {
         let _ = velocity;
         false
+    }
+    /// Number of the actuator's own states, carried in the model's ODE state (after the
+    /// control law's): none by default (the actuator is a function of the command and the
+    /// slider velocity, [`Actuator::apply`]).
+    fn states(&self) -> usize {
+        0
+    }
+    /// The actuator's states, one per state in their order (name and unit; the linear
+    /// models name their states by them). None by default.
+    fn state_names(&self) -> &'static [ActuatorSignal] {
+        &[]
+    }
+    /// The states at the start of a run whose slider starts at the velocity `velocity`
+    /// (m/s), into `states` ([`Actuator::states`] entries). Zero by default.
+    fn initial_states(&self, velocity: f64, states: &mut [f64]) {
+        let _ = velocity;
+        states.fill(0.0);
+    }
+    /// The force on the slider for the force command `command` (N) at the slider velocity
+    /// `velocity` (m/s) with the actuator's states `states`, their rates into `rates` (both
+    /// [`Actuator::states`] entries). `friction_velocity`: a slider velocity at which a
+    /// linearisation holds the non-smooth friction (see
+    /// [`Actuator::apply_with_friction_at`]); `None` in a run (the friction at the
+    /// actuator's own speed). Must not allocate. By default (no states)
+    /// [`Actuator::apply_with_friction_at`].
+    fn apply_with_states(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: Option<f64>,
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> ActuatorOutput {
+        let _ = (states, rates);
+        self.apply_with_friction_at(command, velocity, friction_velocity.unwrap_or(velocity))
+    }
+    /// Mass the actuator adds to the slider's own equation of motion (kg): the reflected
+    /// mass ([`Actuator::reflected_mass`]) when the transmission is rigid (the default), none
+    /// when the actuator carries its rotor in its own states (a compliant screw).
+    fn mass_on_slider(&self) -> f64 {
+        self.reflected_mass()
     }
 }
 
