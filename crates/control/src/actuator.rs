@@ -100,6 +100,45 @@ pub const MOTOR_DRIVE_SIGNALS: [ActuatorSignal; 5] = [
     },
 ];
 
+/// The winding current state of a [`MotorBallScrew`] with a [`crate::Winding`] (A).
+const CURRENT_STATE: ActuatorSignal = ActuatorSignal {
+    name: MOTOR_CURRENT,
+    header_unit: "A",
+    symbol: "i",
+    unit: "A",
+};
+/// The current loop's integral (V).
+const INTEGRAL_STATE: ActuatorSignal = ActuatorSignal {
+    name: "current_loop_integral",
+    header_unit: "V",
+    symbol: "x",
+    unit: "V",
+};
+/// The screw's twist `theta - g rho` (rad).
+const TWIST_STATE: ActuatorSignal = ActuatorSignal {
+    name: "screw_twist",
+    header_unit: "rad",
+    symbol: "φ",
+    unit: "rad",
+};
+/// The rotor's speed (rad/s).
+const ROTOR_STATE: ActuatorSignal = ActuatorSignal {
+    name: "rotor_speed",
+    header_unit: "rad_s",
+    symbol: "ω",
+    unit: "rad/s",
+};
+/// The states of a [`MotorBallScrew`] by (winding states, screw): the winding's current and
+/// loop integral first, then the screw's twist and the rotor's speed.
+const MOTOR_STATES: [[&[ActuatorSignal]; 2]; 3] = [
+    [&[], &[TWIST_STATE, ROTOR_STATE]],
+    [&[CURRENT_STATE], &[CURRENT_STATE, TWIST_STATE, ROTOR_STATE]],
+    [
+        &[CURRENT_STATE, INTEGRAL_STATE],
+        &[CURRENT_STATE, INTEGRAL_STATE, TWIST_STATE, ROTOR_STATE],
+    ],
+];
+
 /// What an actuator does at one instant.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ActuatorOutput {
@@ -357,9 +396,22 @@ pub struct MotorBallScrew {
     pub coulomb_friction: f64,
     /// Speed `omega_s` of the Coulomb friction's smoothing (rev/s).
     pub coulomb_smoothing: f64,
-    /// The drive's electrics (the torque-speed envelope), where modelled; `None`: the peak
-    /// torque at any speed.
+    /// The drive's electrics (the torque-speed envelope, and the winding's dynamics where
+    /// modelled); `None`: the peak torque at any speed.
     pub drive: Option<Drive>,
+    /// The screw's axial compliance, where modelled; `None`: a rigid screw.
+    pub screw: Option<Screw>,
+}
+
+/// The axial compliance of a ball screw (with its nut and bearings): a spring and damper
+/// between the motor, seen at the slider as the travel `theta / g` of its angle `theta`,
+/// and the slider (module documentation of [`MotorBallScrew`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Screw {
+    /// Axial stiffness `k` (N/m).
+    pub stiffness: f64,
+    /// Axial damping `c` (N s/m).
+    pub damping: f64,
 }
 
 impl MotorBallScrew {
@@ -517,12 +569,63 @@ impl MotorBallScrew {
         if let Some(drive) = self.drive {
             drive.validated()?;
         }
+        if let Some(screw) = self.screw {
+            check(
+                "screw_stiffness",
+                screw.stiffness,
+                0.0,
+                true,
+                "must be finite and > 0 (N/m; ball screws have 1e7 to 1e9)",
+            )?;
+            if screw.stiffness > 1e12 {
+                return Err(ControlError::InvalidParameter {
+                    name: "screw_stiffness",
+                    value: screw.stiffness,
+                    rule: "must be at most 1e12 N/m",
+                });
+            }
+            check(
+                "screw_damping",
+                screw.damping,
+                0.0,
+                false,
+                "must be finite and >= 0 (N s/m)",
+            )?;
+            if screw.damping > 1e9 {
+                return Err(ControlError::InvalidParameter {
+                    name: "screw_damping",
+                    value: screw.damping,
+                    rule: "must be at most 1e9 N s/m",
+                });
+            }
+            if self.rotor_inertia <= 0.0 {
+                return Err(ControlError::InvalidParameter {
+                    name: "rotor_inertia",
+                    value: self.rotor_inertia,
+                    rule: "must be > 0 with screw_stiffness: the rotor is a mass on the screw's \
+                           spring",
+                });
+            }
+        }
         Ok(self)
     }
 
     /// Transmission ratio `g = 2 pi / p` (rad per metre of slider travel).
     pub fn ratio(&self) -> f64 {
         std::f64::consts::TAU / self.lead
+    }
+
+    /// The frequency (Hz) of the screw's mode with the slider held,
+    /// `(1/2 pi) sqrt(k / m_r)`, `m_r = J g^2` (none for a rigid screw). With a free slider of
+    /// mass `m_s` it rises to `(1/2 pi) sqrt(k (1/m_r + 1/m_s))`.
+    pub fn screw_mode_held_hz(&self) -> Option<f64> {
+        let k = self.screw?.stiffness;
+        Some((k / self.reflected_mass()).sqrt() / std::f64::consts::TAU)
+    }
+
+    /// The number of the winding's states (the drive's [`Drive::states`]).
+    fn winding_states(&self) -> usize {
+        self.drive.map_or(0, |d| d.states())
     }
 
     /// Friction torque at the motor shaft (N m) at the motor speed `omega` (rad/s).
@@ -608,6 +711,115 @@ impl Actuator for MotorBallScrew {
     fn friction_is_non_smooth_at(&self, velocity: f64) -> bool {
         self.coulomb_friction > 0.0 && (velocity / self.lead).abs() < 4.0 * self.coulomb_smoothing
     }
+    /// The winding's current and the current loop's integral (with a [`crate::Winding`]),
+    /// then the screw's twist and the rotor's speed (with a [`Screw`]).
+    fn states(&self) -> usize {
+        self.winding_states() + if self.screw.is_some() { 2 } else { 0 }
+    }
+    fn state_names(&self) -> &'static [ActuatorSignal] {
+        MOTOR_STATES[self.winding_states()][usize::from(self.screw.is_some())]
+    }
+    /// No current, no integral, no twist; the rotor turning with the slider, `g rho'`.
+    fn initial_states(&self, velocity: f64, states: &mut [f64]) {
+        states.fill(0.0);
+        if self.screw.is_some() {
+            states[self.winding_states() + 1] = self.ratio() * velocity;
+        }
+    }
+    /// The module documentation's equations with the winding's dynamics ([`crate::drive`])
+    /// and the compliant screw: `phi' = omega - g rho'`,
+    /// `J omega' = eta (tau - tau_f) - F_s / g`, `F_s = k phi / g + c (omega / g - rho')` the
+    /// force on the slider (the efficiency acts on the motor's torque as for the rigid
+    /// screw, so that the stiff limit is the rigid model).
+    fn apply_with_states(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: Option<f64>,
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> ActuatorOutput {
+        if self.states() == 0 {
+            return self.apply_with_friction_at(
+                command,
+                velocity,
+                friction_velocity.unwrap_or(velocity),
+            );
+        }
+        let g = self.ratio();
+        let electric = self.winding_states();
+        let omega = if self.screw.is_some() {
+            states[electric + 1]
+        } else {
+            g * velocity
+        };
+        let wanted = command / (g * self.efficiency);
+        let (torque, saturated, electrics) = match self.drive {
+            Some(drive) if electric > 0 => {
+                let w = drive
+                    .winding(
+                        wanted,
+                        self.torque_limit(),
+                        omega,
+                        &states[..electric],
+                        &mut rates[..electric],
+                    )
+                    .unwrap_or(crate::WindingOutput {
+                        torque: 0.0,
+                        current: 0.0,
+                        voltage: 0.0,
+                        saturated: false,
+                    });
+                (w.torque, w.saturated, Some((w.current, w.voltage)))
+            }
+            drive => {
+                let (lo, hi) = self.torque_range(omega);
+                let torque = wanted.clamp(lo, hi);
+                let electrics = drive.map(|d| (d.current(torque), d.voltage(torque, omega)));
+                (torque, wanted < lo || wanted > hi, electrics)
+            }
+        };
+        let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
+        let coulomb_speed = friction_velocity.map_or(omega, |v| g * v);
+        let friction = self.viscous_friction * omega
+            + self.coulomb_friction * (coulomb_speed / smoothing).tanh();
+        let force = match self.screw {
+            Some(screw) => {
+                let twist = states[electric];
+                let force = screw.stiffness * twist / g + screw.damping * (omega / g - velocity);
+                rates[electric] = omega - g * velocity;
+                rates[electric + 1] =
+                    (self.efficiency * (torque - friction) - force / g) / self.rotor_inertia;
+                force
+            }
+            None => g * self.efficiency * (torque - friction),
+        };
+        let flag = f64::from(u8::from(saturated));
+        let speed = omega / std::f64::consts::TAU;
+        match electrics {
+            None => ActuatorOutput::with_signals(
+                force,
+                saturated,
+                &MOTOR_SIGNALS,
+                &[torque, speed, flag],
+            ),
+            Some((current, voltage)) => ActuatorOutput::with_signals(
+                force,
+                saturated,
+                &MOTOR_DRIVE_SIGNALS,
+                &[torque, speed, flag, current, voltage],
+            ),
+        }
+    }
+    /// The reflected mass with a rigid screw; none with a compliant one (the rotor is a
+    /// state of its own).
+    fn mass_on_slider(&self) -> f64 {
+        if self.screw.is_some() {
+            0.0
+        } else {
+            self.reflected_mass()
+        }
+    }
     fn name(&self) -> &'static str {
         "motor_ballscrew"
     }
@@ -658,6 +870,7 @@ mod tests {
             coulomb_friction: 0.02,
             coulomb_smoothing: 0.01,
             drive: None,
+            screw: None,
         }
         .validated()
         .unwrap()
@@ -743,6 +956,7 @@ mod tests {
             resistance: 1.5,
             bus_voltage: 100.0,
             current_limit: 12.0,
+            winding: None,
         };
         let m = MotorBallScrew {
             drive: Some(drive),

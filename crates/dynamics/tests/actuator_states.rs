@@ -6,11 +6,15 @@
 //!   at the actuator's initial states, and the rates of the lag's states are `(F_c - F) / T`
 //!   with the command the law computes there (so law and actuator states are not swapped);
 //! * the limit: as `T -> 0` the run converges to the ideal force's at first order in `T`;
-//! * the right-hand sides allocate nothing with such states.
+//! * the right-hand sides allocate nothing with such states (the lag, and a motor with its
+//!   winding, current loop and compliant screw).
 
 use std::sync::Arc;
 
-use flexprr_control::{Actuator, ActuatorOutput, ActuatorSignal, IdealForce, Pid};
+use flexprr_control::{
+    Actuator, ActuatorOutput, ActuatorSignal, Drive, IdealForce, MotorBallScrew, MotorRatings, Pid,
+    Screw, Winding,
+};
 use flexprr_dynamics::{
     Actuation, CoupledOptions, CoupledSystem, ModalDamping, NonlinearOptions, NonlinearSystem,
     SceneModel, paper,
@@ -198,11 +202,54 @@ fn a_vanishing_lag_converges_to_the_ideal_force_at_first_order() {
     assert!(d2 > 0.4 * d1 && d3 > 0.4 * d2, "{d1} {d2} {d3}");
 }
 
+/// A motor with its winding under a current loop and a compliant screw (four states).
+fn drive_motor() -> Arc<dyn Actuator> {
+    Arc::new(
+        MotorBallScrew {
+            rotor_inertia: 1.6e-5,
+            lead: 0.01,
+            efficiency: 0.9,
+            ratings: MotorRatings {
+                peak_torque: 3.5,
+                continuous_torque: 1.2,
+                max_speed: 100.0,
+            },
+            viscous_friction: 1e-4,
+            coulomb_friction: 0.02,
+            coulomb_smoothing: 0.01,
+            drive: Some(Drive {
+                torque_constant: 0.22,
+                resistance: 1.6,
+                bus_voltage: 320.0,
+                current_limit: 16.0,
+                winding: Some(Winding {
+                    inductance: 2.8e-3,
+                    current_bandwidth: Some(1000.0),
+                }),
+            }),
+            screw: Some(Screw {
+                stiffness: 1e8,
+                damping: 300.0,
+            }),
+        }
+        .validated()
+        .unwrap(),
+    )
+}
+
 #[test]
 fn the_right_hand_sides_with_actuator_states_allocate_nothing() {
+    let motor = drive_motor();
+    assert_eq!(motor.states(), 4);
+    let driven = || Actuation {
+        controller: Arc::new(Pid::new(2.0e5, 400.0, 1.0e6, true, 0.0).unwrap()),
+        actuators: [motor.clone(), motor.clone(), motor.clone()],
+    };
     let mut models: Vec<Box<dyn SceneModel>> = vec![
         Box::new(coupled(actuation(Some(1e-3), 1.0e6))),
         Box::new(nonlinear(actuation(Some(1e-3), 1.0e6))),
+        Box::new(coupled(driven())),
+        Box::new(nonlinear(driven())),
     ];
     for model in &mut models {
         let y = model.initial_state();
