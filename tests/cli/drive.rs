@@ -223,3 +223,44 @@ fn bad_drive_and_screw_keys_are_refused_at_their_key() {
         );
     }
 }
+
+/// `friction_feedforward = true`: on `configs/servo_motor_f2.toml` the PD feedback carried
+/// the motors' friction (about 0.2 mm of tracking error); with the friction in the
+/// feedforward what is left is the law's own error.
+#[test]
+fn the_friction_in_the_feedforward_removes_the_error_it_caused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(config("servo_motor_f2.toml")).unwrap();
+    let from = "coulomb_smoothing = 0.01      # rev/s\n";
+    assert!(text.contains(from));
+    let with = dir.path().join("with.toml");
+    std::fs::write(
+        &with,
+        text.replace(from, &format!("{from}friction_feedforward = true\n")),
+    )
+    .unwrap();
+    let mut peaks = Vec::new();
+    for (name, scene) in [("without", config("servo_motor_f2.toml")), ("with", with)] {
+        let out = dir.path().join(name);
+        let o = flexprr()
+            .arg("run")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .arg("--quiet")
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr_of(&o));
+        let (_, rows) = read_csv(&out.join("tracking.csv"));
+        peaks.push(
+            rows.iter()
+                .flat_map(|r| r[1..4].iter())
+                .fold(0.0_f64, |m, v| m.max(v.abs())),
+        );
+    }
+    println!(
+        "peak slider errors: {:.3e} m without, {:.3e} m with the friction fed forward",
+        peaks[0], peaks[1]
+    );
+    assert!(peaks[0] > 1e-4 && peaks[1] < 1e-3 * peaks[0], "{peaks:?}");
+}

@@ -354,6 +354,14 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
         let _ = (states, rates);
         self.apply_with_friction_at(command, velocity, friction_velocity.unwrap_or(velocity))
     }
+    /// The force command (N) that holds the actuator's steady-state friction at the slider
+    /// velocity `velocity` (m/s): what a law's feedforward adds at the commanded velocity
+    /// (besides the rigid inverse dynamics and the reflected inertia), so that the feedback
+    /// does not have to carry the friction. None by default.
+    fn friction_feedforward(&self, velocity: f64) -> f64 {
+        let _ = velocity;
+        0.0
+    }
     /// Mass the actuator adds to the slider's own equation of motion (kg): the reflected
     /// mass ([`Actuator::reflected_mass`]) when the transmission is rigid (the default), none
     /// when the actuator carries its rotor in its own states (a compliant screw).
@@ -401,6 +409,9 @@ pub struct MotorBallScrew {
     pub drive: Option<Drive>,
     /// The screw's axial compliance, where modelled; `None`: a rigid screw.
     pub screw: Option<Screw>,
+    /// Whether a law's feedforward adds the force of the steady friction at the commanded
+    /// slider velocity ([`Actuator::friction_feedforward`]).
+    pub friction_feedforward: bool,
 }
 
 /// The axial compliance of a ball screw (with its nut and bearings): a spring and damper
@@ -811,6 +822,16 @@ impl Actuator for MotorBallScrew {
             ),
         }
     }
+    /// With [`MotorBallScrew::friction_feedforward`], `g eta tau_f(g rho')`: the command
+    /// whose torque `tau_f` holds the friction (the force on the slider is
+    /// `g eta (tau - tau_f)`).
+    fn friction_feedforward(&self, velocity: f64) -> f64 {
+        if !self.friction_feedforward {
+            return 0.0;
+        }
+        let g = self.ratio();
+        g * self.efficiency * self.friction_torque(g * velocity)
+    }
     /// The reflected mass with a rigid screw; none with a compliant one (the rotor is a
     /// state of its own).
     fn mass_on_slider(&self) -> f64 {
@@ -870,6 +891,7 @@ mod tests {
             coulomb_friction: 0.02,
             coulomb_smoothing: 0.01,
             drive: None,
+            friction_feedforward: false,
             screw: None,
         }
         .validated()

@@ -36,6 +36,7 @@ fn motor(drive: Option<Drive>, screw: Option<Screw>) -> MotorBallScrew {
         coulomb_friction: 0.0,
         coulomb_smoothing: 0.01,
         drive,
+        friction_feedforward: false,
         screw,
     }
     .validated()

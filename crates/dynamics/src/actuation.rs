@@ -92,7 +92,8 @@ struct LoopOverrides {
 
 /// The commanded sliders at `t` (the closed-form inverse kinematics of the trajectory) and
 /// the feedforward: the rigid-body inverse-dynamics driving force of the commanded motion
-/// plus the actuators' reflected inertia `m_r rho_ref''`.
+/// plus the actuators' reflected inertia `m_r rho_ref''` and, where an actuator asks for it,
+/// its steady friction at `rho_ref'` ([`Actuator::friction_feedforward`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Reference {
     pub(crate) sliders: [SliderState; 3],
@@ -118,7 +119,10 @@ impl Reference {
             acceleration: legs[i].rho_ddot,
         });
         let feedforward = std::array::from_fn(|i| {
-            forces.driving_force[i] + actuated.spec.actuators[i].reflected_mass() * legs[i].rho_ddot
+            let actuator = &actuated.spec.actuators[i];
+            forces.driving_force[i]
+                + actuator.reflected_mass() * legs[i].rho_ddot
+                + actuator.friction_feedforward(legs[i].rho_dot)
         });
         Ok(Self {
             sliders,

@@ -227,6 +227,7 @@ fn drive_motor() -> Arc<dyn Actuator> {
                     current_bandwidth: Some(1000.0),
                 }),
             }),
+            friction_feedforward: false,
             screw: Some(Screw {
                 stiffness: 1e8,
                 damping: 300.0,
@@ -262,5 +263,120 @@ fn the_right_hand_sides_with_actuator_states_allocate_nothing() {
         });
         assert_eq!(allocations, 0, "{}", model.kind());
         assert!(dy.iter().all(|v| v.is_finite()), "{}", model.kind());
+    }
+}
+
+/// A motor with friction (viscous and Coulomb) on a rigid screw, with or without the
+/// friction in the feedforward.
+fn rubbing_motor(viscous: f64, coulomb: f64, feedforward: bool) -> MotorBallScrew {
+    MotorBallScrew {
+        viscous_friction: viscous,
+        coulomb_friction: coulomb,
+        friction_feedforward: feedforward,
+        drive: None,
+        screw: None,
+        ..*drive_motor_spec()
+    }
+    .validated()
+    .unwrap()
+}
+
+/// The spec of [`drive_motor`], for struct updates.
+fn drive_motor_spec() -> Box<MotorBallScrew> {
+    Box::new(MotorBallScrew {
+        rotor_inertia: 1.6e-5,
+        lead: 0.01,
+        efficiency: 0.9,
+        ratings: MotorRatings {
+            peak_torque: 3.5,
+            continuous_torque: 1.2,
+            max_speed: 100.0,
+        },
+        viscous_friction: 0.0,
+        coulomb_friction: 0.0,
+        coulomb_smoothing: 0.01,
+        drive: None,
+        friction_feedforward: false,
+        screw: None,
+    })
+}
+
+/// The friction in the feedforward: on a constant-velocity move a PD law carries the
+/// motor's friction with the steady error `e = F_f / kp`, `F_f = g eta tau_f(g rho')` (its
+/// closed form); with the friction in the feedforward the error shrinks to the law's own
+/// (the same move without friction).
+#[test]
+fn the_friction_feedforward_leaves_the_laws_own_error() {
+    use flexprr_kinematics::{Line, Pose};
+    let (kp, kd) = (2.0e5, 2000.0);
+    let line: Arc<dyn Trajectory + Send + Sync> = Arc::new(
+        Line::new(
+            Pose::new(-0.02, 0.0, 45f64.to_radians()),
+            nalgebra::Vector3::new(0.1, 0.0, 0.0),
+            0.0,
+        )
+        .unwrap(),
+    );
+    let run = |motor: MotorBallScrew| -> ([f64; 3], [f64; 3]) {
+        let motor: Arc<dyn Actuator> = Arc::new(motor);
+        let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
+        let mut model = CoupledSystem::new(
+            machine,
+            line.clone(),
+            ModalDamping::none(),
+            CoupledOptions::full(),
+        )
+        .unwrap()
+        .with_actuation(
+            Actuation {
+                controller: Arc::new(Pid::pd(kp, kd, true, 0.0).unwrap()),
+                actuators: [motor.clone(), motor.clone(), motor],
+            },
+            0.0,
+        )
+        .unwrap();
+        let end = 0.2;
+        let y0 = SceneModel::initial_state(&model);
+        let solution = Rk45::new(Options::default().rtol(1e-10).atol(1e-14))
+            .solve(&mut model, 0.0, &y0, &[0.0, end])
+            .unwrap();
+        let snapshot = model.snapshot(end, solution.y(1)).unwrap();
+        let rigid = line.motion(end);
+        let commanded = paper::machine(3, paper::YOUNGS_MODULUS)
+            .unwrap()
+            .geometry
+            .inverse_kinematics_unchecked(&rigid)
+            .unwrap();
+        let error = std::array::from_fn(|i| commanded.legs[i].rho - snapshot.sliders[i].position);
+        let velocity = std::array::from_fn(|i| commanded.legs[i].rho_dot);
+        (error, velocity)
+    };
+    let (viscous, coulomb) = (1e-4, 0.02);
+    let (without, velocity) = run(rubbing_motor(viscous, coulomb, false));
+    let (with, _) = run(rubbing_motor(viscous, coulomb, true));
+    let (frictionless, _) = run(rubbing_motor(0.0, 0.0, false));
+    let motor = rubbing_motor(viscous, coulomb, false);
+    let g = motor.ratio();
+    for i in 0..3 {
+        let closed = g * motor.efficiency * motor.friction_torque(g * velocity[i]) / kp;
+        println!(
+            "slider {}: error {:.3} um (friction / kp = {:.3} um), with the friction fed forward {:.4} um, without friction {:.4} um",
+            i + 1,
+            1e6 * without[i],
+            1e6 * (closed + frictionless[i]),
+            1e6 * with[i],
+            1e6 * frictionless[i]
+        );
+        assert!(
+            (without[i] - frictionless[i] - closed).abs() <= 0.02 * closed.abs(),
+            "{i}: {} vs {closed}",
+            without[i] - frictionless[i]
+        );
+        assert!(
+            (with[i] - frictionless[i]).abs() <= 1e-3 * closed.abs(),
+            "{i}: {} vs {}",
+            with[i],
+            frictionless[i]
+        );
     }
 }

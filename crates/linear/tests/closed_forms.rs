@@ -484,6 +484,7 @@ fn screw_motor(k: f64) -> MotorBallScrew {
         coulomb_friction: 0.0,
         coulomb_smoothing: 0.01,
         drive: None,
+        friction_feedforward: false,
         screw: Some(Screw {
             stiffness: k,
             damping: 0.0,

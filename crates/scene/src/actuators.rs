@@ -148,6 +148,9 @@ struct MotorKeys {
     /// The screw's axial damping (N s/m; needs `screw_stiffness`).
     #[serde(default)]
     screw_damping: Option<f64>,
+    /// Whether a law's feedforward adds the steady friction at the commanded velocity.
+    #[serde(default)]
+    friction_feedforward: bool,
 }
 
 /// The drive keys of a motor, all or none (`current_limit` optional with the others).
@@ -226,6 +229,7 @@ impl From<MotorKeys> for MotorBallScrew {
             coulomb_smoothing: k.coulomb_smoothing,
             drive,
             screw: k.screw(),
+            friction_feedforward: k.friction_feedforward,
         }
     }
 }
@@ -307,6 +311,12 @@ impl ActuatorFactory for MotorBallScrewFactory {
             .filter_map(|(key, value)| value.map(|v| (key, v))),
         )
         .map(|(key, value)| (key.to_string(), toml::Value::Float(value)))
+        .chain(k.friction_feedforward.then(|| {
+            (
+                "friction_feedforward".to_string(),
+                toml::Value::Boolean(true),
+            )
+        }))
         .collect()
     }
 }
