@@ -10,6 +10,7 @@ mod beam;
 mod collapse;
 mod control;
 mod csv_format;
+mod drive;
 mod frf;
 mod fuzz;
 mod inputs_untouched;

@@ -268,7 +268,11 @@ pub fn attempt(scene: &Scene, method: &MethodHandle) -> Attempt {
     };
     // The method a scene naming `method` would run on this model.
     let linear = model.linear_form().is_some();
-    let mechanical = flexprr_scene::mechanical_model(&scene.coupling, scene.controller.as_ref());
+    let mechanical = flexprr_scene::mechanical_model(
+        &scene.coupling,
+        scene.controller.as_ref(),
+        scene.actuator.as_ref(),
+    );
     let mut registry = flexprr_scene::Registry::default();
     registry.register_method(method);
     let handle = match registry.resolve_method_for(method.name(), linear, mechanical, model.kind())

@@ -100,6 +100,45 @@ pub const MOTOR_DRIVE_SIGNALS: [ActuatorSignal; 5] = [
     },
 ];
 
+/// The winding current state of a [`MotorBallScrew`] with a [`crate::Winding`] (A).
+const CURRENT_STATE: ActuatorSignal = ActuatorSignal {
+    name: MOTOR_CURRENT,
+    header_unit: "A",
+    symbol: "i",
+    unit: "A",
+};
+/// The current loop's integral (V).
+const INTEGRAL_STATE: ActuatorSignal = ActuatorSignal {
+    name: "current_loop_integral",
+    header_unit: "V",
+    symbol: "x",
+    unit: "V",
+};
+/// The screw's twist `theta - g rho` (rad).
+const TWIST_STATE: ActuatorSignal = ActuatorSignal {
+    name: "screw_twist",
+    header_unit: "rad",
+    symbol: "φ",
+    unit: "rad",
+};
+/// The rotor's speed (rad/s).
+const ROTOR_STATE: ActuatorSignal = ActuatorSignal {
+    name: "rotor_speed",
+    header_unit: "rad_s",
+    symbol: "ω",
+    unit: "rad/s",
+};
+/// The states of a [`MotorBallScrew`] by (winding states, screw): the winding's current and
+/// loop integral first, then the screw's twist and the rotor's speed.
+const MOTOR_STATES: [[&[ActuatorSignal]; 2]; 3] = [
+    [&[], &[TWIST_STATE, ROTOR_STATE]],
+    [&[CURRENT_STATE], &[CURRENT_STATE, TWIST_STATE, ROTOR_STATE]],
+    [
+        &[CURRENT_STATE, INTEGRAL_STATE],
+        &[CURRENT_STATE, INTEGRAL_STATE, TWIST_STATE, ROTOR_STATE],
+    ],
+];
+
 /// What an actuator does at one instant.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ActuatorOutput {
@@ -162,9 +201,15 @@ pub struct MotorRatings {
 /// An actuator of one slider.
 ///
 /// Required: the force on the slider for a force command at a slider velocity, and a name.
-/// Provided: no signals besides the force, no reflected mass, no limit, no ratings (an ideal
-/// force). A scene names an actuator through a factory registered in the scene layer
-/// (`flexprr_scene::ActuatorFactory`).
+/// Provided: no signals besides the force, no reflected mass, no limit, no ratings, no
+/// states of its own (an ideal force). A scene names an actuator through a factory
+/// registered in the scene layer (`flexprr_scene::ActuatorFactory`).
+///
+/// An actuator with dynamics of its own (a winding's current, a compliant screw's rotor)
+/// declares its states ([`Actuator::states`], [`Actuator::state_names`],
+/// [`Actuator::initial_states`]) and computes their rates in
+/// [`Actuator::apply_with_states`]: the model carries them in its ODE state after the
+/// control law's, and its linear models include them.
 ///
 /// ```
 /// use flexprr_control::{Actuator, ActuatorOutput, ActuatorSignal};
@@ -172,11 +217,16 @@ pub struct MotorRatings {
 /// /// The part of the command it clips (N), reported as a signal.
 /// const CLIPPED: [ActuatorSignal; 1] =
 ///     [ActuatorSignal { name: "clipped_force", header_unit: "N", symbol: "ΔF", unit: "N" }];
+/// /// Its one state: the force it delivers (N).
+/// const LAGGED: [ActuatorSignal; 1] =
+///     [ActuatorSignal { name: "lagged_force", header_unit: "N", symbol: "F", unit: "N" }];
 ///
-/// /// An ideal force that clips at 500 N.
+/// /// A force that clips at 500 N and follows the clipped command with a first-order lag
+/// /// of time constant `0.001` s (an amplifier's bandwidth).
 /// #[derive(Debug)]
 /// struct Clipped;
 /// impl Actuator for Clipped {
+///     /// In steady state the lag has settled: the clipped command.
 ///     fn apply(&self, command: f64, _velocity: f64) -> ActuatorOutput {
 ///         let force = command.clamp(-500.0, 500.0);
 ///         ActuatorOutput::with_signals(force, command.abs() > 500.0, &CLIPPED, &[command - force])
@@ -184,10 +234,30 @@ pub struct MotorRatings {
 ///     fn force_limit(&self) -> f64 { 500.0 }
 ///     fn name(&self) -> &'static str { "clipped" }
 ///     fn signals(&self) -> &'static [ActuatorSignal] { &CLIPPED }
+///     fn states(&self) -> usize { 1 }
+///     fn state_names(&self) -> &'static [ActuatorSignal] { &LAGGED }
+///     /// `F' = (clamp(F_c) - F) / T`; the force on the slider is the state `F`.
+///     fn apply_with_states(
+///         &self,
+///         command: f64,
+///         _velocity: f64,
+///         _friction_velocity: Option<f64>,
+///         states: &[f64],
+///         rates: &mut [f64],
+///     ) -> ActuatorOutput {
+///         let target = command.clamp(-500.0, 500.0);
+///         rates[0] = (target - states[0]) / 0.001;
+///         ActuatorOutput::with_signals(states[0], command.abs() > 500.0, &CLIPPED, &[command - target])
+///     }
 /// }
 /// let out = Clipped.apply(800.0, 0.0);
 /// assert!(out.saturated);
 /// assert_eq!(out.signal("clipped_force"), Some(300.0));
+/// // Started at rest, the lagged force rises towards the clipped command at 500 kN/s.
+/// let (mut state, mut rate) = ([0.0], [0.0]);
+/// Clipped.initial_states(0.0, &mut state);
+/// let out = Clipped.apply_with_states(800.0, 0.0, None, &state, &mut rate);
+/// assert_eq!((out.force, rate[0]), (0.0, 5.0e5));
 /// ```
 pub trait Actuator: std::fmt::Debug + Send + Sync {
     /// The force on the slider (and the motor's state) for the force command `command` (N)
@@ -200,7 +270,9 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
     fn signals(&self) -> &'static [ActuatorSignal] {
         &[]
     }
-    /// Mass the actuator adds to the slider along its guide (kg): the reflected rotor inertia.
+    /// The actuator's moving inertia reflected to the slider along its guide (kg): the rotor
+    /// inertia `J g^2`. What a motion's feedforward and feasibility add to the slider's mass;
+    /// the model adds [`Actuator::mass_on_slider`].
     fn reflected_mass(&self) -> f64 {
         0.0
     }
@@ -247,6 +319,55 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
         let _ = velocity;
         false
     }
+    /// Number of the actuator's own states, carried in the model's ODE state (after the
+    /// control law's): none by default (the actuator is a function of the command and the
+    /// slider velocity, [`Actuator::apply`]).
+    fn states(&self) -> usize {
+        0
+    }
+    /// The actuator's states, one per state in their order (name and unit; the linear
+    /// models name their states by them). None by default.
+    fn state_names(&self) -> &'static [ActuatorSignal] {
+        &[]
+    }
+    /// The states at the start of a run whose slider starts at the velocity `velocity`
+    /// (m/s), into `states` ([`Actuator::states`] entries). Zero by default.
+    fn initial_states(&self, velocity: f64, states: &mut [f64]) {
+        let _ = velocity;
+        states.fill(0.0);
+    }
+    /// The force on the slider for the force command `command` (N) at the slider velocity
+    /// `velocity` (m/s) with the actuator's states `states`, their rates into `rates` (both
+    /// [`Actuator::states`] entries). `friction_velocity`: a slider velocity at which a
+    /// linearisation holds the non-smooth friction (see
+    /// [`Actuator::apply_with_friction_at`]); `None` in a run (the friction at the
+    /// actuator's own speed). Must not allocate. By default (no states)
+    /// [`Actuator::apply_with_friction_at`].
+    fn apply_with_states(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: Option<f64>,
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> ActuatorOutput {
+        let _ = (states, rates);
+        self.apply_with_friction_at(command, velocity, friction_velocity.unwrap_or(velocity))
+    }
+    /// The force command (N) that holds the actuator's steady-state friction at the slider
+    /// velocity `velocity` (m/s): what a law's feedforward adds at the commanded velocity
+    /// (besides the rigid inverse dynamics and the reflected inertia), so that the feedback
+    /// does not have to carry the friction. None by default.
+    fn friction_feedforward(&self, velocity: f64) -> f64 {
+        let _ = velocity;
+        0.0
+    }
+    /// Mass the actuator adds to the slider's own equation of motion (kg): the reflected
+    /// mass ([`Actuator::reflected_mass`]) when the transmission is rigid (the default), none
+    /// when the actuator carries its rotor in its own states (a compliant screw).
+    fn mass_on_slider(&self) -> f64 {
+        self.reflected_mass()
+    }
 }
 
 /// `kind = "force"`: the command is the force.
@@ -283,9 +404,25 @@ pub struct MotorBallScrew {
     pub coulomb_friction: f64,
     /// Speed `omega_s` of the Coulomb friction's smoothing (rev/s).
     pub coulomb_smoothing: f64,
-    /// The drive's electrics (the torque-speed envelope), where modelled; `None`: the peak
-    /// torque at any speed.
+    /// The drive's electrics (the torque-speed envelope, and the winding's dynamics where
+    /// modelled); `None`: the peak torque at any speed.
     pub drive: Option<Drive>,
+    /// The screw's axial compliance, where modelled; `None`: a rigid screw.
+    pub screw: Option<Screw>,
+    /// Whether a law's feedforward adds the force of the steady friction at the commanded
+    /// slider velocity ([`Actuator::friction_feedforward`]).
+    pub friction_feedforward: bool,
+}
+
+/// The axial compliance of a ball screw (with its nut and bearings): a spring and damper
+/// between the motor, seen at the slider as the travel `theta / g` of its angle `theta`,
+/// and the slider (module documentation of [`MotorBallScrew`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Screw {
+    /// Axial stiffness `k` (N/m).
+    pub stiffness: f64,
+    /// Axial damping `c` (N s/m).
+    pub damping: f64,
 }
 
 impl MotorBallScrew {
@@ -443,12 +580,63 @@ impl MotorBallScrew {
         if let Some(drive) = self.drive {
             drive.validated()?;
         }
+        if let Some(screw) = self.screw {
+            check(
+                "screw_stiffness",
+                screw.stiffness,
+                0.0,
+                true,
+                "must be finite and > 0 (N/m; ball screws have 1e7 to 1e9)",
+            )?;
+            if screw.stiffness > 1e12 {
+                return Err(ControlError::InvalidParameter {
+                    name: "screw_stiffness",
+                    value: screw.stiffness,
+                    rule: "must be at most 1e12 N/m",
+                });
+            }
+            check(
+                "screw_damping",
+                screw.damping,
+                0.0,
+                false,
+                "must be finite and >= 0 (N s/m)",
+            )?;
+            if screw.damping > 1e9 {
+                return Err(ControlError::InvalidParameter {
+                    name: "screw_damping",
+                    value: screw.damping,
+                    rule: "must be at most 1e9 N s/m",
+                });
+            }
+            if self.rotor_inertia <= 0.0 {
+                return Err(ControlError::InvalidParameter {
+                    name: "rotor_inertia",
+                    value: self.rotor_inertia,
+                    rule: "must be > 0 with screw_stiffness: the rotor is a mass on the screw's \
+                           spring",
+                });
+            }
+        }
         Ok(self)
     }
 
     /// Transmission ratio `g = 2 pi / p` (rad per metre of slider travel).
     pub fn ratio(&self) -> f64 {
         std::f64::consts::TAU / self.lead
+    }
+
+    /// The frequency (Hz) of the screw's mode with the slider held,
+    /// `(1/2 pi) sqrt(k / m_r)`, `m_r = J g^2` (none for a rigid screw). With a free slider of
+    /// mass `m_s` it rises to `(1/2 pi) sqrt(k (1/m_r + 1/m_s))`.
+    pub fn screw_mode_held_hz(&self) -> Option<f64> {
+        let k = self.screw?.stiffness;
+        Some((k / self.reflected_mass()).sqrt() / std::f64::consts::TAU)
+    }
+
+    /// The number of the winding's states (the drive's [`Drive::states`]).
+    fn winding_states(&self) -> usize {
+        self.drive.map_or(0, |d| d.states())
     }
 
     /// Friction torque at the motor shaft (N m) at the motor speed `omega` (rad/s).
@@ -534,6 +722,125 @@ impl Actuator for MotorBallScrew {
     fn friction_is_non_smooth_at(&self, velocity: f64) -> bool {
         self.coulomb_friction > 0.0 && (velocity / self.lead).abs() < 4.0 * self.coulomb_smoothing
     }
+    /// The winding's current and the current loop's integral (with a [`crate::Winding`]),
+    /// then the screw's twist and the rotor's speed (with a [`Screw`]).
+    fn states(&self) -> usize {
+        self.winding_states() + if self.screw.is_some() { 2 } else { 0 }
+    }
+    fn state_names(&self) -> &'static [ActuatorSignal] {
+        MOTOR_STATES[self.winding_states()][usize::from(self.screw.is_some())]
+    }
+    /// No current, no integral, no twist; the rotor turning with the slider, `g rho'`.
+    fn initial_states(&self, velocity: f64, states: &mut [f64]) {
+        states.fill(0.0);
+        if self.screw.is_some() {
+            states[self.winding_states() + 1] = self.ratio() * velocity;
+        }
+    }
+    /// The module documentation's equations with the winding's dynamics ([`crate::drive`])
+    /// and the compliant screw: `phi' = omega - g rho'`,
+    /// `J omega' = eta (tau - tau_f) - F_s / g`, `F_s = k phi / g + c (omega / g - rho')` the
+    /// force on the slider (the efficiency acts on the motor's torque as for the rigid
+    /// screw, so that the stiff limit is the rigid model).
+    fn apply_with_states(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: Option<f64>,
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> ActuatorOutput {
+        if self.states() == 0 {
+            return self.apply_with_friction_at(
+                command,
+                velocity,
+                friction_velocity.unwrap_or(velocity),
+            );
+        }
+        let g = self.ratio();
+        let electric = self.winding_states();
+        let omega = if self.screw.is_some() {
+            states[electric + 1]
+        } else {
+            g * velocity
+        };
+        let wanted = command / (g * self.efficiency);
+        let (torque, saturated, electrics) = match self.drive {
+            Some(drive) if electric > 0 => {
+                let w = drive
+                    .winding(
+                        wanted,
+                        self.torque_limit(),
+                        omega,
+                        &states[..electric],
+                        &mut rates[..electric],
+                    )
+                    .unwrap_or(crate::WindingOutput {
+                        torque: 0.0,
+                        current: 0.0,
+                        voltage: 0.0,
+                        saturated: false,
+                    });
+                (w.torque, w.saturated, Some((w.current, w.voltage)))
+            }
+            drive => {
+                let (lo, hi) = self.torque_range(omega);
+                let torque = wanted.clamp(lo, hi);
+                let electrics = drive.map(|d| (d.current(torque), d.voltage(torque, omega)));
+                (torque, wanted < lo || wanted > hi, electrics)
+            }
+        };
+        let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
+        let coulomb_speed = friction_velocity.map_or(omega, |v| g * v);
+        let friction = self.viscous_friction * omega
+            + self.coulomb_friction * (coulomb_speed / smoothing).tanh();
+        let force = match self.screw {
+            Some(screw) => {
+                let twist = states[electric];
+                let force = screw.stiffness * twist / g + screw.damping * (omega / g - velocity);
+                rates[electric] = omega - g * velocity;
+                rates[electric + 1] =
+                    (self.efficiency * (torque - friction) - force / g) / self.rotor_inertia;
+                force
+            }
+            None => g * self.efficiency * (torque - friction),
+        };
+        let flag = f64::from(u8::from(saturated));
+        let speed = omega / std::f64::consts::TAU;
+        match electrics {
+            None => ActuatorOutput::with_signals(
+                force,
+                saturated,
+                &MOTOR_SIGNALS,
+                &[torque, speed, flag],
+            ),
+            Some((current, voltage)) => ActuatorOutput::with_signals(
+                force,
+                saturated,
+                &MOTOR_DRIVE_SIGNALS,
+                &[torque, speed, flag, current, voltage],
+            ),
+        }
+    }
+    /// With [`MotorBallScrew::friction_feedforward`], `g eta tau_f(g rho')`: the command
+    /// whose torque `tau_f` holds the friction (the force on the slider is
+    /// `g eta (tau - tau_f)`).
+    fn friction_feedforward(&self, velocity: f64) -> f64 {
+        if !self.friction_feedforward {
+            return 0.0;
+        }
+        let g = self.ratio();
+        g * self.efficiency * self.friction_torque(g * velocity)
+    }
+    /// The reflected mass with a rigid screw; none with a compliant one (the rotor is a
+    /// state of its own).
+    fn mass_on_slider(&self) -> f64 {
+        if self.screw.is_some() {
+            0.0
+        } else {
+            self.reflected_mass()
+        }
+    }
     fn name(&self) -> &'static str {
         "motor_ballscrew"
     }
@@ -584,6 +891,8 @@ mod tests {
             coulomb_friction: 0.02,
             coulomb_smoothing: 0.01,
             drive: None,
+            friction_feedforward: false,
+            screw: None,
         }
         .validated()
         .unwrap()
@@ -669,6 +978,7 @@ mod tests {
             resistance: 1.5,
             bus_voltage: 100.0,
             current_limit: 12.0,
+            winding: None,
         };
         let m = MotorBallScrew {
             drive: Some(drive),

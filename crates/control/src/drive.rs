@@ -16,8 +16,28 @@
 //!
 //! the motor's torque-speed envelope: the peak (or current-limited) torque up to the corner
 //! speed, then falling linearly to zero at the no-load speed `V_bus / K_e` when motoring; a
-//! braking torque is helped by the back-EMF. The winding's inductance and the current loop's
-//! own dynamics are not modelled here (the envelope is their steady state).
+//! braking torque is helped by the back-EMF.
+//!
+//! With a [`Winding`] the current is a state instead (the envelope is then the steady state
+//! of its dynamics):
+//!
+//! ```text
+//! winding            L i' = u - R i - K_e omega
+//! current reference  i_r = clamp(tau_c, -tau_max, tau_max) / K_t      (tau_max: K_t I_max or the peak)
+//! current loop (PI)  u* = k_p (i_r - i) + x + K_e omega,   u = clamp(u*, -V_bus, V_bus)
+//!                    x' = k_i (i_r - i) + (u - u*) k_i / k_p               (back-calculation)
+//!                    k_p = 2 pi f_c L,  k_i = 2 pi f_c R
+//! no current loop    u = clamp(R i_r + K_e omega, -V_bus, V_bus)           (a voltage amplifier)
+//! torque             tau = K_t i
+//! ```
+//!
+//! The PI's zero `k_i / k_p = R / L` cancels the winding's pole, so that below the bus
+//! voltage the current follows its reference as the first-order lag
+//! `i / i_r = 2 pi f_c / (s + 2 pi f_c)`, whatever the speed: the back-EMF is fed forward
+//! (the drive knows the speed). When the voltage clips, the back-calculation (tracking time
+//! `k_p / k_i = L / R`; Åström & Hägglund, *Advanced PID Control*, 2006, 3.5) keeps the
+//! integral where the loop comes out of saturation without overshoot. Without the current
+//! loop the current reaches the reference with the winding's own time constant `L / R`.
 
 use crate::ControlError;
 use crate::error::check;
@@ -34,6 +54,33 @@ pub struct Drive {
     pub bus_voltage: f64,
     /// Current limit `I_max` (A) of the amplifier (infinite: none).
     pub current_limit: f64,
+    /// The winding's inductance and the amplifier's current loop, where modelled (the
+    /// current is then a state); `None`: the steady state of the module documentation.
+    pub winding: Option<Winding>,
+}
+
+/// The winding's inductance and the amplifier's current loop (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Winding {
+    /// Inductance `L` (H), terminal to terminal.
+    pub inductance: f64,
+    /// Bandwidth `f_c` (Hz) of the PI current loop; `None`: a voltage amplifier without a
+    /// current loop.
+    pub current_bandwidth: Option<f64>,
+}
+
+/// The winding's states, their rates and what the drive does at one instant
+/// ([`Drive::winding`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindingOutput {
+    /// The torque `K_t i` (N m).
+    pub torque: f64,
+    /// The current `i` (A).
+    pub current: f64,
+    /// The winding voltage `u` the amplifier applies (V).
+    pub voltage: f64,
+    /// Whether the current reference or the voltage was clipped.
+    pub saturated: bool,
 }
 
 impl Drive {
@@ -69,6 +116,38 @@ impl Drive {
                 value: self.current_limit,
                 rule: "must be > 0 (A)",
             });
+        }
+        if let Some(w) = self.winding {
+            check(
+                "inductance",
+                w.inductance,
+                0.0,
+                true,
+                "must be finite and > 0 (H; servo windings have 1e-4 to 0.1)",
+            )?;
+            if w.inductance > 10.0 {
+                return Err(ControlError::InvalidParameter {
+                    name: "inductance",
+                    value: w.inductance,
+                    rule: "must be at most 10 H",
+                });
+            }
+            if let Some(f) = w.current_bandwidth {
+                check(
+                    "current_bandwidth",
+                    f,
+                    0.0,
+                    true,
+                    "must be finite and > 0 (Hz; current loops have 500 to 5000)",
+                )?;
+                if f > 1e6 {
+                    return Err(ControlError::InvalidParameter {
+                        name: "current_bandwidth",
+                        value: f,
+                        rule: "must be at most 1e6 Hz",
+                    });
+                }
+            }
         }
         for (name, value, max, rule) in [
             (
@@ -118,6 +197,60 @@ impl Drive {
         self.resistance * self.current(torque) + self.torque_constant * omega
     }
 
+    /// The number of the winding's states: the current, and the current loop's integral
+    /// (none without a [`Winding`]).
+    pub fn states(&self) -> usize {
+        match self.winding {
+            None => 0,
+            Some(Winding {
+                current_bandwidth: None,
+                ..
+            }) => 1,
+            Some(_) => 2,
+        }
+    }
+
+    /// The PI gains `(k_p, k_i)` of the current loop (V/A, V/(A s)), where there is one.
+    pub fn current_loop_gains(&self) -> Option<(f64, f64)> {
+        let w = self.winding?;
+        let omega_c = std::f64::consts::TAU * w.current_bandwidth?;
+        Some((omega_c * w.inductance, omega_c * self.resistance))
+    }
+
+    /// The winding at the motor speed `omega` (rad/s) for the torque command `torque` (N m)
+    /// limited to `+-torque_limit` (N m), with its states `states` (the current, then the
+    /// loop's integral; [`Drive::states`] entries) and their rates into `rates` (module
+    /// documentation). Without a [`Winding`], nothing (the steady state is
+    /// [`Drive::voltage_limited_torque`]).
+    pub fn winding(
+        &self,
+        torque: f64,
+        torque_limit: f64,
+        omega: f64,
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> Option<WindingOutput> {
+        let w = self.winding?;
+        let reference = torque.clamp(-torque_limit, torque_limit) / self.torque_constant;
+        let current = states[0];
+        let emf = self.torque_constant * omega;
+        let wanted = match self.current_loop_gains() {
+            Some((kp, _)) => kp * (reference - current) + states[1] + emf,
+            None => self.resistance * reference + emf,
+        };
+        let voltage = wanted.clamp(-self.bus_voltage, self.bus_voltage);
+        rates[0] = (voltage - self.resistance * current - emf) / w.inductance;
+        if let Some((kp, ki)) = self.current_loop_gains() {
+            rates[1] = ki * (reference - current) + (voltage - wanted) * ki / kp;
+        }
+        Some(WindingOutput {
+            torque: self.torque_constant * current,
+            current,
+            voltage,
+            saturated: torque.abs() > torque_limit || wanted.abs() > self.bus_voltage,
+        })
+    }
+
     /// The torque interval the bus voltage allows at the motor speed `omega` (rad/s),
     /// `K_t (+-V_bus - K_e omega) / R` (N m); the current limit is
     /// [`Drive::current_limited_torque`].
@@ -138,6 +271,7 @@ mod tests {
             resistance: 2.0,
             bus_voltage: 300.0,
             current_limit: 10.0,
+            winding: None,
         }
         .validated()
         .unwrap()

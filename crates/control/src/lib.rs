@@ -35,11 +35,11 @@ mod vibration;
 pub use actuator::{
     Actuator, ActuatorOutput, ActuatorSignal, IdealForce, MAX_ACTUATOR_SIGNALS, MOTOR_CURRENT,
     MOTOR_DRIVE_SIGNALS, MOTOR_SIGNALS, MOTOR_SPEED, MOTOR_TORQUE, MOTOR_VOLTAGE, MotorBallScrew,
-    MotorRatings,
+    MotorRatings, Screw,
 };
 pub use callback::{CallbackLaw, LawFunction};
 pub use controller::{ControlInput, Controller, SliderState};
-pub use drive::Drive;
+pub use drive::{Drive, Winding, WindingOutput};
 pub use error::ControlError;
 pub use pid::Pid;
 pub use sensed::{MAX_DELAY_PERIODS, MAX_PADE_ORDER, SensedLaw, Sensors};

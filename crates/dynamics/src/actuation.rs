@@ -54,11 +54,21 @@ struct Sample {
 }
 
 /// The actuation of a model with its running state.
+///
+/// It owns the wiring the actuated models share: their state is
+/// `y = (q, rho, q', rho', z, x_1, x_2, x_3)`, the sliders the last three of the model's
+/// `coordinates` generalized coordinates, then the continuous law's states `z` and each
+/// actuator's own states `x_i` ([`Actuator::states`]).
 #[derive(Debug, Clone)]
 pub(crate) struct Actuated {
     pub(crate) spec: Actuation,
-    /// Slider mass plus the actuator's reflected mass, per slider (kg).
+    /// Slider mass plus the mass the actuator adds to it ([`Actuator::mass_on_slider`]),
+    /// per slider (kg).
     pub(crate) slider_mass: [f64; 3],
+    /// The model's generalized coordinates (the sliders the last three).
+    coordinates: usize,
+    /// Where each actuator's states start among the actuators' states, and their end.
+    actuator_offsets: [usize; 4],
     /// The samples of a sampled law.
     hold: Hold<Sample>,
     /// Scratch for the law's state rates (continuous law: written into `dy`).
@@ -82,7 +92,8 @@ struct LoopOverrides {
 
 /// The commanded sliders at `t` (the closed-form inverse kinematics of the trajectory) and
 /// the feedforward: the rigid-body inverse-dynamics driving force of the commanded motion
-/// plus the actuators' reflected inertia `m_r rho_ref''`.
+/// plus the actuators' reflected inertia `m_r rho_ref''` and, where an actuator asks for it,
+/// its steady friction at `rho_ref'` ([`Actuator::friction_feedforward`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Reference {
     pub(crate) sliders: [SliderState; 3],
@@ -108,7 +119,10 @@ impl Reference {
             acceleration: legs[i].rho_ddot,
         });
         let feedforward = std::array::from_fn(|i| {
-            forces.driving_force[i] + actuated.spec.actuators[i].reflected_mass() * legs[i].rho_ddot
+            let actuator = &actuated.spec.actuators[i];
+            forces.driving_force[i]
+                + actuator.reflected_mass() * legs[i].rho_ddot
+                + actuator.friction_feedforward(legs[i].rho_dot)
         });
         Ok(Self {
             sliders,
@@ -118,15 +132,22 @@ impl Reference {
 }
 
 impl Actuated {
-    /// The actuation of `machine`'s sliders, started at `start`.
-    pub(crate) fn new(spec: Actuation, machine: &Machine, start: f64) -> Self {
+    /// The actuation of `machine`'s sliders, started at `start`, in a model of
+    /// `coordinates` generalized coordinates (the sliders the last three).
+    pub(crate) fn new(spec: Actuation, machine: &Machine, start: f64, coordinates: usize) -> Self {
         let slider_mass =
-            std::array::from_fn(|i| machine.slider_mass[i] + spec.actuators[i].reflected_mass());
+            std::array::from_fn(|i| machine.slider_mass[i] + spec.actuators[i].mass_on_slider());
         let rates = vec![0.0; spec.controller.states()];
         let spec_period = spec.controller.period();
+        let mut actuator_offsets = [0; 4];
+        for i in 0..3 {
+            actuator_offsets[i + 1] = actuator_offsets[i] + spec.actuators[i].states();
+        }
         Self {
             spec,
             slider_mass,
+            coordinates,
+            actuator_offsets,
             hold: Hold::new(start, spec_period),
             rates,
             overrides: LoopOverrides::default(),
@@ -182,11 +203,57 @@ impl Actuated {
     }
 
     /// Number of the law's states carried in the ODE state (a continuous law's).
-    pub(crate) fn ode_states(&self) -> usize {
+    pub(crate) fn law_states(&self) -> usize {
         if self.period() > 0.0 {
             0
         } else {
             self.spec.controller.states()
+        }
+    }
+
+    /// Number of the actuators' own states carried in the ODE state.
+    pub(crate) fn actuator_states(&self) -> usize {
+        self.actuator_offsets[3]
+    }
+
+    /// Number of states carried in the ODE state after the mechanical ones: the
+    /// continuous law's, then the actuators'.
+    pub(crate) fn ode_states(&self) -> usize {
+        self.law_states() + self.actuator_states()
+    }
+
+    /// The length of the model's state.
+    pub(crate) fn dim(&self) -> usize {
+        2 * self.coordinates + self.ode_states()
+    }
+
+    /// The measured sliders of the state `y`: the last three coordinates and their rates.
+    pub(crate) fn measured(&self, y: &[f64]) -> [SliderState; 3] {
+        let (n, first) = (self.coordinates, self.coordinates - 3);
+        std::array::from_fn(|i| SliderState {
+            position: y[first + i],
+            velocity: y[n + first + i],
+            acceleration: 0.0,
+        })
+    }
+
+    /// Writes the start of a run on the commanded state `rigid` into the model's state `y`:
+    /// the sliders at `rho_ref(t0)` with `rho_ref'(t0)`, the law's initial states, the
+    /// actuators' ([`Actuator::initial_states`]). The rest of `y` is the model's.
+    pub(crate) fn start<L: AsRef<LegKinematics>>(&self, rigid: &MachineState<L>, y: &mut [f64]) {
+        let (n, first) = (self.coordinates, self.coordinates - 3);
+        for (i, leg) in rigid.legs.iter().enumerate() {
+            let leg = leg.as_ref();
+            y[first + i] = leg.rho;
+            y[n + first + i] = leg.rho_dot;
+        }
+        let (law, actuators) = y[2 * n..].split_at_mut(self.law_states());
+        if !law.is_empty() {
+            law.copy_from_slice(&self.spec.controller.initial_states());
+        }
+        for (i, leg) in rigid.legs.iter().enumerate() {
+            let range = self.actuator_offsets[i]..self.actuator_offsets[i + 1];
+            self.spec.actuators[i].initial_states(leg.as_ref().rho_dot, &mut actuators[range]);
         }
     }
 
@@ -281,27 +348,53 @@ impl Actuated {
         self.rates = rates;
     }
 
-    /// The force commands and the actuators' outputs at `t` for the commanded state `rigid`
-    /// and the measured sliders, with the continuous law's states `states` (their rates into
-    /// `rates`; a sampled law holds its command).
+    /// The force commands and the actuators' outputs at `(t, y)` for the commanded state
+    /// `rigid`: the sliders measured from `y`, the continuous law's and the actuators' states
+    /// from its tail, their rates into `rates` (the tail of the model's `dy`; a sampled law
+    /// holds its command).
     ///
     /// # Errors
     /// A singular rigid inverse dynamics of the commanded motion (the feedforward).
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn forces<L: AsRef<LegKinematics>>(
         &self,
         machine: &Machine,
         rigid: &MachineState<L>,
         t: f64,
-        measured: [SliderState; 3],
-        states: &[f64],
+        y: &[f64],
         rates: &mut [f64],
     ) -> Result<Commands, DynamicsError> {
+        let measured = self.measured(y);
+        let (law, actuators) = y[2 * self.coordinates..].split_at(self.law_states());
+        let (law_rates, actuator_rates) = rates.split_at_mut(self.law_states());
         let reference = Reference::of(machine, self, rigid, t)?;
         let input = self.input(t, &reference, measured);
-        let command = self.command(&input, states, rates);
+        let command = self.command(&input, law, law_rates);
         let applied = std::array::from_fn(|i| self.overrides.command[i].unwrap_or(command[i]));
-        Ok((command, self.apply(&applied, measured.map(|m| m.velocity))))
+        let outputs = self.apply(
+            &applied,
+            measured.map(|m| m.velocity),
+            actuators,
+            actuator_rates,
+        );
+        Ok((command, outputs))
+    }
+
+    /// What the sampled law commands at a sample at `(t, y)` with its states
+    /// `slider_states`, for the commanded state `rigid` (see
+    /// [`crate::ControlLaws::law_sample`]).
+    ///
+    /// # Errors
+    /// A singular rigid inverse dynamics of the commanded motion (the feedforward).
+    pub(crate) fn law_sample_at<L: AsRef<LegKinematics>>(
+        &self,
+        machine: &Machine,
+        rigid: &MachineState<L>,
+        t: f64,
+        y: &[f64],
+        slider_states: &[f64],
+    ) -> Result<([f64; 3], Vec<f64>), DynamicsError> {
+        let input = self.sample_input(machine, rigid, t, self.measured(y))?;
+        Ok(self.law_sample(&input, slider_states))
     }
 
     /// The control input of a sample at `t` for the commanded state `rigid` and the
@@ -321,19 +414,20 @@ impl Actuated {
     }
 
     /// Takes a sampled law's sample when `t` is one of its sample times (see
-    /// [`Actuated::sample`]), for the commanded motion `trajectory` and the measured
-    /// sliders; a kinematic failure there is left to the right-hand side, which meets and
-    /// reports it.
+    /// [`Actuated::sample`]), for the commanded motion `trajectory` and the sliders measured
+    /// from the state `y` (of the model's length); a kinematic failure there is left to the
+    /// right-hand side, which meets and reports it.
     pub(crate) fn sample_at(
         &mut self,
         machine: &Machine,
         trajectory: &dyn flexprr_kinematics::Trajectory,
         t: f64,
-        measured: [SliderState; 3],
+        y: &[f64],
     ) {
-        if self.period() <= 0.0 {
+        if self.period() <= 0.0 || y.len() != self.dim() {
             return;
         }
+        let measured = self.measured(y);
         let Ok(rigid) = machine
             .geometry
             .inverse_kinematics_unchecked(&trajectory.motion(t))
@@ -347,11 +441,31 @@ impl Actuated {
         self.sample(&input);
     }
 
-    /// The actuator outputs for the force commands at the slider velocities.
-    pub(crate) fn apply(&self, command: &[f64; 3], velocity: [f64; 3]) -> [ActuatorOutput; 3] {
-        let friction = self.overrides.friction_velocity.unwrap_or(velocity);
-        std::array::from_fn(|i| {
-            self.spec.actuators[i].apply_with_friction_at(command[i], velocity[i], friction[i])
+    /// The actuator outputs for the force commands at the slider velocities, with the
+    /// actuators' states `states` (their rates into `rates`).
+    fn apply(
+        &self,
+        command: &[f64; 3],
+        velocity: [f64; 3],
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> [ActuatorOutput; 3] {
+        let friction = self.overrides.friction_velocity;
+        let o = self.actuator_offsets;
+        let (rates_1, rest) = rates.split_at_mut(o[1]);
+        let (rates_2, rates_3) = rest.split_at_mut(o[2] - o[1]);
+        let rates = [rates_1, rates_2, rates_3];
+        let mut i = 0;
+        rates.map(|r| {
+            let out = self.spec.actuators[i].apply_with_states(
+                command[i],
+                velocity[i],
+                friction.map(|f| f[i]),
+                &states[o[i]..o[i + 1]],
+                r,
+            );
+            i += 1;
+            out
         })
     }
 }

@@ -43,6 +43,27 @@ pub(crate) fn state_names(model: &dyn SceneModel, layout: &Relaxation<'_>) -> Ve
     let law = model
         .actuation()
         .map_or_else(|| "control".to_string(), |a| a.controller.name());
+    // The actuators' own states come last, slider by slider.
+    let actuator_states: Vec<(String, String)> = model.actuation().map_or_else(Vec::new, |a| {
+        a.actuators
+            .iter()
+            .enumerate()
+            .flat_map(|(i, actuator)| {
+                actuator.state_names().iter().map(move |s| {
+                    (
+                        format!(
+                            "{} of actuator {} ({})",
+                            s.name.replace('_', " "),
+                            i + 1,
+                            s.unit
+                        ),
+                        format!("{}_{}", s.name, i + 1),
+                    )
+                })
+            })
+            .collect()
+    });
+    let first_actuator_state = layout.dim() - actuator_states.len();
     (0..layout.dim())
         .map(|k| {
             let (name, signal) = if k < total {
@@ -50,6 +71,8 @@ pub(crate) fn state_names(model: &dyn SceneModel, layout: &Relaxation<'_>) -> Ve
             } else if k < 2 * total {
                 let (name, signal) = coordinate(k - total);
                 (format!("rate of the {name}"), format!("{signal}_rate"))
+            } else if k >= first_actuator_state {
+                actuator_states[k - first_actuator_state].clone()
             } else {
                 let i = k - 2 * total + 1;
                 (format!("state {i} of the {law} law"), format!("law_{i}"))

@@ -17,11 +17,12 @@
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-use flexprr_control::{Actuator, IdealForce, Pid};
+use flexprr_control::{Actuator, IdealForce, MotorBallScrew, MotorRatings, Pid, Screw};
 use flexprr_dynamics::{
     Actuation, CoupledOptions, CoupledSystem, Machine, ModalDamping, NonlinearOptions,
     NonlinearSystem, SceneModel, inverse_dynamics, paper,
 };
+use flexprr_integrators::{Integrator, Options, Rk45};
 use flexprr_kinematics::{Line, PlatformMotion, Pose, Trajectory};
 use flexprr_linear::{
     Axis, Input, Output, frequency_response, frequency_response_direct, linearize, modes,
@@ -466,4 +467,144 @@ fn the_hessenberg_response_agrees_with_a_dense_solve() {
     println!("against a dense complex LU: Hessenberg {worst_direct:.1e}, modal {worst_modal:.1e}");
     assert!(worst_direct < 1e-9, "{worst_direct}");
     assert!(worst_modal < 1e-6, "{worst_modal}");
+}
+
+/// A motor on a compliant ball screw of stiffness `k` (no friction, no drive).
+fn screw_motor(k: f64) -> MotorBallScrew {
+    MotorBallScrew {
+        rotor_inertia: 1.6e-5,
+        lead: 0.01,
+        efficiency: 0.9,
+        ratings: MotorRatings {
+            peak_torque: 3.5,
+            continuous_torque: 1.2,
+            max_speed: 100.0,
+        },
+        viscous_friction: 0.0,
+        coulomb_friction: 0.0,
+        coulomb_smoothing: 0.01,
+        drive: None,
+        friction_feedforward: false,
+        screw: Some(Screw {
+            stiffness: k,
+            damping: 0.0,
+        }),
+    }
+    .validated()
+    .unwrap()
+}
+
+/// The closed form of a rigid machine's screw modes: each rotor a mass `m_r = J g^2` at its
+/// slider's travel `x_r`, on the screw's spring `k` to the slider `x_s`; the PD law's force
+/// `-kp x_s` acts on the rotor (through the motor torque), the sliders carry the rigid
+/// machine's mass matrix `M_rho`:
+/// `m_r x_r'' = -kp x_s - k (x_r - x_s)`, `M_rho x_s'' = k (x_r - x_s)`. Returns the
+/// frequencies (Hz, ascending) and the eigenvectors `(x_r, x_s)` of `M^-1 K`.
+fn screw_modes(
+    mass: &Matrix3<f64>,
+    m_r: f64,
+    k: f64,
+    kp: f64,
+) -> Vec<(f64, nalgebra::DVector<f64>)> {
+    let mut system = nalgebra::DMatrix::<f64>::zeros(6, 6);
+    let inverse = mass.try_inverse().unwrap();
+    for i in 0..3 {
+        system[(i, i)] = k / m_r;
+        system[(i, 3 + i)] = (kp - k) / m_r;
+        for j in 0..3 {
+            // x_s'' = M^-1 k (x_r - x_s): row 3 + i of M^-1 K is -(M^-1 k)_ij on x_r_j.
+            system[(3 + i, j)] = -k * inverse[(i, j)];
+            system[(3 + i, 3 + j)] = k * inverse[(i, j)];
+        }
+    }
+    let eigen = system.complex_eigenvalues();
+    let mut modes: Vec<(f64, nalgebra::DVector<f64>)> = eigen
+        .iter()
+        .map(|lambda| {
+            assert!(lambda.im.abs() <= 1e-9 * lambda.re.abs(), "{lambda}");
+            let omega2 = lambda.re;
+            // The eigenvector: the null space of (M^-1 K - omega^2 I).
+            let shifted = &system - nalgebra::DMatrix::<f64>::identity(6, 6) * omega2;
+            let svd = shifted.svd(false, true);
+            let v_t = svd.v_t.unwrap();
+            let smallest = (0..6)
+                .min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))
+                .unwrap();
+            (omega2.sqrt() / (2.0 * PI), v_t.row(smallest).transpose())
+        })
+        .collect();
+    modes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    modes
+}
+
+/// Issue 38, the screw's axial stiffness: with rigid links the machine's three screw modes
+/// are the closed form of [`screw_modes`] (a two-mass oscillator per slider,
+/// `sqrt(k (1/m_r + 1/m_s)) / 2 pi` for a lone slider), found in the linear model's modes
+/// and in a ring-down of a run started in one of them.
+#[test]
+fn screw_modes_of_rigid_links_are_the_rotors_on_the_screws_against_the_rigid_mass_matrix() {
+    let (kp, k) = (2.0e5, 1.0e8);
+    let stiff = Arc::new(paper::machine(3, 1.0e4 * paper::YOUNGS_MODULUS).unwrap());
+    let motor = screw_motor(k);
+    let (g, m_r) = (motor.ratio(), motor.reflected_mass());
+    let actuator: Arc<dyn Actuator> = Arc::new(motor);
+    let actuation = Actuation {
+        controller: Arc::new(Pid::pd(kp, 0.0, false, 0.0).unwrap()),
+        actuators: [actuator.clone(), actuator.clone(), actuator],
+    };
+    let lone = (k * (1.0 / m_r + 1.0 / stiff.slider_mass[0])).sqrt() / (2.0 * PI);
+    for p in POSES {
+        let at = pose(p);
+        let mass = slider_mass_matrix(&stiff, at);
+        let expected = screw_modes(&mass, m_r, k, kp);
+        let mut model = coupled(stiff.clone(), at, Some(actuation.clone()));
+        let y0 = model.initial_state();
+        let lin = linearize(model.as_mut(), 0.0, &y0, &[], &[Output::SliderPosition(0)]).unwrap();
+        let found = modes(&lin).unwrap();
+        let mut worst: f64 = 0.0;
+        for (f, _) in &expected[3..] {
+            let nearest = found
+                .iter()
+                .map(|m| m.frequency_hz)
+                .min_by(|a, b| (a - f).abs().total_cmp(&(b - f).abs()))
+                .unwrap();
+            worst = worst.max((nearest - f).abs() / f);
+        }
+        println!(
+            "{p:?}: screw modes {:.2} {:.2} {:.2} Hz (a lone slider's two masses {lone:.2} Hz): linear model within {worst:.1e}",
+            expected[3].0, expected[4].0, expected[5].0
+        );
+        assert!(worst < 1e-3, "{p:?}: {worst}");
+
+        // A ring-down from the highest screw mode's shape (small, at rest): the twists ring
+        // at its frequency.
+        let (f, shape) = &expected[5];
+        let n = model.modes();
+        let mut y = y0.clone();
+        let amplitude = 1e-6 / shape.amax();
+        let tail = 2 * n;
+        for i in 0..3 {
+            let (x_r, x_s) = (amplitude * shape[i], amplitude * shape[3 + i]);
+            y[n - 3 + i] += x_s;
+            // The rotor's states: twist g (x_r - x_s), speed 0 (after the law's none).
+            y[tail + 2 * i] = g * (x_r - x_s);
+        }
+        let periods = 30.0;
+        let end = periods / f;
+        let times: Vec<f64> = (0..=3000).map(|j| end * f64::from(j) / 3000.0).collect();
+        let integrator = Rk45::new(Options::default().rtol(1e-10).atol(1e-16));
+        let solution = integrator.solve(model.as_mut(), 0.0, &y, &times).unwrap();
+        // The first twist's upward zero crossings, linearly interpolated.
+        let twist: Vec<f64> = (0..times.len()).map(|j| solution.y(j)[tail]).collect();
+        let crossings: Vec<f64> = (1..times.len())
+            .filter(|&j| twist[j - 1] < 0.0 && twist[j] >= 0.0)
+            .map(|j| {
+                times[j - 1] + (times[j] - times[j - 1]) * twist[j - 1] / (twist[j - 1] - twist[j])
+            })
+            .collect();
+        let ringing =
+            (crossings.len() - 1) as f64 / (crossings[crossings.len() - 1] - crossings[0]);
+        println!("  ring-down from its shape: {ringing:.3} Hz against {f:.3} Hz");
+        assert!((ringing / f - 1.0).abs() < 1e-3, "{ringing} vs {f}");
+    }
 }

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use flexprr_control::{Actuator, Drive, IdealForce, MotorBallScrew, MotorRatings};
+use flexprr_control::{Actuator, Drive, IdealForce, MotorBallScrew, MotorRatings, Screw, Winding};
 use serde::Deserialize;
 
 use crate::error::ScenarioError;
@@ -136,22 +136,68 @@ struct MotorKeys {
     /// The drive's current limit (A); none unless set.
     #[serde(default)]
     current_limit: Option<f64>,
+    /// The winding's inductance (H): the current becomes a state (needs the drive).
+    #[serde(default)]
+    inductance: Option<f64>,
+    /// The bandwidth of the drive's PI current loop (Hz; needs `inductance`).
+    #[serde(default)]
+    current_bandwidth: Option<f64>,
+    /// The screw's axial stiffness (N/m): the rotor becomes a mass on a spring.
+    #[serde(default)]
+    screw_stiffness: Option<f64>,
+    /// The screw's axial damping (N s/m; needs `screw_stiffness`).
+    #[serde(default)]
+    screw_damping: Option<f64>,
+    /// Whether a law's feedforward adds the steady friction at the commanded velocity.
+    #[serde(default)]
+    friction_feedforward: bool,
 }
 
 /// The drive keys of a motor, all or none (`current_limit` optional with the others).
 const DRIVE_KEYS: [&str; 3] = ["torque_constant", "resistance", "bus_voltage"];
 
 impl MotorKeys {
+    /// A key given without the keys it needs: `(key, message)`.
+    fn orphan(&self) -> Option<(&'static str, &'static str)> {
+        if self.current_bandwidth.is_some() && self.inductance.is_none() {
+            return Some((
+                "current_bandwidth",
+                "needs inductance: the current loop acts on the winding's inductance (set inductance, or remove current_bandwidth for the steady-state drive)",
+            ));
+        }
+        if self.screw_damping.is_some() && self.screw_stiffness.is_none() {
+            return Some((
+                "screw_damping",
+                "needs screw_stiffness: the damping acts beside the screw's spring (set screw_stiffness, or remove screw_damping for a rigid screw)",
+            ));
+        }
+        None
+    }
+
+    /// The screw, when compliant.
+    fn screw(&self) -> Option<Screw> {
+        self.screw_stiffness.map(|stiffness| Screw {
+            stiffness,
+            damping: self.screw_damping.unwrap_or(0.0),
+        })
+    }
+
     /// The drive, when its keys are given; the first missing key of a partial drive.
     fn drive(&self) -> Result<Option<Drive>, &'static str> {
         let given = [self.torque_constant, self.resistance, self.bus_voltage];
         match given {
-            [None, None, None] if self.current_limit.is_none() => Ok(None),
+            [None, None, None] if self.current_limit.is_none() && self.inductance.is_none() => {
+                Ok(None)
+            }
             [Some(torque_constant), Some(resistance), Some(bus_voltage)] => Ok(Some(Drive {
                 torque_constant,
                 resistance,
                 bus_voltage,
                 current_limit: self.current_limit.unwrap_or(f64::INFINITY),
+                winding: self.inductance.map(|inductance| Winding {
+                    inductance,
+                    current_bandwidth: self.current_bandwidth,
+                }),
             })),
             _ => Err(DRIVE_KEYS
                 .iter()
@@ -182,6 +228,8 @@ impl From<MotorKeys> for MotorBallScrew {
             coulomb_friction: k.coulomb_friction,
             coulomb_smoothing: k.coulomb_smoothing,
             drive,
+            screw: k.screw(),
+            friction_feedforward: k.friction_feedforward,
         }
     }
 }
@@ -203,6 +251,19 @@ pub(crate) struct MotorBallScrewFactory;
 impl ActuatorFactory for MotorBallScrewFactory {
     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Actuator>, ScenarioError> {
         let keys: MotorKeys = params.parse()?;
+        if let Some((key, message)) = keys.orphan() {
+            return Err(params.error(key, message.to_string()));
+        }
+        if keys.inductance.is_some()
+            && keys.torque_constant.is_none()
+            && keys.resistance.is_none()
+            && keys.bus_voltage.is_none()
+        {
+            return Err(params.error(
+                "inductance",
+                "needs the drive: torque_constant, resistance and bus_voltage (the winding's time constant is L / R, its current limited by the bus voltage)".to_string(),
+            ));
+        }
         if let Err(missing) = keys.drive() {
             return Err(params.error(
                 "",
@@ -241,11 +302,21 @@ impl ActuatorFactory for MotorBallScrewFactory {
                 ("resistance", k.resistance),
                 ("bus_voltage", k.bus_voltage),
                 ("current_limit", k.current_limit),
+                ("inductance", k.inductance),
+                ("current_bandwidth", k.current_bandwidth),
+                ("screw_stiffness", k.screw_stiffness),
+                ("screw_damping", k.screw_damping),
             ]
             .into_iter()
             .filter_map(|(key, value)| value.map(|v| (key, v))),
         )
         .map(|(key, value)| (key.to_string(), toml::Value::Float(value)))
+        .chain(k.friction_feedforward.then(|| {
+            (
+                "friction_feedforward".to_string(),
+                toml::Value::Boolean(true),
+            )
+        }))
         .collect()
     }
 }

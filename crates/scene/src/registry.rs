@@ -133,7 +133,7 @@ pub enum MethodKind {
     Linear,
     /// Needs a model with a mechanical form ([`OdeSystem::second_order_form`]: state
     /// `(q, q')`, mass, damping and stiffness): the nonlinear model without a continuous
-    /// control law's states; `generalized_alpha`. A scene with another model is refused at
+    /// control law's or an actuator's states; `generalized_alpha`. A scene with another model is refused at
     /// load.
     Mechanical,
     /// Stands for one of the registered methods, chosen by the scene's model: `linear` for a
@@ -152,13 +152,16 @@ pub enum MethodKind {
 
 /// Whether a scene's model has a mechanical form ([`MethodKind::Mechanical`]): a kind with
 /// [`crate::ModelCapabilities::mechanical_form`] (the nonlinear model), with no control law
-/// or one without continuous states (a sampled or stateless law).
+/// or one without continuous states (a sampled or stateless law), and actuators without
+/// states of their own ([`flexprr_control::Actuator::states`]).
 pub fn mechanical_model(
     coupling: &crate::ModelKindHandle,
     controller: Option<&Arc<dyn flexprr_control::Controller>>,
+    actuator: Option<&Arc<dyn flexprr_control::Actuator>>,
 ) -> bool {
     coupling.capabilities().mechanical_form
         && controller.is_none_or(|c| c.period() > 0.0 || c.states() == 0)
+        && actuator.is_none_or(|a| a.states() == 0)
 }
 
 /// How a basis gets its number of functions.

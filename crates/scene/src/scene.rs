@@ -355,7 +355,11 @@ impl Scene {
             .resolve_method_for(
                 method.name(),
                 caps.linear_in_state && piezo.patches.is_empty(),
-                crate::mechanical_model(&model.coupling, control.controller.as_ref()),
+                crate::mechanical_model(
+                    &model.coupling,
+                    control.controller.as_ref(),
+                    control.actuator.as_ref(),
+                ),
                 &model_name,
             )
             .map_err(|m| c.value_error("integrator.method", m))?;

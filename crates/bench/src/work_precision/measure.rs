@@ -268,7 +268,11 @@ pub fn method_applies(scene: &Scene, method: &MethodHandle) -> Result<(), String
         .resolve_method_for(
             method.name(),
             scene.coupling.capabilities().linear_in_state,
-            flexprr_scene::mechanical_model(&scene.coupling, scene.controller.as_ref()),
+            flexprr_scene::mechanical_model(
+                &scene.coupling,
+                scene.controller.as_ref(),
+                scene.actuator.as_ref(),
+            ),
             scene.coupling.name(),
         )
         .map(|_| ())

@@ -52,7 +52,6 @@ use nalgebra::Vector2;
 
 use crate::actuation::{Actuated, Actuation};
 use crate::{DynamicsError, Machine, ModalDamping};
-use flexprr_control::SliderState;
 
 mod elastic;
 mod kinetics;
@@ -446,22 +445,15 @@ impl CoupledSystem {
     /// # Errors
     /// The commanded motion's inverse kinematics fails at `t0`.
     pub fn with_actuation(mut self, actuation: Actuation, t0: f64) -> Result<Self, DynamicsError> {
-        let actuated = Actuated::new(actuation, &self.machine, t0);
+        let actuated = Actuated::new(actuation, &self.machine, t0, self.modes + 3);
         let nominal = self.trajectory.motion(t0);
         let rigid = self
             .machine
             .geometry
             .inverse_kinematics_unchecked(&nominal)
             .map_err(|source| DynamicsError::Kinematics { t: t0, source })?;
-        let (n, coordinates) = (self.modes, self.modes + 3);
-        let mut y = vec![0.0; 2 * coordinates + actuated.ode_states()];
-        for (i, leg) in rigid.legs.iter().enumerate() {
-            y[n + i] = leg.rho;
-            y[coordinates + n + i] = leg.rho_dot;
-        }
-        if actuated.ode_states() > 0 {
-            y[2 * coordinates..].copy_from_slice(&actuated.spec.controller.initial_states());
-        }
+        let mut y = vec![0.0; actuated.dim()];
+        actuated.start(&rigid, &mut y);
         self.initial = y;
         self.actuated = Some(actuated);
         Ok(self)
@@ -548,10 +540,8 @@ impl CoupledSystem {
                 .geometry
                 .inverse_kinematics_unchecked(&self.trajectory.motion(t))
                 .map_err(|source| DynamicsError::Kinematics { t, source })?;
-            let input =
-                actuated.sample_input(&self.machine, &rigid, t, self.measured_sliders(y))?;
             (sample.slider_command, sample.slider_rates) =
-                actuated.law_sample(&input, slider_states);
+                actuated.law_sample_at(&self.machine, &rigid, t, y, slider_states)?;
         }
         let (eta, eta_dot) = self.elastic_state(y);
         let (eta, eta_dot) = (eta.to_vec(), eta_dot.to_vec());
@@ -623,16 +613,6 @@ impl CoupledSystem {
         )
     }
 
-    /// The measured sliders of `y` (actuated sliders).
-    fn measured_sliders(&self, y: &[f64]) -> [SliderState; 3] {
-        let (n, coordinates) = (self.modes, self.modes + 3);
-        std::array::from_fn(|i| SliderState {
-            position: y[n + i],
-            velocity: y[coordinates + n + i],
-            acceleration: 0.0,
-        })
-    }
-
     /// The actuators' force commands and outputs at `(t, y)` (the control law's state rates
     /// into `rates`), for the commanded state `rigid` at `t`.
     fn actuator_forces(
@@ -646,11 +626,7 @@ impl CoupledSystem {
             return Ok(None);
         };
         self.counters.inverse_dynamics_solves += 1;
-        let measured = self.measured_sliders(y);
-        let states = &y[2 * self.coordinates()..];
-        actuated
-            .forces(&self.machine, rigid, t, measured, states, rates)
-            .map(Some)
+        actuated.forces(&self.machine, rigid, t, y, rates).map(Some)
     }
 
     /// The machine.
@@ -736,7 +712,7 @@ impl CoupledSystem {
 
 impl OdeSystem for CoupledSystem {
     fn dim(&self) -> usize {
-        2 * self.coordinates() + self.actuated.as_ref().map_or(0, Actuated::ode_states)
+        self.actuated.as_ref().map_or(2 * self.modes, Actuated::dim)
     }
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
@@ -817,12 +793,8 @@ impl OdeSystem for CoupledSystem {
             patches.sample(t, eta, eta_dot);
             self.patches = Some(patches);
         }
-        if self.actuated.is_none() {
-            return;
-        }
-        let measured = self.measured_sliders(y);
         if let Some(actuated) = self.actuated.as_mut() {
-            actuated.sample_at(&self.machine, self.trajectory.as_ref(), t, measured);
+            actuated.sample_at(&self.machine, self.trajectory.as_ref(), t, y);
         }
     }
 }

@@ -14,7 +14,8 @@ impl NonlinearSystem {
     /// # Errors
     /// The commanded motion's inverse kinematics fails at `t0`.
     pub fn with_actuation(mut self, actuation: Actuation, t0: f64) -> Result<Self, DynamicsError> {
-        self.actuated = Some(Actuated::new(actuation, &self.machine, t0));
+        let coordinates = 3 + 3 * self.per_link + 3;
+        self.actuated = Some(Actuated::new(actuation, &self.machine, t0, coordinates));
         self.mass = BorderedBanded::new(3, self.per_link, MASS_BANDWIDTH, 6);
         self.generalized = vec![0.0; self.coordinates()];
         self.tangent_work = vec![0.0; self.dim()];
@@ -77,10 +78,8 @@ impl NonlinearSystem {
         let frame = self.frame(t, y)?;
         let mut sample = crate::LawSample::default();
         if let Some(actuated) = self.actuated.as_ref().filter(|a| a.period() > 0.0) {
-            let input =
-                actuated.sample_input(&self.machine, &frame.rigid, t, self.measured_sliders(y))?;
             (sample.slider_command, sample.slider_rates) =
-                actuated.law_sample(&input, slider_states);
+                actuated.law_sample_at(&self.machine, &frame.rigid, t, y, slider_states)?;
         }
         if self
             .patches
@@ -224,10 +223,7 @@ impl NonlinearSystem {
         let Some(actuated) = self.actuated.as_ref() else {
             return Ok(None);
         };
-        let measured = self.measured_sliders(y);
-        let states = &y[2 * self.coordinates()..];
-        let (command, outputs) =
-            actuated.forces(&self.machine, &frame.rigid, t, measured, states, rates)?;
+        let (command, outputs) = actuated.forces(&self.machine, &frame.rigid, t, y, rates)?;
         self.slider_forces = outputs.map(|o| o.force);
         Ok(Some((command, outputs)))
     }

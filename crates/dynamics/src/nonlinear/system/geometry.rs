@@ -101,7 +101,7 @@ impl NonlinearSystem {
             r: [Vector2::zeros(); 3],
             c: [[Vector2::zeros(); 2]; 3],
         };
-        let measured = self.actuated.is_some().then(|| self.measured_sliders(y));
+        let measured = self.actuated.as_ref().map(|a| a.measured(y));
         for (i, leg) in self.machine.geometry.legs.iter().enumerate() {
             let s = &frame.rigid.legs[i];
             let u = leg.guide.direction.into_inner();

@@ -39,7 +39,6 @@ use super::inertia::NodalMass;
 use crate::actuation::{Actuated, Actuation};
 use crate::model::ActuatorState;
 use crate::{DynamicsError, Machine};
-use flexprr_control::SliderState;
 use flexprr_kinematics::MachineState;
 
 mod control;
@@ -325,16 +324,6 @@ impl NonlinearSystem {
     /// Index of slider `i`'s coordinate (actuated sliders).
     pub(super) fn slider_index(&self, i: usize) -> usize {
         3 + 3 * self.per_link + i
-    }
-
-    /// The measured sliders of `y` (actuated sliders).
-    fn measured_sliders(&self, y: &[f64]) -> [SliderState; 3] {
-        let n = self.coordinates();
-        std::array::from_fn(|i| SliderState {
-            position: y[self.slider_index(i)],
-            velocity: y[n + self.slider_index(i)],
-            acceleration: 0.0,
-        })
     }
 
     /// Slider masses (kg), with the actuators' reflected masses when actuated.

@@ -129,7 +129,9 @@ impl NonlinearSystem {
 
 impl OdeSystem for NonlinearSystem {
     fn dim(&self) -> usize {
-        2 * self.coordinates() + self.actuated.as_ref().map_or(0, Actuated::ode_states)
+        self.actuated
+            .as_ref()
+            .map_or(2 * self.coordinates(), Actuated::dim)
     }
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
@@ -238,12 +240,8 @@ impl OdeSystem for NonlinearSystem {
                 }
             }
         }
-        if self.actuated.is_none() {
-            return;
-        }
-        let measured = self.measured_sliders(y);
         if let Some(actuated) = self.actuated.as_mut() {
-            actuated.sample_at(&self.machine, self.trajectory.as_ref(), t, measured);
+            actuated.sample_at(&self.machine, self.trajectory.as_ref(), t, y);
         }
     }
 }

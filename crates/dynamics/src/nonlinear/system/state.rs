@@ -19,13 +19,7 @@ impl NonlinearSystem {
         let n = self.coordinates();
         let mut y = vec![0.0; self.dim()];
         if let Some(actuated) = &self.actuated {
-            for (i, leg) in rigid.legs.iter().enumerate() {
-                y[self.slider_index(i)] = leg.rho;
-                y[n + self.slider_index(i)] = leg.rho_dot;
-            }
-            if actuated.ode_states() > 0 {
-                y[2 * n..].copy_from_slice(&actuated.spec.controller.initial_states());
-            }
+            actuated.start(&rigid, &mut y);
         }
         let (z, zd) = y[..2 * n].split_at_mut(n);
         let p = nominal.pose;
