@@ -27,6 +27,7 @@
 use crate::ControlError;
 use crate::drive::Drive;
 use crate::error::check;
+use crate::friction::{BRISTLE_DEFLECTION, LuGre};
 
 /// A named signal an actuator reports beside its force (a motor's torque and speed, a
 /// linear motor's current, ...): one column per slider in `actuators.csv`, headed
@@ -252,6 +253,13 @@ pub trait Actuator: std::fmt::Debug + Send + Sync {
         let _ = (force, velocity);
         None
     }
+    /// The force the actuator's friction takes from the command in steady state at the
+    /// slider velocity `velocity` (m/s): what a feedforward adds to the force it wants on the
+    /// slider (`feedforward = "rigid+friction"`). None (0) by default.
+    fn friction_force(&self, velocity: f64) -> f64 {
+        let _ = velocity;
+        0.0
+    }
     /// The motor's drive (its torque-speed envelope), where one is modelled: what the
     /// feasibility check of a commanded motion compares the winding voltage and current
     /// with. None by default.
@@ -360,6 +368,11 @@ pub struct MotorBallScrew {
     /// The drive's electrics (the torque-speed envelope), where modelled; `None`: the peak
     /// torque at any speed.
     pub drive: Option<Drive>,
+    /// LuGre friction with a stuck phase ([`crate::friction`]), where modelled: it replaces
+    /// the smoothed Coulomb friction (the Coulomb and viscous torques are its `tau_C` and
+    /// `sigma2`; `coulomb_smoothing` is unused) and adds the bristle deflection as the
+    /// motor's state. `None`: viscous plus smoothed Coulomb friction.
+    pub lugre: Option<LuGre>,
 }
 
 impl MotorBallScrew {
@@ -517,6 +530,9 @@ impl MotorBallScrew {
         if let Some(drive) = self.drive {
             drive.validated()?;
         }
+        if let Some(lugre) = self.lugre {
+            lugre.validated(self.coulomb_friction)?;
+        }
         Ok(self)
     }
 
@@ -525,8 +541,12 @@ impl MotorBallScrew {
         std::f64::consts::TAU / self.lead
     }
 
-    /// Friction torque at the motor shaft (N m) at the motor speed `omega` (rad/s).
+    /// Friction torque at the motor shaft (N m) at the motor speed `omega` (rad/s), in
+    /// steady state (with [`LuGre`] friction: sliding at `omega`, [`LuGre::steady_torque`]).
     pub fn friction_torque(&self, omega: f64) -> f64 {
+        if let Some(lugre) = self.lugre {
+            return lugre.steady_torque(self.coulomb_friction, self.viscous_friction, omega);
+        }
         let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
         self.viscous_friction * omega + self.coulomb_friction * (omega / smoothing).tanh()
     }
@@ -557,27 +577,16 @@ impl MotorBallScrew {
             (brake, brake)
         }
     }
-}
 
-impl Actuator for MotorBallScrew {
-    fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput {
-        self.apply_with_friction_at(command, velocity, velocity)
-    }
-    /// The viscous friction at `velocity`, the Coulomb friction at `friction_velocity`.
-    fn apply_with_friction_at(
-        &self,
-        command: f64,
-        velocity: f64,
-        friction_velocity: f64,
-    ) -> ActuatorOutput {
+    /// The output for the force command `command` (N) at the slider velocity `velocity`
+    /// (m/s) against the friction torque `friction` (N m): the torque within its envelope,
+    /// the force on the slider and the signals.
+    fn output(&self, command: f64, velocity: f64, friction: f64) -> ActuatorOutput {
         let g = self.ratio();
         let omega = g * velocity;
         let wanted = command / (g * self.efficiency);
         let (lo, hi) = self.torque_range(omega);
         let torque = wanted.clamp(lo, hi);
-        let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
-        let friction = self.viscous_friction * omega
-            + self.coulomb_friction * (g * friction_velocity / smoothing).tanh();
         let saturated = wanted < lo || wanted > hi;
         let force = g * self.efficiency * (torque - friction);
         let flag = f64::from(u8::from(saturated));
@@ -600,6 +609,77 @@ impl Actuator for MotorBallScrew {
                     drive.voltage(torque, omega),
                 ],
             ),
+        }
+    }
+}
+
+impl Actuator for MotorBallScrew {
+    fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput {
+        self.apply_with_friction_at(command, velocity, velocity)
+    }
+    /// The viscous friction at `velocity`, the Coulomb friction at `friction_velocity`.
+    fn apply_with_friction_at(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: f64,
+    ) -> ActuatorOutput {
+        let g = self.ratio();
+        let omega = g * velocity;
+        let friction = if let Some(lugre) = self.lugre {
+            // Stateless: the bristles as when sliding (the Stribeck curve).
+            let coulomb = lugre.steady_torque(self.coulomb_friction, 0.0, g * friction_velocity);
+            coulomb + self.viscous_friction * omega
+        } else {
+            let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
+            self.viscous_friction * omega
+                + self.coulomb_friction * (g * friction_velocity / smoothing).tanh()
+        };
+        self.output(command, velocity, friction)
+    }
+    /// With [`LuGre`] friction, the bristle deflection `z` is the state: the friction
+    /// torque and `z'` of [`LuGre::torque`] at the motor speed; without, as
+    /// [`Actuator::apply_with_friction_at`].
+    fn apply_with_states(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: Option<f64>,
+        states: &[f64],
+        rates: &mut [f64],
+    ) -> ActuatorOutput {
+        let Some(lugre) = self.lugre else {
+            return self.apply_with_friction_at(
+                command,
+                velocity,
+                friction_velocity.unwrap_or(velocity),
+            );
+        };
+        let omega = self.ratio() * velocity;
+        let (friction, rate) = lugre.torque(
+            self.coulomb_friction,
+            self.viscous_friction,
+            omega,
+            states[0],
+        );
+        rates[0] = rate;
+        self.output(command, velocity, friction)
+    }
+    fn states(&self) -> usize {
+        usize::from(self.lugre.is_some())
+    }
+    fn state_names(&self) -> &'static [ActuatorSignal] {
+        if self.lugre.is_some() {
+            &BRISTLE_DEFLECTION
+        } else {
+            &[]
+        }
+    }
+    /// With [`LuGre`] friction the bristles start as when sliding at the slider's speed
+    /// ([`LuGre::steady_deflection`]; unloaded at rest).
+    fn initial_states(&self, velocity: f64, states: &mut [f64]) {
+        if let Some(lugre) = self.lugre {
+            states[0] = lugre.steady_deflection(self.coulomb_friction, self.ratio() * velocity);
         }
     }
     /// Within four smoothing speeds of rest (`|rho'| / p < 4 omega_s`), where
@@ -631,6 +711,13 @@ impl Actuator for MotorBallScrew {
     fn drive(&self) -> Option<Drive> {
         self.drive
     }
+    /// `g eta tau_f(g rho')`: the steady friction torque at the motor speed
+    /// ([`MotorBallScrew::friction_torque`]; with LuGre friction the Stribeck curve) as a
+    /// force at the slider.
+    fn friction_force(&self, velocity: f64) -> f64 {
+        let g = self.ratio();
+        g * self.efficiency * self.friction_torque(g * velocity)
+    }
     /// The torque that delivers `force` against the friction at `velocity`:
     /// `tau = F / (g eta) + tau_f(g rho')`, and the speed `rho' / p`.
     fn required(&self, force: f64, velocity: f64) -> Option<(f64, f64)> {
@@ -658,6 +745,7 @@ mod tests {
             coulomb_friction: 0.02,
             coulomb_smoothing: 0.01,
             drive: None,
+            lugre: None,
         }
         .validated()
         .unwrap()

@@ -53,6 +53,7 @@ pub struct CallbackLaw {
     measurements: Vec<SliderSignal>,
     commands: Vec<usize>,
     feedforward: bool,
+    friction_feedforward: bool,
     period: f64,
     function: Arc<dyn LawFunction>,
     name: String,
@@ -71,6 +72,14 @@ impl fmt::Debug for CallbackLaw {
 }
 
 impl CallbackLaw {
+    /// The law with the actuators' steady friction in its feedforward (when `on`, and the
+    /// feedforward is on; [`Controller::friction_feedforward`]).
+    #[must_use]
+    pub fn with_friction_feedforward(mut self, on: bool) -> Self {
+        self.friction_feedforward = on;
+        self
+    }
+
     /// The law `name` (for summaries) on `measurements`, commanding the sliders `commands`
     /// (0-based, each at most once), sampled every `period` s.
     ///
@@ -98,6 +107,7 @@ impl CallbackLaw {
             measurements,
             commands,
             feedforward,
+            friction_feedforward: false,
             period,
             function,
             name: name.to_string(),
@@ -116,6 +126,9 @@ impl CallbackLaw {
 }
 
 impl Controller for CallbackLaw {
+    fn friction_feedforward(&self) -> bool {
+        self.feedforward && self.friction_feedforward
+    }
     /// As [`Controller::try_command`], with NaN commands where the function failed.
     fn command(
         &self,

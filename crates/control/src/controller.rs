@@ -86,6 +86,13 @@ pub trait Controller: fmt::Debug + Send + Sync {
         force: &mut [f64; 3],
         rates: &mut [f64],
     );
+    /// Whether the law's feedforward includes the actuators' steady friction at the
+    /// commanded slider velocity ([`crate::Actuator::friction_force`]): the actuated models
+    /// then add it to [`ControlInput::feedforward`] (`feedforward = "rigid+friction"`).
+    /// False by default.
+    fn friction_feedforward(&self) -> bool {
+        false
+    }
     /// Number of states of the law (0 for PD).
     fn states(&self) -> usize {
         0

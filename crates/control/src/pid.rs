@@ -21,6 +21,7 @@ pub struct Pid {
     kd: f64,
     ki: f64,
     feedforward: bool,
+    friction_feedforward: bool,
     period: f64,
 }
 
@@ -73,6 +74,7 @@ impl Pid {
             kd: check("kd", kd, 0.0, false, "a gain must be finite and >= 0")?,
             ki: check("ki", ki, 0.0, false, "a gain must be finite and >= 0")?,
             feedforward,
+            friction_feedforward: false,
             period: check(
                 "period",
                 period,
@@ -92,9 +94,20 @@ impl Pid {
     pub fn feedforward(&self) -> bool {
         self.feedforward
     }
+
+    /// The law with the actuators' steady friction in its feedforward (when `on`, and the
+    /// feedforward is on; [`Controller::friction_feedforward`]).
+    #[must_use]
+    pub fn with_friction_feedforward(mut self, on: bool) -> Self {
+        self.friction_feedforward = on;
+        self
+    }
 }
 
 impl Controller for Pid {
+    fn friction_feedforward(&self) -> bool {
+        self.feedforward && self.friction_feedforward
+    }
     fn command(
         &self,
         input: &ControlInput<'_>,

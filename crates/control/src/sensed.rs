@@ -358,6 +358,10 @@ impl Controller for SensedLaw {
         self.inner.states() + self.signals.len() * self.line.states()
     }
 
+    fn friction_feedforward(&self) -> bool {
+        self.inner.friction_feedforward()
+    }
+
     fn initial_states(&self) -> Vec<f64> {
         let mut z = self.inner.initial_states();
         z.resize(self.states(), 0.0);

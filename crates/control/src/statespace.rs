@@ -95,11 +95,20 @@ pub struct StateSpaceLaw {
     /// The slider of each command (0-based).
     commands: Vec<usize>,
     feedforward: bool,
+    friction_feedforward: bool,
     period: f64,
     warnings: Vec<String>,
 }
 
 impl StateSpaceLaw {
+    /// The law with the actuators' steady friction in its feedforward (when `on`, and the
+    /// feedforward is on; [`Controller::friction_feedforward`]).
+    #[must_use]
+    pub fn with_friction_feedforward(mut self, on: bool) -> Self {
+        self.friction_feedforward = on;
+        self
+    }
+
     /// A law on `measurements` commanding the sliders `commands` (0-based, each at most
     /// once); continuous when `period` is 0 (then `A`, `B` are a continuous-time law's),
     /// sampled otherwise (then they are the discrete-time law's at that period).
@@ -152,6 +161,7 @@ impl StateSpaceLaw {
             measurements,
             commands,
             feedforward,
+            friction_feedforward: false,
             period,
             warnings: Vec::new(),
         })
@@ -181,6 +191,9 @@ impl StateSpaceLaw {
 }
 
 impl Controller for StateSpaceLaw {
+    fn friction_feedforward(&self) -> bool {
+        self.feedforward && self.friction_feedforward
+    }
     fn command(
         &self,
         input: &ControlInput<'_>,

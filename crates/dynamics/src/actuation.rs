@@ -92,7 +92,9 @@ struct LoopOverrides {
 
 /// The commanded sliders at `t` (the closed-form inverse kinematics of the trajectory) and
 /// the feedforward: the rigid-body inverse-dynamics driving force of the commanded motion
-/// plus the actuators' reflected inertia `m_r rho_ref''`.
+/// plus the actuators' reflected inertia `m_r rho_ref''`, and when the law asks for it
+/// ([`flexprr_control::Controller::friction_feedforward`]) the actuators' steady friction
+/// at the commanded velocity ([`Actuator::friction_force`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Reference {
     pub(crate) sliders: [SliderState; 3],
@@ -117,8 +119,15 @@ impl Reference {
             velocity: legs[i].rho_dot,
             acceleration: legs[i].rho_ddot,
         });
+        let friction = actuated.spec.controller.friction_feedforward();
         let feedforward = std::array::from_fn(|i| {
-            forces.driving_force[i] + actuated.spec.actuators[i].reflected_mass() * legs[i].rho_ddot
+            let actuator = &actuated.spec.actuators[i];
+            let rigid = forces.driving_force[i] + actuator.reflected_mass() * legs[i].rho_ddot;
+            if friction {
+                rigid + actuator.friction_force(legs[i].rho_dot)
+            } else {
+                rigid
+            }
         });
         Ok(Self {
             sliders,

@@ -162,6 +162,7 @@ fn the_motor_torque_is_the_command_through_the_screw() {
         coulomb_friction: 0.02,
         coulomb_smoothing: 0.01,
         drive: None,
+        lugre: None,
     }
     .validated()
     .unwrap();

@@ -32,6 +32,7 @@ fn sampling_and_rows_allocate_nothing() {
         coulomb_friction: 0.01,
         coulomb_smoothing: 0.01,
         drive: None,
+        lugre: None,
     };
     let constraints: Vec<Box<dyn Constraint>> = vec![
         Box::new(SliderSpeed::new(1.0).unwrap()),

@@ -55,6 +55,7 @@ fn a_limit_no_motion_can_meet_is_named_with_its_place() {
         coulomb_friction: 0.6,
         coulomb_smoothing: 0.01,
         drive: None,
+        lugre: None,
     };
     let error = Planner::new(&machine, &path, Settings::default())
         .constraint(MotorTorque::new(motor, Efficiency::Symmetric).unwrap())

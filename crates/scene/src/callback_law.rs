@@ -95,11 +95,12 @@ impl ControllerFactory for CallbackLawFactory {
             "python",
             measurements,
             commands,
-            keys.feedforward == Feedforward::Rigid,
+            keys.feedforward.on(),
             period,
             function,
         )
-        .map_err(|e| params.control_error(e))?;
+        .map_err(|e| params.control_error(e))?
+        .with_friction_feedforward(keys.feedforward.friction());
         Ok(Arc::new(law))
     }
 }

@@ -61,7 +61,8 @@ pub trait ControllerFactory: Send + Sync {
     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError>;
 }
 
-/// `feedforward`: the rigid inverse-dynamics force of the commanded motion, or none.
+/// `feedforward`: the rigid inverse-dynamics force of the commanded motion, with the
+/// actuators' steady friction or not, or none.
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub(crate) enum Feedforward {
@@ -69,8 +70,24 @@ pub(crate) enum Feedforward {
     /// inertia).
     #[default]
     Rigid,
+    /// `"rigid+friction"`: [`Feedforward::Rigid`] plus the actuators' steady friction at the
+    /// commanded slider velocity.
+    #[serde(rename = "rigid+friction")]
+    RigidFriction,
     /// No feedforward: the feedback does all the work.
     None,
+}
+
+impl Feedforward {
+    /// Whether a feedforward is added.
+    pub(crate) fn on(self) -> bool {
+        self != Self::None
+    }
+
+    /// Whether it includes the actuators' friction.
+    pub(crate) fn friction(self) -> bool {
+        self == Self::RigidFriction
+    }
 }
 
 /// The keys of `kind = "pd"`.
@@ -110,9 +127,9 @@ impl ControllerFactory for PdFactory {
             ));
         }
         let keys: PdKeys = params.parse()?;
-        let feedforward = keys.feedforward == Feedforward::Rigid;
-        let law = Pid::pd(keys.kp, keys.kd, feedforward, keys.period)
-            .map_err(|e| params.control_error(e))?;
+        let law = Pid::pd(keys.kp, keys.kd, keys.feedforward.on(), keys.period)
+            .map_err(|e| params.control_error(e))?
+            .with_friction_feedforward(keys.feedforward.friction());
         Ok(Arc::new(law))
     }
 }
@@ -124,9 +141,15 @@ pub(crate) struct PidFactory;
 impl ControllerFactory for PidFactory {
     fn build(&self, params: &TableParams<'_>) -> Result<Arc<dyn Controller>, ScenarioError> {
         let keys: PidKeys = params.parse()?;
-        let feedforward = keys.feedforward == Feedforward::Rigid;
-        let law = Pid::new(keys.kp, keys.kd, keys.ki, feedforward, keys.period)
-            .map_err(|e| params.control_error(e))?;
+        let law = Pid::new(
+            keys.kp,
+            keys.kd,
+            keys.ki,
+            keys.feedforward.on(),
+            keys.period,
+        )
+        .map_err(|e| params.control_error(e))?
+        .with_friction_feedforward(keys.feedforward.friction());
         Ok(Arc::new(law))
     }
 }

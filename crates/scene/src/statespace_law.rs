@@ -173,10 +173,11 @@ impl ControllerFactory for StateSpaceFactory {
             matrices,
             measurements,
             commands,
-            keys.feedforward == Feedforward::Rigid,
+            keys.feedforward.on(),
             keys.period,
         )
         .map_err(|e| params.control_error(e))?
+        .with_friction_feedforward(keys.feedforward.friction())
         .with_warnings(warnings);
         Ok(Arc::new(law))
     }

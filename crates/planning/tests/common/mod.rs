@@ -39,5 +39,6 @@ pub fn motor() -> MotorBallScrew {
         coulomb_friction: 0.01,
         coulomb_smoothing: 0.01,
         drive: None,
+        lugre: None,
     }
 }
