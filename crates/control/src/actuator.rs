@@ -685,8 +685,11 @@ impl Actuator for MotorBallScrew {
     /// Within four smoothing speeds of rest (`|rho'| / p < 4 omega_s`), where
     /// `tanh(omega / omega_s)` is still 0.1 % or more short of the full Coulomb torque and
     /// its slope `tau_C / omega_s` is the smoothing's, not the machine's.
+    /// LuGre friction has no smoothing (its bristles are the physics): never.
     fn friction_is_non_smooth_at(&self, velocity: f64) -> bool {
-        self.coulomb_friction > 0.0 && (velocity / self.lead).abs() < 4.0 * self.coulomb_smoothing
+        self.lugre.is_none()
+            && self.coulomb_friction > 0.0
+            && (velocity / self.lead).abs() < 4.0 * self.coulomb_smoothing
     }
     fn name(&self) -> &'static str {
         "motor_ballscrew"

@@ -201,7 +201,7 @@ impl MotorKeys {
         ];
         if let Some((key, _, unit)) = required.iter().find(|(_, v, _)| v.is_none()) {
             return Err((
-                key,
+                "friction",
                 format!(
                     "{key} is missing: friction = \"lugre\" needs static_friction, stribeck_speed and bristle_stiffness ({key} in {unit})"
                 ),
