@@ -70,7 +70,7 @@ impl LuGre {
     /// # Errors
     /// The first parameter out of its range, by its key.
     pub fn validated(self, coulomb: f64) -> Result<Self, ControlError> {
-        if !(coulomb > 0.0) {
+        if coulomb.is_nan() || coulomb <= 0.0 {
             return Err(ControlError::InvalidParameter {
                 name: "coulomb_friction",
                 value: coulomb,

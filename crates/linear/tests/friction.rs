@@ -138,3 +138,72 @@ fn stuck_the_bristles_are_a_presliding_spring_in_the_linear_model() {
         "{nearest} vs {predicted}"
     );
 }
+
+#[test]
+fn sliding_the_bristles_add_a_fast_pole_and_the_stribeck_slope() {
+    // Sliders at about the Stribeck speed (0.05 rev/s = 0.5 mm/s on a 10 mm lead), where
+    // the curve's slope is steepest.
+    let m = motor(true);
+    let lugre = m.lugre.unwrap();
+    let g = m.ratio();
+    let actuator: Arc<dyn Actuator> = Arc::new(m);
+    let actuation = Actuation {
+        controller: Arc::new(Pid::pd(2.0e5, 2000.0, true, 0.0).unwrap()),
+        actuators: [actuator.clone(), actuator.clone(), actuator],
+    };
+    let line: Arc<dyn Trajectory + Send + Sync> = Arc::new(
+        Line::new(
+            Pose::new(-0.05, 0.0, 45f64.to_radians()),
+            Vector3::new(6e-4, 3e-4, 0.0),
+            0.0,
+        )
+        .unwrap(),
+    );
+    let machine = Arc::new(paper::machine(3, paper::YOUNGS_MODULUS).unwrap());
+    let rigid = machine
+        .geometry
+        .inverse_kinematics(&line.motion(0.0))
+        .unwrap();
+    let mut model = CoupledSystem::new(machine, line, ModalDamping::none(), CoupledOptions::full())
+        .unwrap()
+        .with_actuation(actuation, 0.0)
+        .unwrap();
+    let y0 = model.initial_state();
+    let lin = linearize(&mut model, 0.0, &y0, &[], &[Output::SliderPosition(0)]).unwrap();
+    let index = |signal: &str| {
+        lin.states
+            .iter()
+            .position(|s| s.signal == signal)
+            .unwrap_or_else(|| panic!("no state {signal}"))
+    };
+    let ws = lugre.stribeck_rate();
+    for i in 1..=3 {
+        let omega = g * rigid.legs[i - 1].rho_dot;
+        let curve = lugre.stribeck(0.02, omega);
+        let slope = -(0.03 - 0.02) * 2.0 * omega / (ws * ws) * (-(omega / ws).powi(2)).exp();
+        let (row, rate) = (
+            index(&format!("bristle_deflection_{i}")),
+            index(&format!("rho_{i}_rate")),
+        );
+        // z' = omega - sigma0 |omega| z / g(omega) about z = sign(omega) g / sigma0:
+        // d z'/d z = -sigma0 |omega| / g, d z'/d rho' = g omega g'(omega) / g(omega).
+        let pole = -STIFFNESS * omega.abs() / curve;
+        let coupling = g * omega * slope / curve;
+        println!(
+            "slider {i}: {:.3} rev/s, pole {:.4e} 1/s (A: {:.4e}), d z'/d rho' {coupling:.4e} (A: {:.4e})",
+            omega / std::f64::consts::TAU,
+            pole,
+            lin.a[(row, row)],
+            lin.a[(row, rate)]
+        );
+        assert!(
+            (omega / ws).abs() > 0.3,
+            "slider {i} far from the Stribeck speed"
+        );
+        assert!((lin.a[(row, row)] / pole - 1.0).abs() < 1e-5, "slider {i}");
+        assert!(
+            (lin.a[(row, rate)] - coupling).abs() < 1e-4 * g,
+            "slider {i}"
+        );
+    }
+}
