@@ -27,6 +27,7 @@
 use crate::ControlError;
 use crate::drive::Drive;
 use crate::error::check;
+use crate::friction::{BRISTLE_DEFLECTION, LuGre};
 
 /// A named signal an actuator reports beside its force (a motor's torque and speed, a
 /// linear motor's current, ...): one column per slider in `actuators.csv`, headed
@@ -128,16 +129,43 @@ const ROTOR_STATE: ActuatorSignal = ActuatorSignal {
     symbol: "ω",
     unit: "rad/s",
 };
-/// The states of a [`MotorBallScrew`] by (winding states, screw): the winding's current and
-/// loop integral first, then the screw's twist and the rotor's speed.
-const MOTOR_STATES: [[&[ActuatorSignal]; 2]; 3] = [
-    [&[], &[TWIST_STATE, ROTOR_STATE]],
-    [&[CURRENT_STATE], &[CURRENT_STATE, TWIST_STATE, ROTOR_STATE]],
+/// The states of a [`MotorBallScrew`] by (winding states, screw, LuGre friction): the
+/// winding's current and loop integral first, then the screw's twist and the rotor's speed,
+/// then the bristle deflection.
+const MOTOR_STATES: [[[&[ActuatorSignal]; 2]; 2]; 3] = [
     [
-        &[CURRENT_STATE, INTEGRAL_STATE],
-        &[CURRENT_STATE, INTEGRAL_STATE, TWIST_STATE, ROTOR_STATE],
+        [&[], &[BRISTLE]],
+        [
+            &[TWIST_STATE, ROTOR_STATE],
+            &[TWIST_STATE, ROTOR_STATE, BRISTLE],
+        ],
+    ],
+    [
+        [&[CURRENT_STATE], &[CURRENT_STATE, BRISTLE]],
+        [
+            &[CURRENT_STATE, TWIST_STATE, ROTOR_STATE],
+            &[CURRENT_STATE, TWIST_STATE, ROTOR_STATE, BRISTLE],
+        ],
+    ],
+    [
+        [
+            &[CURRENT_STATE, INTEGRAL_STATE],
+            &[CURRENT_STATE, INTEGRAL_STATE, BRISTLE],
+        ],
+        [
+            &[CURRENT_STATE, INTEGRAL_STATE, TWIST_STATE, ROTOR_STATE],
+            &[
+                CURRENT_STATE,
+                INTEGRAL_STATE,
+                TWIST_STATE,
+                ROTOR_STATE,
+                BRISTLE,
+            ],
+        ],
     ],
 ];
+/// The bristle deflection state of LuGre friction (rad).
+const BRISTLE: ActuatorSignal = BRISTLE_DEFLECTION[0];
 
 /// What an actuator does at one instant.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -412,6 +440,11 @@ pub struct MotorBallScrew {
     /// Whether a law's feedforward adds the force of the steady friction at the commanded
     /// slider velocity ([`Actuator::friction_feedforward`]).
     pub friction_feedforward: bool,
+    /// LuGre friction with a stuck phase ([`crate::friction`]), where modelled: it replaces
+    /// the smoothed Coulomb friction (the Coulomb and viscous torques are its `tau_C` and
+    /// `sigma2`; `coulomb_smoothing` is unused) and adds the bristle deflection as the
+    /// motor's state. `None`: viscous plus smoothed Coulomb friction.
+    pub lugre: Option<LuGre>,
 }
 
 /// The axial compliance of a ball screw (with its nut and bearings): a spring and damper
@@ -618,6 +651,9 @@ impl MotorBallScrew {
                 });
             }
         }
+        if let Some(lugre) = self.lugre {
+            lugre.validated(self.coulomb_friction)?;
+        }
         Ok(self)
     }
 
@@ -639,8 +675,12 @@ impl MotorBallScrew {
         self.drive.map_or(0, |d| d.states())
     }
 
-    /// Friction torque at the motor shaft (N m) at the motor speed `omega` (rad/s).
+    /// Friction torque at the motor shaft (N m) at the motor speed `omega` (rad/s), in
+    /// steady state (with [`LuGre`] friction: sliding at `omega`, [`LuGre::steady_torque`]).
     pub fn friction_torque(&self, omega: f64) -> f64 {
+        if let Some(lugre) = self.lugre {
+            return lugre.steady_torque(self.coulomb_friction, self.viscous_friction, omega);
+        }
         let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
         self.viscous_friction * omega + self.coulomb_friction * (omega / smoothing).tanh()
     }
@@ -671,27 +711,16 @@ impl MotorBallScrew {
             (brake, brake)
         }
     }
-}
 
-impl Actuator for MotorBallScrew {
-    fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput {
-        self.apply_with_friction_at(command, velocity, velocity)
-    }
-    /// The viscous friction at `velocity`, the Coulomb friction at `friction_velocity`.
-    fn apply_with_friction_at(
-        &self,
-        command: f64,
-        velocity: f64,
-        friction_velocity: f64,
-    ) -> ActuatorOutput {
+    /// The output for the force command `command` (N) at the slider velocity `velocity`
+    /// (m/s) against the friction torque `friction` (N m): the torque within its envelope,
+    /// the force on the slider and the signals.
+    fn output(&self, command: f64, velocity: f64, friction: f64) -> ActuatorOutput {
         let g = self.ratio();
         let omega = g * velocity;
         let wanted = command / (g * self.efficiency);
         let (lo, hi) = self.torque_range(omega);
         let torque = wanted.clamp(lo, hi);
-        let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
-        let friction = self.viscous_friction * omega
-            + self.coulomb_friction * (g * friction_velocity / smoothing).tanh();
         let saturated = wanted < lo || wanted > hi;
         let force = g * self.efficiency * (torque - friction);
         let flag = f64::from(u8::from(saturated));
@@ -716,25 +745,64 @@ impl Actuator for MotorBallScrew {
             ),
         }
     }
+}
+
+impl Actuator for MotorBallScrew {
+    fn apply(&self, command: f64, velocity: f64) -> ActuatorOutput {
+        self.apply_with_friction_at(command, velocity, velocity)
+    }
+    /// The viscous friction at `velocity`, the Coulomb friction at `friction_velocity`.
+    fn apply_with_friction_at(
+        &self,
+        command: f64,
+        velocity: f64,
+        friction_velocity: f64,
+    ) -> ActuatorOutput {
+        let g = self.ratio();
+        let omega = g * velocity;
+        let friction = if let Some(lugre) = self.lugre {
+            // Stateless: the bristles as when sliding (the Stribeck curve).
+            let coulomb = lugre.steady_torque(self.coulomb_friction, 0.0, g * friction_velocity);
+            coulomb + self.viscous_friction * omega
+        } else {
+            let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
+            self.viscous_friction * omega
+                + self.coulomb_friction * (g * friction_velocity / smoothing).tanh()
+        };
+        self.output(command, velocity, friction)
+    }
     /// Within four smoothing speeds of rest (`|rho'| / p < 4 omega_s`), where
     /// `tanh(omega / omega_s)` is still 0.1 % or more short of the full Coulomb torque and
     /// its slope `tau_C / omega_s` is the smoothing's, not the machine's.
+    /// LuGre friction has no smoothing (its bristles are the physics): never.
     fn friction_is_non_smooth_at(&self, velocity: f64) -> bool {
-        self.coulomb_friction > 0.0 && (velocity / self.lead).abs() < 4.0 * self.coulomb_smoothing
+        self.lugre.is_none()
+            && self.coulomb_friction > 0.0
+            && (velocity / self.lead).abs() < 4.0 * self.coulomb_smoothing
     }
     /// The winding's current and the current loop's integral (with a [`crate::Winding`]),
     /// then the screw's twist and the rotor's speed (with a [`Screw`]).
     fn states(&self) -> usize {
-        self.winding_states() + if self.screw.is_some() { 2 } else { 0 }
+        self.winding_states()
+            + if self.screw.is_some() { 2 } else { 0 }
+            + usize::from(self.lugre.is_some())
     }
     fn state_names(&self) -> &'static [ActuatorSignal] {
         MOTOR_STATES[self.winding_states()][usize::from(self.screw.is_some())]
+            [usize::from(self.lugre.is_some())]
     }
-    /// No current, no integral, no twist; the rotor turning with the slider, `g rho'`.
+    /// No current, no integral, no twist; the rotor turning with the slider, `g rho'`; with
+    /// [`LuGre`] friction the bristles as when sliding at that speed
+    /// ([`LuGre::steady_deflection`]; unloaded at rest).
     fn initial_states(&self, velocity: f64, states: &mut [f64]) {
         states.fill(0.0);
+        let omega = self.ratio() * velocity;
+        let mechanical = self.winding_states();
         if self.screw.is_some() {
-            states[self.winding_states() + 1] = self.ratio() * velocity;
+            states[mechanical + 1] = omega;
+        }
+        if let Some(lugre) = self.lugre {
+            states[self.states() - 1] = lugre.steady_deflection(self.coulomb_friction, omega);
         }
     }
     /// The module documentation's equations with the winding's dynamics ([`crate::drive`])
@@ -790,10 +858,22 @@ impl Actuator for MotorBallScrew {
                 (torque, wanted < lo || wanted > hi, electrics)
             }
         };
-        let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
-        let coulomb_speed = friction_velocity.map_or(omega, |v| g * v);
-        let friction = self.viscous_friction * omega
-            + self.coulomb_friction * (coulomb_speed / smoothing).tanh();
+        let friction = if let Some(lugre) = self.lugre {
+            let bristle = self.states() - 1;
+            let (torque, rate) = lugre.torque(
+                self.coulomb_friction,
+                self.viscous_friction,
+                omega,
+                states[bristle],
+            );
+            rates[bristle] = rate;
+            torque
+        } else {
+            let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
+            let coulomb_speed = friction_velocity.map_or(omega, |v| g * v);
+            self.viscous_friction * omega
+                + self.coulomb_friction * (coulomb_speed / smoothing).tanh()
+        };
         let force = match self.screw {
             Some(screw) => {
                 let twist = states[electric];
@@ -893,6 +973,7 @@ mod tests {
             drive: None,
             friction_feedforward: false,
             screw: None,
+            lugre: None,
         }
         .validated()
         .unwrap()

@@ -12,7 +12,8 @@
 //! * [`Actuator`]: [`IdealForce`] (`kind = "force"`) and [`MotorBallScrew`]
 //!   (`kind = "motor_ballscrew"`: reflected rotor inertia, efficiency, torque saturation,
 //!   viscous and smoothed Coulomb friction, speed limit reported), with a [`Drive`] its
-//!   torque-speed envelope from the bus voltage and current limit.
+//!   torque-speed envelope from the bus voltage and current limit, with [`LuGre`] friction
+//!   a stuck phase, breakaway at the static torque and a Stribeck curve ([`friction`]).
 //! * [`StateSpaceLaw`]: `kind = "statespace"`, a linear law designed elsewhere.
 //! * [`CallbackLaw`]: a sampled law whose commands a [`LawFunction`] computes
 //!   (`kind = "python"`: the Python bindings fill it).
@@ -27,6 +28,7 @@ mod callback;
 mod controller;
 pub mod drive;
 mod error;
+pub mod friction;
 mod pid;
 mod sensed;
 mod statespace;
@@ -41,6 +43,7 @@ pub use callback::{CallbackLaw, LawFunction};
 pub use controller::{ControlInput, Controller, SliderState};
 pub use drive::{Drive, Winding, WindingOutput};
 pub use error::ControlError;
+pub use friction::LuGre;
 pub use pid::Pid;
 pub use sensed::{MAX_DELAY_PERIODS, MAX_PADE_ORDER, SensedLaw, Sensors};
 pub use statespace::{MAX_MEASUREMENTS, SliderSignal, StateSpaceLaw, StateSpaceMatrices};

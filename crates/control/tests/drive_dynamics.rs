@@ -37,6 +37,7 @@ fn motor(drive: Option<Drive>, screw: Option<Screw>) -> MotorBallScrew {
         coulomb_smoothing: 0.01,
         drive,
         friction_feedforward: false,
+        lugre: None,
         screw,
     }
     .validated()

@@ -228,6 +228,7 @@ fn drive_motor() -> Arc<dyn Actuator> {
                 }),
             }),
             friction_feedforward: false,
+            lugre: None,
             screw: Some(Screw {
                 stiffness: 1e8,
                 damping: 300.0,
@@ -297,6 +298,7 @@ fn drive_motor_spec() -> Box<MotorBallScrew> {
         coulomb_smoothing: 0.01,
         drive: None,
         friction_feedforward: false,
+        lugre: None,
         screw: None,
     })
 }

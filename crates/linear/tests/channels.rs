@@ -164,6 +164,7 @@ fn the_motor_torque_is_the_command_through_the_screw() {
         drive: None,
         friction_feedforward: false,
         screw: None,
+        lugre: None,
     }
     .validated()
     .unwrap();

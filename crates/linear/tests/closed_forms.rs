@@ -485,6 +485,7 @@ fn screw_motor(k: f64) -> MotorBallScrew {
         coulomb_smoothing: 0.01,
         drive: None,
         friction_feedforward: false,
+        lugre: None,
         screw: Some(Screw {
             stiffness: k,
             damping: 0.0,

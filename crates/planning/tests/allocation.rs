@@ -34,6 +34,7 @@ fn sampling_and_rows_allocate_nothing() {
         drive: None,
         friction_feedforward: false,
         screw: None,
+        lugre: None,
     };
     let constraints: Vec<Box<dyn Constraint>> = vec![
         Box::new(SliderSpeed::new(1.0).unwrap()),

@@ -57,6 +57,7 @@ fn a_limit_no_motion_can_meet_is_named_with_its_place() {
         drive: None,
         friction_feedforward: false,
         screw: None,
+        lugre: None,
     };
     let error = Planner::new(&machine, &path, Settings::default())
         .constraint(MotorTorque::new(motor, Efficiency::Symmetric).unwrap())

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use flexprr_control::{Actuator, Drive, IdealForce, MotorBallScrew, MotorRatings, Screw, Winding};
+use flexprr_control::{
+    Actuator, Drive, IdealForce, LuGre, MotorBallScrew, MotorRatings, Screw, Winding,
+};
 use serde::Deserialize;
 
 use crate::error::ScenarioError;
@@ -151,6 +153,93 @@ struct MotorKeys {
     /// Whether a law's feedforward adds the steady friction at the commanded velocity.
     #[serde(default)]
     friction_feedforward: bool,
+    /// The friction model: `"coulomb"` (viscous and smoothed Coulomb, the default) or
+    /// `"lugre"` (with the four keys below).
+    #[serde(default)]
+    friction: FrictionKind,
+    /// Static (breakaway) torque of LuGre friction (N m).
+    #[serde(default)]
+    static_friction: Option<f64>,
+    /// Stribeck speed of LuGre friction (rev/s).
+    #[serde(default)]
+    stribeck_speed: Option<f64>,
+    /// Bristle stiffness of LuGre friction (N m/rad).
+    #[serde(default)]
+    bristle_stiffness: Option<f64>,
+    /// Bristle damping of LuGre friction (N m s/rad); by default critical damping of the
+    /// rotor on the bristles, `2 sqrt(sigma0 J)`.
+    #[serde(default)]
+    bristle_damping: Option<f64>,
+}
+
+/// `friction` of a motor.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+enum FrictionKind {
+    /// Viscous plus `tanh`-smoothed Coulomb friction.
+    #[default]
+    Coulomb,
+    /// LuGre friction: a stuck phase, breakaway and a Stribeck curve.
+    Lugre,
+}
+
+/// The LuGre keys, all required with `friction = "lugre"` but `bristle_damping`.
+const LUGRE_KEYS: [&str; 4] = [
+    "static_friction",
+    "stribeck_speed",
+    "bristle_stiffness",
+    "bristle_damping",
+];
+
+impl MotorKeys {
+    /// The LuGre friction of the keys (`None` without `friction = "lugre"`); a key that
+    /// does not fit the friction model: its name and the rule.
+    fn lugre(&self, written: &toml::Table) -> Result<Option<LuGre>, (&'static str, String)> {
+        let k = self;
+        if self.friction == FrictionKind::Coulomb {
+            return match LUGRE_KEYS.iter().find(|key| written.contains_key(**key)) {
+                Some(key) => Err((
+                    key,
+                    format!("{key} is a key of LuGre friction: set friction = \"lugre\" with it"),
+                )),
+                None => Ok(None),
+            };
+        }
+        if written.contains_key("coulomb_smoothing") {
+            return Err((
+                "coulomb_smoothing",
+                "LuGre friction is not smoothed (its bristles make it continuous): remove coulomb_smoothing with friction = \"lugre\"".to_string(),
+            ));
+        }
+        let required = [
+            ("static_friction", k.static_friction, "N m"),
+            ("stribeck_speed", k.stribeck_speed, "rev/s"),
+            ("bristle_stiffness", k.bristle_stiffness, "N m/rad"),
+        ];
+        if let Some((key, _, unit)) = required.iter().find(|(_, v, _)| v.is_none()) {
+            return Err((
+                "friction",
+                format!(
+                    "{key} is missing: friction = \"lugre\" needs static_friction, stribeck_speed and bristle_stiffness ({key} in {unit})"
+                ),
+            ));
+        }
+        let stiffness = k.bristle_stiffness.unwrap_or(0.0);
+        Ok(Some(LuGre {
+            static_friction: k.static_friction.unwrap_or(0.0),
+            stribeck_speed: k.stribeck_speed.unwrap_or(0.0),
+            bristle_stiffness: stiffness,
+            bristle_damping: k
+                .bristle_damping
+                .unwrap_or_else(|| default_bristle_damping(stiffness, self.rotor_inertia)),
+        }))
+    }
+}
+
+/// The default bristle damping: critical damping of the rotor's inertia `J` on the bristle
+/// spring `sigma0`, `2 sqrt(sigma0 J)` (N m s/rad; 0 for a non-positive product).
+fn default_bristle_damping(stiffness: f64, rotor_inertia: f64) -> f64 {
+    2.0 * (stiffness * rotor_inertia).max(0.0).sqrt()
 }
 
 /// The drive keys of a motor, all or none (`current_limit` optional with the others).
@@ -230,6 +319,7 @@ impl From<MotorKeys> for MotorBallScrew {
             drive,
             screw: k.screw(),
             friction_feedforward: k.friction_feedforward,
+            lugre: k.lugre(&toml::Table::new()).ok().flatten(),
         }
     }
 }
@@ -272,6 +362,9 @@ impl ActuatorFactory for MotorBallScrewFactory {
                 ),
             ));
         }
+        if let Err((key, message)) = keys.lugre(params.table()) {
+            return Err(params.error(key, message));
+        }
         let motor = MotorBallScrew::from(keys)
             .validated()
             .map_err(|e| params.control_error(e))?;
@@ -284,7 +377,7 @@ impl ActuatorFactory for MotorBallScrewFactory {
         let Ok(k) = params.clone().try_into::<MotorKeys>() else {
             return params.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
         };
-        [
+        let mut keys: Vec<(String, toml::Value)> = [
             ("rotor_inertia", k.rotor_inertia),
             ("lead", k.lead),
             ("efficiency", k.efficiency),
@@ -317,6 +410,26 @@ impl ActuatorFactory for MotorBallScrewFactory {
                 toml::Value::Boolean(true),
             )
         }))
-        .collect()
+        .collect();
+        if let Ok(Some(lugre)) = k.lugre(params) {
+            // LuGre friction has no smoothing: its keys replace coulomb_smoothing.
+            keys.retain(|(key, _)| key != "coulomb_smoothing");
+            keys.push((
+                "friction".to_string(),
+                toml::Value::String("lugre".to_string()),
+            ));
+            keys.extend(
+                LUGRE_KEYS
+                    .into_iter()
+                    .zip([
+                        lugre.static_friction,
+                        lugre.stribeck_speed,
+                        lugre.bristle_stiffness,
+                        lugre.bristle_damping,
+                    ])
+                    .map(|(key, value)| (key.to_string(), toml::Value::Float(value))),
+            );
+        }
+        keys
     }
 }

@@ -41,5 +41,6 @@ pub fn motor() -> MotorBallScrew {
         drive: None,
         friction_feedforward: false,
         screw: None,
+        lugre: None,
     }
 }
