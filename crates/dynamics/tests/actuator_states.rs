@@ -206,17 +206,8 @@ fn a_vanishing_lag_converges_to_the_ideal_force_at_first_order() {
 fn drive_motor() -> Arc<dyn Actuator> {
     Arc::new(
         MotorBallScrew {
-            rotor_inertia: 1.6e-5,
-            lead: 0.01,
-            efficiency: 0.9,
-            ratings: MotorRatings {
-                peak_torque: 3.5,
-                continuous_torque: 1.2,
-                max_speed: 100.0,
-            },
             viscous_friction: 1e-4,
             coulomb_friction: 0.02,
-            coulomb_smoothing: 0.01,
             drive: Some(Drive {
                 torque_constant: 0.22,
                 resistance: 1.6,
@@ -227,11 +218,11 @@ fn drive_motor() -> Arc<dyn Actuator> {
                     current_bandwidth: Some(1000.0),
                 }),
             }),
-            friction_feedforward: false,
             screw: Some(Screw {
                 stiffness: 1e8,
                 damping: 300.0,
             }),
+            ..*drive_motor_spec()
         }
         .validated()
         .unwrap(),
@@ -281,7 +272,7 @@ fn rubbing_motor(viscous: f64, coulomb: f64, feedforward: bool) -> MotorBallScre
     .unwrap()
 }
 
-/// The spec of [`drive_motor`], for struct updates.
+/// The motor of [`drive_motor`] without friction, drive or screw, for struct updates.
 fn drive_motor_spec() -> Box<MotorBallScrew> {
     Box::new(MotorBallScrew {
         rotor_inertia: 1.6e-5,
