@@ -177,7 +177,8 @@ fn a_vanishing_lag_converges_to_the_ideal_force_at_first_order() {
     let t: Vec<f64> = (0..=40).map(|k| 5e-4 * f64::from(k)).collect();
     let sliders = |lag: Option<f64>| -> Vec<f64> {
         let mut model = coupled(actuation(lag, 0.0));
-        let n = model.modes();
+        // The sliders are the last three coordinates (the trait's count, with them).
+        let n = SceneModel::modes(&model);
         let y0 = SceneModel::initial_state(&model);
         let solution = Rk45::new(Options::default().rtol(1e-10).atol(1e-13))
             .solve(&mut model, 0.0, &y0, &t)
@@ -206,17 +207,8 @@ fn a_vanishing_lag_converges_to_the_ideal_force_at_first_order() {
 fn drive_motor() -> Arc<dyn Actuator> {
     Arc::new(
         MotorBallScrew {
-            rotor_inertia: 1.6e-5,
-            lead: 0.01,
-            efficiency: 0.9,
-            ratings: MotorRatings {
-                peak_torque: 3.5,
-                continuous_torque: 1.2,
-                max_speed: 100.0,
-            },
             viscous_friction: 1e-4,
             coulomb_friction: 0.02,
-            coulomb_smoothing: 0.01,
             drive: Some(Drive {
                 torque_constant: 0.22,
                 resistance: 1.6,
@@ -233,6 +225,7 @@ fn drive_motor() -> Arc<dyn Actuator> {
                 stiffness: 1e8,
                 damping: 300.0,
             }),
+            ..*drive_motor_spec()
         }
         .validated()
         .unwrap(),
@@ -282,7 +275,7 @@ fn rubbing_motor(viscous: f64, coulomb: f64, feedforward: bool) -> MotorBallScre
     .unwrap()
 }
 
-/// The spec of [`drive_motor`], for struct updates.
+/// The motor of [`drive_motor`] without friction, drive or screw, for struct updates.
 fn drive_motor_spec() -> Box<MotorBallScrew> {
     Box::new(MotorBallScrew {
         rotor_inertia: 1.6e-5,
