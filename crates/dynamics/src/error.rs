@@ -195,10 +195,6 @@ pub enum DynamicsError {
     /// Patches, their modal velocity law or a model's patch states that do not fit.
     #[error(transparent)]
     Patch(Box<crate::patches::PatchError>),
-    /// Inconsistent model set-up, for the control laws' set-up checks (their messages say
-    /// what to change).
-    #[error("{0}")]
-    Inconsistent(String),
 }
 
 /// A capability a model may lack ([`DynamicsError::NoCapability`]).
