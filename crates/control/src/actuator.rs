@@ -26,7 +26,7 @@
 
 use crate::ControlError;
 use crate::drive::Drive;
-use crate::error::check;
+use crate::error::{at_most, check};
 use crate::friction::{BRISTLE_DEFLECTION, LuGre};
 
 /// A named signal an actuator reports beside its force (a motor's torque and speed, a
@@ -485,13 +485,7 @@ impl MotorBallScrew {
             true,
             "must be in (0, 1]",
         )?;
-        if self.efficiency > 1.0 {
-            return Err(ControlError::InvalidParameter {
-                name: "efficiency",
-                value: self.efficiency,
-                rule: "must be in (0, 1]",
-            });
-        }
+        at_most("efficiency", self.efficiency, 1.0, "must be in (0, 1]")?;
         let r = self.ratings;
         check(
             "peak_torque",
@@ -507,13 +501,12 @@ impl MotorBallScrew {
             true,
             "must be finite and > 0 (N m)",
         )?;
-        if r.continuous_torque > r.peak_torque {
-            return Err(ControlError::InvalidParameter {
-                name: "continuous_torque",
-                value: r.continuous_torque,
-                rule: "must not exceed peak_torque",
-            });
-        }
+        at_most(
+            "continuous_torque",
+            r.continuous_torque,
+            r.peak_torque,
+            "must not exceed peak_torque",
+        )?;
         check(
             "max_speed",
             r.max_speed,
@@ -621,13 +614,12 @@ impl MotorBallScrew {
                 true,
                 "must be finite and > 0 (N/m; ball screws have 1e7 to 1e9)",
             )?;
-            if screw.stiffness > 1e12 {
-                return Err(ControlError::InvalidParameter {
-                    name: "screw_stiffness",
-                    value: screw.stiffness,
-                    rule: "must be at most 1e12 N/m",
-                });
-            }
+            at_most(
+                "screw_stiffness",
+                screw.stiffness,
+                1e12,
+                "must be at most 1e12 N/m",
+            )?;
             check(
                 "screw_damping",
                 screw.damping,
@@ -635,13 +627,12 @@ impl MotorBallScrew {
                 false,
                 "must be finite and >= 0 (N s/m)",
             )?;
-            if screw.damping > 1e9 {
-                return Err(ControlError::InvalidParameter {
-                    name: "screw_damping",
-                    value: screw.damping,
-                    rule: "must be at most 1e9 N s/m",
-                });
-            }
+            at_most(
+                "screw_damping",
+                screw.damping,
+                1e9,
+                "must be at most 1e9 N s/m",
+            )?;
             if self.rotor_inertia <= 0.0 {
                 return Err(ControlError::InvalidParameter {
                     name: "rotor_inertia",

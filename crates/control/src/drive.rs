@@ -40,7 +40,7 @@
 //! loop the current reaches the reference with the winding's own time constant `L / R`.
 
 use crate::ControlError;
-use crate::error::check;
+use crate::error::{at_most, check};
 
 /// The drive of a servo motor (module documentation): its torque-speed envelope from the bus
 /// voltage, the winding resistance, the torque constant and the current limit.
@@ -125,13 +125,7 @@ impl Drive {
                 true,
                 "must be finite and > 0 (H; servo windings have 1e-4 to 0.1)",
             )?;
-            if w.inductance > 10.0 {
-                return Err(ControlError::InvalidParameter {
-                    name: "inductance",
-                    value: w.inductance,
-                    rule: "must be at most 10 H",
-                });
-            }
+            at_most("inductance", w.inductance, 10.0, "must be at most 10 H")?;
             if let Some(f) = w.current_bandwidth {
                 check(
                     "current_bandwidth",
@@ -140,13 +134,7 @@ impl Drive {
                     true,
                     "must be finite and > 0 (Hz; current loops have 500 to 5000)",
                 )?;
-                if f > 1e6 {
-                    return Err(ControlError::InvalidParameter {
-                        name: "current_bandwidth",
-                        value: f,
-                        rule: "must be at most 1e6 Hz",
-                    });
-                }
+                at_most("current_bandwidth", f, 1e6, "must be at most 1e6 Hz")?;
             }
         }
         for (name, value, max, rule) in [

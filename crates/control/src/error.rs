@@ -28,6 +28,21 @@ pub enum ControlError {
 }
 
 /// `value` if it is finite and at least `min` (strictly above when `strict`), else the error.
+/// `value` when it is at most `max`; else the parameter `name` with its `rule` (the upper
+/// bound of a parameter whose lower bound [`check`] tested).
+pub(crate) fn at_most(
+    name: &'static str,
+    value: f64,
+    max: f64,
+    rule: &'static str,
+) -> Result<f64, ControlError> {
+    if value > max {
+        Err(ControlError::InvalidParameter { name, value, rule })
+    } else {
+        Ok(value)
+    }
+}
+
 pub(crate) fn check(
     name: &'static str,
     value: f64,
