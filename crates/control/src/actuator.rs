@@ -947,6 +947,7 @@ impl Actuator for MotorBallScrew {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Winding;
 
     fn motor() -> MotorBallScrew {
         MotorBallScrew {
@@ -1090,5 +1091,89 @@ mod tests {
         assert!((u - (1.5 * i + 0.2 * g * 10.0 * m.lead)).abs() <= 1e-9);
         // The anti-windup limit follows the current limit.
         assert!((m.force_limit() - g * 0.9 * 2.4).abs() <= 1e-9);
+    }
+
+    /// Every combination of winding, compliant screw and LuGre friction names each of its
+    /// states, and the bristles ride last: with a compliant screw they see the rotor's
+    /// speed, and the rotor feels their torque (LuGre at `z = 0`: `z' = omega`, friction
+    /// `(sigma1 + sigma2) omega`).
+    #[test]
+    fn the_motor_states_combine_winding_screw_and_bristles() {
+        let lugre = LuGre {
+            static_friction: 0.03,
+            stribeck_speed: 0.05,
+            bristle_stiffness: 30.0,
+            bristle_damping: 0.02,
+        };
+        let screw = Screw {
+            stiffness: 1e8,
+            damping: 300.0,
+        };
+        let drive = |winding: Option<Winding>| Drive {
+            torque_constant: 0.2,
+            resistance: 1.5,
+            bus_voltage: 320.0,
+            current_limit: 16.0,
+            winding,
+        };
+        let windings = [
+            None,
+            Some(drive(None)),
+            Some(drive(Some(Winding {
+                inductance: 2.6e-3,
+                current_bandwidth: None,
+            }))),
+            Some(drive(Some(Winding {
+                inductance: 2.6e-3,
+                current_bandwidth: Some(1000.0),
+            }))),
+        ];
+        for d in windings {
+            for s in [None, Some(screw)] {
+                for l in [None, Some(lugre)] {
+                    let m = MotorBallScrew {
+                        drive: d,
+                        screw: s,
+                        lugre: l,
+                        ..motor()
+                    }
+                    .validated()
+                    .unwrap();
+                    assert_eq!(m.state_names().len(), m.states(), "{d:?} {s:?} {l:?}");
+                    if let Some(l) = l {
+                        assert_eq!(m.state_names().last().unwrap().name, "bristle_deflection");
+                        let mut y = vec![0.0; m.states()];
+                        m.initial_states(0.05, &mut y);
+                        let omega = m.ratio() * 0.05;
+                        let z = l.steady_deflection(m.coulomb_friction, omega);
+                        assert!((y[m.states() - 1] - z).abs() <= 1e-15);
+                    }
+                }
+            }
+        }
+        // Screw and bristles, no drive: the rotor turns at 10 rad/s, the slider at rest, the
+        // screw untwisted, the bristles unloaded.
+        let m = MotorBallScrew {
+            screw: Some(screw),
+            lugre: Some(lugre),
+            ..motor()
+        }
+        .validated()
+        .unwrap();
+        let omega = 10.0;
+        let (y, mut rates) = ([0.0, omega, 0.0], [0.0; 3]);
+        let out = m.apply_with_states(0.0, 0.0, None, &y, &mut rates);
+        let g = m.ratio();
+        let force = screw.damping * omega / g;
+        assert!((out.force - force).abs() <= 1e-12 * force);
+        assert!((rates[2] - omega).abs() <= 1e-12 * omega);
+        let friction = (lugre.bristle_damping + m.viscous_friction) * omega;
+        let rotor = (-m.efficiency * friction - force / g) / m.rotor_inertia;
+        assert!(
+            (rates[1] - rotor).abs() <= 1e-9 * rotor.abs(),
+            "{} vs {rotor}",
+            rates[1]
+        );
+        assert!((rates[0] - omega).abs() <= 1e-12 * omega);
     }
 }
