@@ -226,6 +226,43 @@ pub struct MotorRatings {
     pub max_speed: f64,
 }
 
+impl MotorRatings {
+    /// Checks the ratings: positive and finite, the continuous torque within the peak.
+    ///
+    /// # Errors
+    /// The first rating out of its range, by its key.
+    pub fn validated(self) -> Result<Self, ControlError> {
+        check(
+            "peak_torque",
+            self.peak_torque,
+            0.0,
+            true,
+            "must be finite and > 0 (N m)",
+        )?;
+        check(
+            "continuous_torque",
+            self.continuous_torque,
+            0.0,
+            true,
+            "must be finite and > 0 (N m)",
+        )?;
+        at_most(
+            "continuous_torque",
+            self.continuous_torque,
+            self.peak_torque,
+            "must not exceed peak_torque",
+        )?;
+        check(
+            "max_speed",
+            self.max_speed,
+            0.0,
+            true,
+            "must be finite and > 0 (rev/s)",
+        )?;
+        Ok(self)
+    }
+}
+
 /// An actuator of one slider.
 ///
 /// Required: the force on the slider for a force command at a slider velocity, and a name.
@@ -458,6 +495,51 @@ pub struct Screw {
     pub damping: f64,
 }
 
+impl Screw {
+    /// Checks the stiffness and damping, and that the rotor on the spring (of inertia
+    /// `rotor_inertia`, kg m^2) has a mass.
+    ///
+    /// # Errors
+    /// The first parameter out of its range, by its key.
+    pub fn validated(self, rotor_inertia: f64) -> Result<Self, ControlError> {
+        check(
+            "screw_stiffness",
+            self.stiffness,
+            0.0,
+            true,
+            "must be finite and > 0 (N/m; ball screws have 1e7 to 1e9)",
+        )?;
+        at_most(
+            "screw_stiffness",
+            self.stiffness,
+            1e12,
+            "must be at most 1e12 N/m",
+        )?;
+        check(
+            "screw_damping",
+            self.damping,
+            0.0,
+            false,
+            "must be finite and >= 0 (N s/m)",
+        )?;
+        at_most(
+            "screw_damping",
+            self.damping,
+            1e9,
+            "must be at most 1e9 N s/m",
+        )?;
+        if rotor_inertia <= 0.0 {
+            return Err(ControlError::InvalidParameter {
+                name: "rotor_inertia",
+                value: rotor_inertia,
+                rule: "must be > 0 with screw_stiffness: the rotor is a mass on the screw's \
+                       spring",
+            });
+        }
+        Ok(self)
+    }
+}
+
 impl MotorBallScrew {
     /// Checks every parameter.
     ///
@@ -486,34 +568,7 @@ impl MotorBallScrew {
             "must be in (0, 1]",
         )?;
         at_most("efficiency", self.efficiency, 1.0, "must be in (0, 1]")?;
-        let r = self.ratings;
-        check(
-            "peak_torque",
-            r.peak_torque,
-            0.0,
-            true,
-            "must be finite and > 0 (N m)",
-        )?;
-        check(
-            "continuous_torque",
-            r.continuous_torque,
-            0.0,
-            true,
-            "must be finite and > 0 (N m)",
-        )?;
-        at_most(
-            "continuous_torque",
-            r.continuous_torque,
-            r.peak_torque,
-            "must not exceed peak_torque",
-        )?;
-        check(
-            "max_speed",
-            r.max_speed,
-            0.0,
-            true,
-            "must be finite and > 0 (rev/s)",
-        )?;
+        self.ratings.validated()?;
         check(
             "viscous_friction",
             self.viscous_friction,
@@ -553,13 +608,13 @@ impl MotorBallScrew {
             ),
             (
                 "peak_torque",
-                r.peak_torque,
+                self.ratings.peak_torque,
                 1e6,
                 "must be at most 1e6 N m (servo motors give 0.1 to 1e3)",
             ),
             (
                 "max_speed",
-                r.max_speed,
+                self.ratings.max_speed,
                 1e5,
                 "must be at most 1e5 rev/s (servo motors turn up to about 300)",
             ),
@@ -607,40 +662,7 @@ impl MotorBallScrew {
             drive.validated()?;
         }
         if let Some(screw) = self.screw {
-            check(
-                "screw_stiffness",
-                screw.stiffness,
-                0.0,
-                true,
-                "must be finite and > 0 (N/m; ball screws have 1e7 to 1e9)",
-            )?;
-            at_most(
-                "screw_stiffness",
-                screw.stiffness,
-                1e12,
-                "must be at most 1e12 N/m",
-            )?;
-            check(
-                "screw_damping",
-                screw.damping,
-                0.0,
-                false,
-                "must be finite and >= 0 (N s/m)",
-            )?;
-            at_most(
-                "screw_damping",
-                screw.damping,
-                1e9,
-                "must be at most 1e9 N s/m",
-            )?;
-            if self.rotor_inertia <= 0.0 {
-                return Err(ControlError::InvalidParameter {
-                    name: "rotor_inertia",
-                    value: self.rotor_inertia,
-                    rule: "must be > 0 with screw_stiffness: the rotor is a mass on the screw's \
-                           spring",
-                });
-            }
+            screw.validated(self.rotor_inertia)?;
         }
         if let Some(lugre) = self.lugre {
             lugre.validated(self.coulomb_friction)?;
