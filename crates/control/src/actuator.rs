@@ -694,8 +694,15 @@ impl MotorBallScrew {
         if let Some(lugre) = self.lugre {
             return lugre.steady_torque(self.coulomb_friction, self.viscous_friction, omega);
         }
+        self.smoothed_friction(omega, omega)
+    }
+
+    /// The viscous friction at the motor speed `omega` plus the `tanh`-smoothed Coulomb
+    /// friction at the motor speed `coulomb_speed` (rad/s; a linearisation holds it apart,
+    /// [`Actuator::apply_with_friction_at`]): the friction torque without LuGre (N m).
+    fn smoothed_friction(&self, omega: f64, coulomb_speed: f64) -> f64 {
         let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
-        self.viscous_friction * omega + self.coulomb_friction * (omega / smoothing).tanh()
+        self.viscous_friction * omega + self.coulomb_friction * (coulomb_speed / smoothing).tanh()
     }
 
     /// The largest torque the motor can hold at any speed (N m): the peak torque, or the
@@ -778,9 +785,7 @@ impl Actuator for MotorBallScrew {
             let coulomb = lugre.steady_torque(self.coulomb_friction, 0.0, g * friction_velocity);
             coulomb + self.viscous_friction * omega
         } else {
-            let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
-            self.viscous_friction * omega
-                + self.coulomb_friction * (g * friction_velocity / smoothing).tanh()
+            self.smoothed_friction(omega, g * friction_velocity)
         };
         self.output(command, velocity, friction)
     }
@@ -882,10 +887,7 @@ impl Actuator for MotorBallScrew {
             rates[bristle] = rate;
             torque
         } else {
-            let smoothing = std::f64::consts::TAU * self.coulomb_smoothing;
-            let coulomb_speed = friction_velocity.map_or(omega, |v| g * v);
-            self.viscous_friction * omega
-                + self.coulomb_friction * (coulomb_speed / smoothing).tanh()
+            self.smoothed_friction(omega, friction_velocity.map_or(omega, |v| g * v))
         };
         let force = match self.screw {
             Some(screw) => {
